@@ -1,0 +1,278 @@
+//! One HASEL actuator as a port-Hamiltonian system (model.md, "State and energy" and "Dynamics").
+//!
+//! State x = (θ, l_p, p, Q1, Q2):
+//!
+//! ```text
+//! H  = ½ Kb θ² + ½ g Lv m sin θ + ¼ K (l_p − Lp)² + p²/(2 I) + Q1²/(2 C1) + Q2²/(2 C2(θ, l_p))
+//! ẋ  = (J(x) − R) ∇H + g(x) U
+//! θ̇   = ∂H/∂p
+//! l̇_p = d ∂H/∂p
+//! ṗ   = −∂H/∂θ − d ∂H/∂l_p − b ∂H/∂p
+//! Q̇1  = −(G0 + G1) ∂H/∂Q1 − G0 ∂H/∂Q2 + G0 ga(θ) U
+//! Q̇2  = −G0 ∂H/∂Q1 − (G0 + G2) ∂H/∂Q2 + G0 ga(θ) U
+//! ```
+
+use super::params::{ActuatorParams, Params};
+use super::shell::{DomainError, Shell};
+
+/// Index of each state inside an actuator's block of five.
+pub const THETA: usize = 0;
+pub const L_P: usize = 1;
+pub const P: usize = 2;
+pub const Q1: usize = 3;
+pub const Q2: usize = 4;
+/// States per actuator.
+pub const N: usize = 5;
+
+/// One actuator's constants, derived once from the parameters.
+#[derive(Clone, Debug)]
+pub struct Actuator {
+    pub par: ActuatorParams,
+    /// I = Lv m / 24, as written in the paper (model.md, "open choices").
+    pub inertia: f64,
+    pub g0: f64,
+    pub g1: f64,
+    pub g2: f64,
+    /// ½ g Lv m: the gravity term's coefficient [J].
+    gravity: f64,
+    lp: f64,
+    lv: f64,
+    /// C2 = c2_0 + c2_a A_s, since le = Le − (A_T − A_s)/Xh is affine in A_s.
+    c2_0: f64,
+    c2_a: f64,
+    /// C2 with le = 0 [F].
+    c2_unzipped: f64,
+}
+
+/// Quantities shared by H, ∇H, f and ∂f/∂x at one state.
+struct Eval {
+    shell: Shell,
+    c2: f64,
+    /// V1 = Q1/C1, V2 = Q2/C2 [V]
+    v1: f64,
+    v2: f64,
+    /// ω = ∂H/∂p = p/I [rad/s]
+    omega: f64,
+    h_t: f64,
+    h_l: f64,
+}
+
+impl Actuator {
+    pub fn new(params: &Params, i: usize) -> Actuator {
+        let par = params.act[i];
+        // C2 = ε0 εr w ( le/(2t) + (Le − le)/(2t + Xh) ),  le = Le − (A_T − A_s)/Xh
+        let e = params.eps0 * params.eps_r * params.w;
+        let (thin, thick) = (1.0 / (2.0 * params.t_film), 1.0 / (2.0 * params.t_film + params.xh));
+        let le_0 = params.le - params.a_t / params.xh;
+        Actuator {
+            par,
+            inertia: params.lv * params.m / 24.0,
+            g0: 1.0 / par.r0,
+            g1: 1.0 / par.r1,
+            g2: 1.0 / par.r2,
+            gravity: 0.5 * params.g * params.lv * params.m,
+            lp: params.lp,
+            lv: params.lv,
+            c2_0: e * (params.le * thick + le_0 * (thin - thick)),
+            c2_a: e * (thin - thick) / params.xh,
+            c2_unzipped: e * params.le * thick,
+        }
+    }
+
+    fn eval(&self, x: &[f64]) -> Result<Eval, DomainError> {
+        let shell = Shell::new(x[THETA], x[L_P], self.lv)?;
+        let c2 = self.c2_0 + self.c2_a * shell.a_s;
+        let v1 = x[Q1] / self.par.c1;
+        let v2 = x[Q2] / c2;
+        // ∂/∂x of Q2²/(2 C2) = −½ V2² ∂C2/∂x
+        let e_x = -0.5 * v2 * v2 * self.c2_a;
+        Ok(Eval {
+            c2,
+            v1,
+            v2,
+            omega: x[P] / self.inertia,
+            h_t: self.par.kb * x[THETA] + self.gravity * x[THETA].cos() + e_x * shell.a_s_t,
+            h_l: 0.5 * self.par.k * (x[L_P] - self.lp) + e_x * shell.a_s_l,
+            shell,
+        })
+    }
+
+    /// Electrode capacitance C2(θ, l_p) [F].
+    pub fn c2(&self, theta: f64, l_p: f64) -> Result<f64, DomainError> {
+        Ok(self.c2_0 + self.c2_a * Shell::new(theta, l_p, self.lv)?.a_s)
+    }
+
+    /// Input gain ga(θ) = γ1 cos(γ2 θ).
+    pub fn ga(&self, theta: f64) -> f64 {
+        self.par.gamma1 * (self.par.gamma2 * theta).cos()
+    }
+
+    /// Stored energy H [J].
+    pub fn energy(&self, x: &[f64]) -> Result<f64, DomainError> {
+        let e = self.eval(x)?;
+        let dl = x[L_P] - self.lp;
+        Ok(0.5 * self.par.kb * x[THETA] * x[THETA]
+            + self.gravity * x[THETA].sin()
+            + 0.25 * self.par.k * dl * dl
+            + 0.5 * x[P] * e.omega
+            + 0.5 * x[Q1] * e.v1
+            + 0.5 * x[Q2] * e.v2)
+    }
+
+    /// ∇H = (∂H/∂θ, ∂H/∂l_p, ∂H/∂p, ∂H/∂Q1, ∂H/∂Q2).
+    pub fn grad_h(&self, x: &[f64]) -> Result<[f64; N], DomainError> {
+        let e = self.eval(x)?;
+        Ok([e.h_t, e.h_l, e.omega, e.v1, e.v2])
+    }
+
+    /// ẋ = (J − R) ∇H + g U.
+    pub fn rhs(&self, x: &[f64], u: f64, dx: &mut [f64]) -> Result<(), DomainError> {
+        let e = self.eval(x)?;
+        let d = e.shell.d;
+        let source = self.g0 * self.ga(x[THETA]) * u;
+        dx[THETA] = e.omega;
+        dx[L_P] = d * e.omega;
+        dx[P] = -e.h_t - d * e.h_l - self.par.b * e.omega;
+        dx[Q1] = -(self.g0 + self.g1) * e.v1 - self.g0 * e.v2 + source;
+        dx[Q2] = -self.g0 * e.v1 - (self.g0 + self.g2) * e.v2 + source;
+        Ok(())
+    }
+
+    /// ∂ẋ/∂x as a 5×5 block, written through `set(row, col, value)`.
+    pub fn jacobian(
+        &self,
+        x: &[f64],
+        u: f64,
+        mut set: impl FnMut(usize, usize, f64),
+    ) -> Result<(), DomainError> {
+        let e = self.eval(x)?;
+        let s = &e.shell;
+        let (d, inv_i) = (s.d, 1.0 / self.inertia);
+        // Hessian of H in (θ, l_p, Q2); E = Q2²/(2 C2):
+        // E_xy = (V2²/C2) C2_x C2_y − ½ V2² C2_xy,  E_xQ2 = −V2 C2_x / C2
+        let (c2_t, c2_l) = (self.c2_a * s.a_s_t, self.c2_a * s.a_s_l);
+        let w = e.v2 * e.v2 / e.c2;
+        let half_v2sq = 0.5 * e.v2 * e.v2 * self.c2_a;
+        let h_tt =
+            self.par.kb - self.gravity * x[THETA].sin() + w * c2_t * c2_t - half_v2sq * s.a_s_tt;
+        let h_tl = w * c2_t * c2_l - half_v2sq * s.a_s_tl;
+        let h_ll = 0.5 * self.par.k + w * c2_l * c2_l - half_v2sq * s.a_s_ll;
+        let h_tq2 = -e.v2 * c2_t / e.c2;
+        let h_lq2 = -e.v2 * c2_l / e.c2;
+        let dga = -self.par.gamma1 * self.par.gamma2 * (self.par.gamma2 * x[THETA]).sin();
+        let source_t = self.g0 * dga * u;
+
+        set(THETA, P, inv_i);
+        set(L_P, THETA, s.d_t * e.omega);
+        set(L_P, L_P, s.d_l * e.omega);
+        set(L_P, P, d * inv_i);
+        set(P, THETA, -h_tt - s.d_t * e.h_l - d * h_tl);
+        set(P, L_P, -h_tl - s.d_l * e.h_l - d * h_ll);
+        set(P, P, -self.par.b * inv_i);
+        set(P, Q2, -h_tq2 - d * h_lq2);
+        // ∂V2/∂θ = H_θQ2, ∂V2/∂l_p = H_lQ2
+        set(Q1, THETA, -self.g0 * h_tq2 + source_t);
+        set(Q1, L_P, -self.g0 * h_lq2);
+        set(Q1, Q1, -(self.g0 + self.g1) / self.par.c1);
+        set(Q1, Q2, -self.g0 / e.c2);
+        set(Q2, THETA, -(self.g0 + self.g2) * h_tq2 + source_t);
+        set(Q2, L_P, -(self.g0 + self.g2) * h_lq2);
+        set(Q2, Q1, -self.g0 / self.par.c1);
+        set(Q2, Q2, -(self.g0 + self.g2) / e.c2);
+        Ok(())
+    }
+
+    /// Port output y = G0 ga(θ) (Q1/C1 + Q2/C2) [A]; y·U is the supplied power.
+    pub fn port_output(&self, x: &[f64]) -> Result<f64, DomainError> {
+        let e = self.eval(x)?;
+        Ok(self.g0 * self.ga(x[THETA]) * (e.v1 + e.v2))
+    }
+
+    /// Dissipated power b ω² + G0 (V1+V2)² + G1 V1² + G2 V2² [W].
+    pub fn dissipation(&self, x: &[f64]) -> Result<f64, DomainError> {
+        let e = self.eval(x)?;
+        let vs = e.v1 + e.v2;
+        Ok(self.par.b * e.omega * e.omega
+            + self.g0 * vs * vs
+            + self.g1 * e.v1 * e.v1
+            + self.g2 * e.v2 * e.v2)
+    }
+
+    /// Power into storage, dH/dt = y U − dissipation, written so that the large electrical terms
+    /// cancel analytically: y U − G0 (V1+V2)² = (V1+V2) · G0 (ga U − V1 − V2) = (V1+V2) i0.
+    pub fn stored_power(&self, x: &[f64], u: f64) -> Result<f64, DomainError> {
+        let e = self.eval(x)?;
+        let vs = e.v1 + e.v2;
+        let i0 = self.g0 * (self.ga(x[THETA]) * u - vs);
+        Ok(e.v1 * (i0 - self.g1 * e.v1) + e.v2 * (i0 - self.g2 * e.v2)
+            - self.par.b * e.omega * e.omega)
+    }
+
+    /// Actuator height h = ½ Lv sin θ [m] (the prismatic joint).
+    pub fn height(&self, theta: f64) -> f64 {
+        0.5 * self.lv * theta.sin()
+    }
+
+    /// Scale of each state, for absolute tolerances: θ* = π/(2γ2) (where ga vanishes), Lp,
+    /// I θ*/(1 s), and the charges at 100 V command in the quasi-static divider (C2 unzipped).
+    pub fn state_scales(&self) -> [f64; N] {
+        let theta_star = std::f64::consts::FRAC_PI_2 / self.par.gamma2;
+        let v_source = self.par.gamma1 * 100.0;
+        let i_dc = v_source / (self.par.r0 + self.par.r1 + self.par.r2);
+        [
+            theta_star,
+            self.lp,
+            self.inertia * theta_star,
+            self.par.c1 * i_dc * self.par.r1,
+            self.c2_unzipped * i_dc * self.par.r2,
+        ]
+    }
+}
+
+impl Actuator {
+    /// l_p on the constraint curve through (θ, l_p) = (0, Lp): l̇_p = d θ̇ keeps (θ, l_p) on the
+    /// curve dl_p/dθ = d(θ, l_p), integrated here with classical RK4 (16 steps; θ is small).
+    pub fn l_p_on_curve(&self, theta: f64) -> Result<f64, DomainError> {
+        const STEPS: usize = 16;
+        let dt = theta / STEPS as f64;
+        let slope = |t: f64, l: f64| Shell::new(t, l, self.lv).map(|s| s.d);
+        let mut l = self.lp;
+        for k in 0..STEPS {
+            let t = k as f64 * dt;
+            let k1 = slope(t, l)?;
+            let k2 = slope(t + 0.5 * dt, l + 0.5 * dt * k1)?;
+            let k3 = slope(t + 0.5 * dt, l + 0.5 * dt * k2)?;
+            let k4 = slope(t + dt, l + dt * k3)?;
+            l += dt / 6.0 * (k1 + 2.0 * k2 + 2.0 * k3 + k4);
+        }
+        Ok(l)
+    }
+
+    /// The U = 0 equilibrium under gravity on the curve through (0, Lp), with p = Q1 = Q2 = 0
+    /// (model.md, "open choices": initial state): ṗ = 0 ⇔ ∂H/∂θ + d ∂H/∂l_p = 0, solved by the
+    /// secant method on θ.
+    pub fn rest_state(&self) -> Result<[f64; N], DomainError> {
+        let residual = |theta: f64| -> Result<f64, DomainError> {
+            let x = [theta, self.l_p_on_curve(theta)?, 0.0, 0.0, 0.0];
+            let e = self.eval(&x)?;
+            Ok(e.h_t + e.shell.d * e.h_l)
+        };
+        // start from the gravity sag of the bending spring alone
+        let mut t0 = 0.0;
+        let mut t1 = -self.gravity / self.par.kb;
+        let (mut r0, mut r1) = (residual(t0)?, residual(t1)?);
+        for _ in 0..50 {
+            if r1 == 0.0 || r1 == r0 {
+                break;
+            }
+            let t2 = t1 - r1 * (t1 - t0) / (r1 - r0);
+            (t0, r0) = (t1, r1);
+            t1 = t2;
+            r1 = residual(t1)?;
+            if (t1 - t0).abs() <= 1e-16 * t1.abs().max(1e-12) {
+                break;
+            }
+        }
+        Ok([t1, self.l_p_on_curve(t1)?, 0.0, 0.0, 0.0])
+    }
+}

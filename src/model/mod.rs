@@ -1,0 +1,13 @@
+//! The physics of the HASEL platform (model.md) and nothing else: parameters, the three
+//! port-Hamiltonian actuators, the platform's right-hand side and Jacobian, and kinematics.
+//! It knows no solver and no FMI.
+
+pub mod actuator;
+pub mod kinematics;
+pub mod params;
+pub mod platform;
+pub mod shell;
+
+pub use kinematics::Kinematics;
+pub use params::{ParamError, Params};
+pub use platform::{ModelError, Platform};

@@ -1,0 +1,239 @@
+//! The platform: three independent actuators (15 states) and the kinematics to the tip.
+//!
+//! State layout: actuator i occupies x[5i .. 5i+5] as (θ, l_p, p, Q1, Q2).
+
+use std::fmt;
+
+use super::actuator::{self, Actuator};
+use super::kinematics::Kinematics;
+use super::params::{ParamError, Params};
+use super::shell::DomainError;
+
+/// The model cannot be evaluated at a state.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ModelError {
+    /// 1-based actuator index.
+    pub actuator: usize,
+    pub cause: DomainError,
+}
+
+impl fmt::Display for ModelError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "actuator {}: {}", self.actuator, self.cause)
+    }
+}
+
+impl std::error::Error for ModelError {}
+
+/// The HASEL platform model, built from validated parameters.
+#[derive(Clone, Debug)]
+pub struct Platform {
+    params: Params,
+    pub actuators: [Actuator; 3],
+    pub kinematics: Kinematics,
+}
+
+/// Number of states of the paper's model.
+pub const N_STATES: usize = 3 * actuator::N;
+
+fn block(x: &[f64], i: usize) -> &[f64] {
+    &x[actuator::N * i..actuator::N * (i + 1)]
+}
+
+impl Platform {
+    /// Validates the parameters and derives the constants.
+    pub fn new(params: Params) -> Result<Platform, ParamError> {
+        params.validate()?;
+        Ok(Platform {
+            actuators: [0, 1, 2].map(|i| Actuator::new(&params, i)),
+            kinematics: Kinematics::new(&params),
+            params,
+        })
+    }
+
+    pub fn params(&self) -> &Params {
+        &self.params
+    }
+
+    pub fn n_states(&self) -> usize {
+        N_STATES
+    }
+
+    /// Names of the states, `theta_1, l_p_1, p_1, Q1_1, Q2_1, theta_2, …`.
+    pub fn state_names(&self) -> Vec<String> {
+        (1..=3)
+            .flat_map(|i| ["theta", "l_p", "p", "Q1", "Q2"].map(|s| format!("{s}_{i}")))
+            .collect()
+    }
+
+    fn each<T>(
+        &self,
+        mut f: impl FnMut(usize, &Actuator) -> Result<T, DomainError>,
+    ) -> Result<[T; 3], ModelError> {
+        let wrap = |i: usize, r: Result<T, DomainError>| {
+            r.map_err(|cause| ModelError { actuator: i + 1, cause })
+        };
+        Ok([
+            wrap(0, f(0, &self.actuators[0]))?,
+            wrap(1, f(1, &self.actuators[1]))?,
+            wrap(2, f(2, &self.actuators[2]))?,
+        ])
+    }
+
+    /// ẋ = f(x, U) for the three actuators.
+    pub fn rhs(&self, x: &[f64], u: [f64; 3], dx: &mut [f64]) -> Result<(), ModelError> {
+        let n = actuator::N;
+        self.each(|i, a| a.rhs(block(x, i), u[i], &mut dx[n * i..n * (i + 1)]))?;
+        Ok(())
+    }
+
+    /// ∂f/∂x into `jac`, column-major `n_states × n_states`.
+    pub fn jacobian(&self, x: &[f64], u: [f64; 3], jac: &mut [f64]) -> Result<(), ModelError> {
+        let (n, dim) = (actuator::N, self.n_states());
+        jac.fill(0.0);
+        self.each(|i, a| {
+            a.jacobian(block(x, i), u[i], |r, c, v| jac[(n * i + c) * dim + n * i + r] = v)
+        })?;
+        Ok(())
+    }
+
+    /// The spec's initial state: each actuator at its U = 0 equilibrium under gravity.
+    pub fn rest_state(&self) -> Result<Vec<f64>, ModelError> {
+        Ok(self.each(|_, a| a.rest_state())?.concat())
+    }
+
+    /// Actuator heights h_i = ½ Lv sin θ_i [m].
+    pub fn heights(&self, x: &[f64]) -> [f64; 3] {
+        [0, 1, 2].map(|i| self.actuators[i].height(block(x, i)[actuator::THETA]))
+    }
+
+    /// Antenna tip from the FKM [m].
+    pub fn tip(&self, x: &[f64]) -> [f64; 3] {
+        self.kinematics.tip(self.heights(x))
+    }
+
+    /// Stored energy H [J].
+    pub fn energy(&self, x: &[f64]) -> Result<f64, ModelError> {
+        Ok(self.each(|i, a| a.energy(block(x, i)))?.iter().sum())
+    }
+
+    /// Supplied power Σ y_i U_i [W].
+    pub fn supplied_power(&self, x: &[f64], u: [f64; 3]) -> Result<f64, ModelError> {
+        Ok(self.each(|i, a| Ok(a.port_output(block(x, i))? * u[i]))?.iter().sum())
+    }
+
+    /// Dissipated power [W].
+    pub fn dissipated_power(&self, x: &[f64]) -> Result<f64, ModelError> {
+        Ok(self.each(|i, a| a.dissipation(block(x, i)))?.iter().sum())
+    }
+
+    /// dH/dt along the flow with the large electrical terms cancelled analytically [W].
+    pub fn stored_power(&self, x: &[f64], u: [f64; 3]) -> Result<f64, ModelError> {
+        Ok(self.each(|i, a| a.stored_power(block(x, i), u[i]))?.iter().sum())
+    }
+
+    /// Per-state scale for absolute tolerances (see [`Actuator::state_scales`]).
+    pub fn state_scales(&self) -> Vec<f64> {
+        self.actuators.iter().flat_map(|a| a.state_scales()).collect()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn platform() -> Platform {
+        Platform::new(Params::default()).unwrap()
+    }
+
+    /// A state away from rest with charges, momentum and a zipped electrode.
+    fn busy_state(p: &Platform) -> Vec<f64> {
+        let mut x = Vec::new();
+        for (i, a) in p.actuators.iter().enumerate() {
+            let theta = 0.004 * (i as f64 + 1.0);
+            let l_p = a.l_p_on_curve(theta).unwrap();
+            x.extend_from_slice(&[theta, l_p, 3e-8 * (i as f64 - 1.0), 2e-9, 3e-8]);
+        }
+        x
+    }
+
+    #[test]
+    fn rest_state_matches_the_spec_and_stays_put() {
+        let p = platform();
+        let x = p.rest_state().unwrap();
+        let h = p.heights(&x);
+        // model.md: θ ≈ −2.2e-4 rad, h ≈ −1.31 / −1.33 / −1.33 µm, l_p − Lp ≈ −0.68 µm
+        for (hi, want) in h.iter().zip([-1.31e-6, -1.33e-6, -1.33e-6]) {
+            assert!((hi - want).abs() < 0.006e-6, "h = {h:?}");
+        }
+        assert!((x[1] - 0.014 + 0.68e-6).abs() < 0.01e-6);
+        let mut dx = vec![0.0; N_STATES];
+        p.rhs(&x, [0.0; 3], &mut dx).unwrap();
+        // ṗ ≈ 0 relative to the size of its terms (Kb θ ≈ 7e-5 N m)
+        for i in 0..3 {
+            assert!(dx[5 * i + 2].abs() < 1e-15, "p_dot = {}", dx[5 * i + 2]);
+        }
+    }
+
+    #[test]
+    fn jacobian_matches_finite_differences() {
+        let p = platform();
+        let x = busy_state(&p);
+        let u = [60.0, 25.0, -40.0];
+        let n = N_STATES;
+        let mut jac = vec![0.0; n * n];
+        p.jacobian(&x, u, &mut jac).unwrap();
+        let scales = p.state_scales();
+        let (mut fp, mut fm) = (vec![0.0; n], vec![0.0; n]);
+        for c in 0..n {
+            let hc = 1e-6 * scales[c];
+            let (mut xp, mut xm) = (x.clone(), x.clone());
+            xp[c] += hc;
+            xm[c] -= hc;
+            p.rhs(&xp, u, &mut fp).unwrap();
+            p.rhs(&xm, u, &mut fm).unwrap();
+            for r in 0..n {
+                let fd = (fp[r] - fm[r]) / (2.0 * hc);
+                let an = jac[c * n + r];
+                // compare relative to the row's largest entry times the column's scale
+                let row_scale = (0..n).map(|k| (jac[k * n + r] * scales[k]).abs()).fold(0.0, f64::max);
+                assert!(
+                    (an - fd).abs() * scales[c] <= 1e-6 * row_scale + 1e-300,
+                    "J[{r},{c}] analytic {an:e} vs fd {fd:e}"
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn power_balance_holds_pointwise() {
+        // ∇H · f = y U − D: the port-Hamiltonian structure, relative to the supplied power
+        let p = platform();
+        let x = busy_state(&p);
+        let u = [60.0, 25.0, -40.0];
+        let mut dx = vec![0.0; N_STATES];
+        p.rhs(&x, u, &mut dx).unwrap();
+        let mut dh = 0.0;
+        for (i, a) in p.actuators.iter().enumerate() {
+            let g = a.grad_h(&x[5 * i..5 * i + 5]).unwrap();
+            dh += (0..5).map(|k| g[k] * dx[5 * i + k]).sum::<f64>();
+        }
+        let supplied = p.supplied_power(&x, u).unwrap();
+        let dissipated = p.dissipated_power(&x).unwrap();
+        let scale = supplied.abs() + dissipated;
+        assert!((dh - (supplied - dissipated)).abs() < 1e-12 * scale);
+        let stored = p.stored_power(&x, u).unwrap();
+        assert!((dh - stored).abs() < 1e-12 * scale, "{dh} vs {stored}");
+    }
+
+    #[test]
+    fn evaluation_outside_the_domain_names_the_actuator() {
+        let p = platform();
+        let mut x = p.rest_state().unwrap();
+        x[5 + 1] = 0.011; // l_p of actuator 2 below Lv
+        let mut dx = vec![0.0; N_STATES];
+        let e = p.rhs(&x, [0.0; 3], &mut dx).unwrap_err();
+        assert_eq!(e.actuator, 2);
+        assert!(e.to_string().starts_with("actuator 2: shell geometry undefined"));
+    }
+}

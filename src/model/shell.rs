@@ -1,0 +1,131 @@
+//! Shell geometry of one actuator as a function of (θ, l_p), with first and second partial
+//! derivatives (model.md, "State and energy"):
+//!
+//! ```text
+//! δ1  = (π + θ)/2 − asin( (Lv/l_p) sin((π − θ)/2) )
+//! A_s = ¼ l_p Lv sin δ1          liquid area inside the shell
+//! d   = 2 A_s / l_p = ½ Lv sin δ1
+//! ```
+//!
+//! Second derivatives are needed for the analytic Jacobian (∇²H).
+
+use std::f64::consts::PI;
+
+/// The model is defined only where the asin argument is below 1, i.e. l_p > Lv cos(θ/2).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct DomainError {
+    pub theta: f64,
+    pub l_p: f64,
+    pub lv: f64,
+}
+
+impl std::fmt::Display for DomainError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "shell geometry undefined at theta = {:e} rad, l_p = {:e} m: needs l_p > Lv cos(theta/2) = {:e} m",
+            self.theta,
+            self.l_p,
+            self.lv * (self.theta / 2.0).cos()
+        )
+    }
+}
+
+impl std::error::Error for DomainError {}
+
+/// δ1, A_s and d at one (θ, l_p) with their partials; subscripts `_t` = ∂/∂θ, `_l` = ∂/∂l_p.
+#[derive(Clone, Copy, Debug)]
+pub struct Shell {
+    pub delta1: f64,
+    pub a_s: f64,
+    pub a_s_t: f64,
+    pub a_s_l: f64,
+    pub a_s_tt: f64,
+    pub a_s_tl: f64,
+    pub a_s_ll: f64,
+    pub d: f64,
+    pub d_t: f64,
+    pub d_l: f64,
+}
+
+impl Shell {
+    pub fn new(theta: f64, l_p: f64, lv: f64) -> Result<Shell, DomainError> {
+        // s = (Lv/l_p) sin((π − θ)/2) = (Lv/l_p) cos(θ/2)
+        let (sin_h, cos_h) = (theta / 2.0).sin_cos();
+        let r = lv / l_p;
+        let s = r * cos_h;
+        if !(l_p > 0.0 && s.abs() < 1.0) || !theta.is_finite() {
+            return Err(DomainError { theta, l_p, lv });
+        }
+        let s_t = -0.5 * r * sin_h;
+        let s_l = -s / l_p;
+        let s_tt = -0.25 * s;
+        let s_tl = -s_t / l_p;
+        let s_ll = 2.0 * s / (l_p * l_p);
+
+        // a = asin(s): a' = 1/√(1 − s²) = k, a'' = s k³
+        let k = 1.0 / (1.0 - s * s).sqrt();
+        let k3s = s * k * k * k;
+        let a_t = k * s_t;
+        let a_l = k * s_l;
+        let a_tt = k3s * s_t * s_t + k * s_tt;
+        let a_tl = k3s * s_t * s_l + k * s_tl;
+        let a_ll = k3s * s_l * s_l + k * s_ll;
+
+        let delta1 = 0.5 * (PI + theta) - s.asin();
+        let (dl_t, dl_l) = (0.5 - a_t, -a_l);
+        let (dl_tt, dl_tl, dl_ll) = (-a_tt, -a_tl, -a_ll);
+
+        let (sin_d, cos_d) = delta1.sin_cos();
+        let q = 0.25 * lv;
+        Ok(Shell {
+            delta1,
+            a_s: q * l_p * sin_d,
+            a_s_t: q * l_p * cos_d * dl_t,
+            a_s_l: q * (sin_d + l_p * cos_d * dl_l),
+            a_s_tt: q * l_p * (-sin_d * dl_t * dl_t + cos_d * dl_tt),
+            a_s_tl: q * (cos_d * dl_t + l_p * (-sin_d * dl_t * dl_l + cos_d * dl_tl)),
+            a_s_ll: q * (2.0 * cos_d * dl_l + l_p * (-sin_d * dl_l * dl_l + cos_d * dl_ll)),
+            d: 0.5 * lv * sin_d,
+            d_t: 0.5 * lv * cos_d * dl_t,
+            d_l: 0.5 * lv * cos_d * dl_l,
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const LV: f64 = 0.012;
+
+    #[test]
+    fn partials_match_central_differences() {
+        for &(th, l) in &[(0.0, 0.014), (0.02, 0.01395), (-0.01, 0.01401), (0.3, 0.0135)] {
+            let s = Shell::new(th, l, LV).unwrap();
+            let (ht, hl) = (1e-6, 1e-9);
+            let pt = Shell::new(th + ht, l, LV).unwrap();
+            let mt = Shell::new(th - ht, l, LV).unwrap();
+            let pl = Shell::new(th, l + hl, LV).unwrap();
+            let ml = Shell::new(th, l - hl, LV).unwrap();
+            let close = |a: f64, b: f64, what: &str| {
+                assert!((a - b).abs() <= 1e-6 * b.abs().max(1e-6), "{what}: {a} vs {b}");
+            };
+            close(s.a_s_t, (pt.a_s - mt.a_s) / (2.0 * ht), "A_s_t");
+            close(s.a_s_l, (pl.a_s - ml.a_s) / (2.0 * hl), "A_s_l");
+            close(s.a_s_tt, (pt.a_s_t - mt.a_s_t) / (2.0 * ht), "A_s_tt");
+            close(s.a_s_tl, (pl.a_s_t - ml.a_s_t) / (2.0 * hl), "A_s_tl");
+            close(s.a_s_ll, (pl.a_s_l - ml.a_s_l) / (2.0 * hl), "A_s_ll");
+            close(s.d_t, (pt.d - mt.d) / (2.0 * ht), "d_t");
+            close(s.d_l, (pl.d - ml.d) / (2.0 * hl), "d_l");
+            close(s.d, 2.0 * s.a_s / l, "d = 2 A_s / l_p");
+        }
+    }
+
+    #[test]
+    fn outside_the_asin_domain_is_an_error() {
+        let e = Shell::new(0.0, 0.0119, LV).unwrap_err();
+        assert!(e.to_string().contains("needs l_p > Lv cos(theta/2)"));
+        assert!(Shell::new(f64::NAN, 0.014, LV).is_err());
+    }
+}
