@@ -2,3 +2,4 @@
 //! Co-Simulation FMU and the `hasel` command-line tool.
 
 pub mod model;
+pub mod solver;
