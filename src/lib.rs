@@ -3,3 +3,5 @@
 
 pub mod model;
 pub mod solver;
+pub mod simulation;
+pub mod io;

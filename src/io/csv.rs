@@ -1,0 +1,185 @@
+//! Numeric CSV tables with a header row: read with errors that name the file, the line and the
+//! column; written atomically (a temporary file renamed into place, so nothing is half-written).
+
+use std::fmt;
+use std::path::{Path, PathBuf};
+
+/// Where in which file something is wrong, and what.
+#[derive(Clone, Debug, PartialEq)]
+pub struct FileError {
+    pub path: PathBuf,
+    /// 1-based line, when the problem has one.
+    pub line: Option<usize>,
+    /// Column name or 1-based number, when the problem has one.
+    pub column: Option<String>,
+    pub message: String,
+}
+
+impl fmt::Display for FileError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "{}", self.path.display())?;
+        if let Some(l) = self.line {
+            write!(f, ":{l}")?;
+        }
+        if let Some(c) = &self.column {
+            write!(f, ", column {c}")?;
+        }
+        write!(f, ": {}", self.message)
+    }
+}
+
+impl std::error::Error for FileError {}
+
+impl FileError {
+    pub fn new(path: &Path, message: impl Into<String>) -> FileError {
+        FileError { path: path.to_path_buf(), line: None, column: None, message: message.into() }
+    }
+    pub fn at(path: &Path, line: usize, column: Option<String>, message: impl Into<String>) -> FileError {
+        FileError { path: path.to_path_buf(), line: Some(line), column, message: message.into() }
+    }
+}
+
+/// A numeric table: column names and rows of equal length.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Table {
+    pub path: PathBuf,
+    pub header: Vec<String>,
+    pub rows: Vec<Vec<f64>>,
+    /// 1-based file line of each row, for messages about a row.
+    pub lines: Vec<usize>,
+}
+
+impl Table {
+    /// Reads `path`: a header of names, then rows of finite numbers; blank lines and lines
+    /// starting with `#` are skipped.
+    pub fn read(path: &Path) -> Result<Table, FileError> {
+        let text = std::fs::read_to_string(path).map_err(|e| FileError::new(path, format!("cannot read: {e}")))?;
+        Table::parse(path, &text)
+    }
+
+    pub fn parse(path: &Path, text: &str) -> Result<Table, FileError> {
+        let mut lines = text.lines().enumerate().filter(|(_, l)| {
+            let l = l.trim();
+            !l.is_empty() && !l.starts_with('#')
+        });
+        let (header_no, header_line) = lines.next().ok_or_else(|| FileError::new(path, "empty file: expected a header row"))?;
+        let header: Vec<String> = header_line.split(',').map(|s| s.trim().to_string()).collect();
+        for (c, name) in header.iter().enumerate() {
+            if name.is_empty() {
+                return Err(FileError::at(path, header_no + 1, Some((c + 1).to_string()), "empty column name in the header"));
+            }
+            if header[..c].contains(name) {
+                return Err(FileError::at(path, header_no + 1, Some(name.clone()), "column appears twice in the header"));
+            }
+        }
+        let mut rows = Vec::new();
+        let mut line_nos = Vec::new();
+        for (no, line) in lines {
+            let fields: Vec<&str> = line.split(',').collect();
+            if fields.len() != header.len() {
+                return Err(FileError::at(
+                    path,
+                    no + 1,
+                    None,
+                    format!("{} fields, the header has {}", fields.len(), header.len()),
+                ));
+            }
+            let mut row = Vec::with_capacity(fields.len());
+            for (c, f) in fields.iter().enumerate() {
+                let v: f64 = f.trim().parse().map_err(|_| {
+                    FileError::at(path, no + 1, Some(header[c].clone()), format!("'{}' is not a number", f.trim()))
+                })?;
+                if !v.is_finite() {
+                    return Err(FileError::at(path, no + 1, Some(header[c].clone()), format!("{v} is not a finite number")));
+                }
+                row.push(v);
+            }
+            rows.push(row);
+            line_nos.push(no + 1);
+        }
+        Ok(Table { path: path.to_path_buf(), header, rows, lines: line_nos })
+    }
+
+    /// Index of the column `name`, if present.
+    pub fn find(&self, name: &str) -> Option<usize> {
+        self.header.iter().position(|h| h == name)
+    }
+
+    /// The column `name`, or an error naming the file and the missing column.
+    pub fn column(&self, name: &str) -> Result<Vec<f64>, FileError> {
+        let c = self.find(name).ok_or_else(|| {
+            FileError { path: self.path.clone(), line: Some(1), column: Some(name.into()), message: format!("missing column (the header has {})", self.header.join(",")) }
+        })?;
+        Ok(self.rows.iter().map(|r| r[c]).collect())
+    }
+
+    /// Checks that column `name` increases strictly from row to row.
+    pub fn check_increasing(&self, name: &str) -> Result<(), FileError> {
+        let values = self.column(name)?;
+        for k in 1..values.len() {
+            if values[k] <= values[k - 1] {
+                return Err(FileError::at(
+                    &self.path,
+                    self.lines[k],
+                    Some(name.into()),
+                    format!("{} does not increase (previous row: {})", values[k], values[k - 1]),
+                ));
+            }
+        }
+        Ok(())
+    }
+}
+
+/// Writes a table to `path` through a temporary file in the same folder, renamed into place.
+pub fn write_atomic(path: &Path, header: &[&str], rows: impl Iterator<Item = Vec<f64>>) -> Result<(), FileError> {
+    let mut text = header.join(",");
+    text.push('\n');
+    for row in rows {
+        let fields: Vec<String> = row.iter().map(|v| format!("{v:.12e}")).collect();
+        text.push_str(&fields.join(","));
+        text.push('\n');
+    }
+    write_text_atomic(path, &text)
+}
+
+/// Writes `text` to `path` through a temporary file renamed into place.
+pub fn write_text_atomic(path: &Path, text: &str) -> Result<(), FileError> {
+    write_bytes_atomic(path, text.as_bytes())
+}
+
+/// Writes `bytes` to `path` through a temporary file renamed into place.
+pub fn write_bytes_atomic(path: &Path, bytes: &[u8]) -> Result<(), FileError> {
+    let dir = path.parent().filter(|d| !d.as_os_str().is_empty()).unwrap_or(Path::new("."));
+    std::fs::create_dir_all(dir).map_err(|e| FileError::new(path, format!("cannot create folder: {e}")))?;
+    let name = path.file_name().ok_or_else(|| FileError::new(path, "not a file path"))?;
+    let tmp = dir.join(format!(".{}.tmp{}", name.to_string_lossy(), std::process::id()));
+    std::fs::write(&tmp, bytes).map_err(|e| FileError::new(path, format!("cannot write: {e}")))?;
+    std::fs::rename(&tmp, path).map_err(|e| {
+        let _ = std::fs::remove_file(&tmp);
+        FileError::new(path, format!("cannot move into place: {e}"))
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn parse(text: &str) -> Result<Table, FileError> {
+        Table::parse(Path::new("x.csv"), text)
+    }
+
+    #[test]
+    fn errors_name_file_line_and_column() {
+        let e = parse("t,U1\n0,1\n0.1,abc\n").unwrap_err();
+        assert_eq!(e.to_string(), "x.csv:3, column U1: 'abc' is not a number");
+        let e = parse("t,U1\n0,1,2\n").unwrap_err();
+        assert_eq!(e.to_string(), "x.csv:2: 3 fields, the header has 2");
+        let e = parse("t,U1\n0,nan\n").unwrap_err();
+        assert!(e.to_string().starts_with("x.csv:2, column U1: NaN is not a finite number"));
+        let t = parse("# comment\nt,U1\n0,1\n0,2\n").unwrap();
+        assert_eq!(t.check_increasing("t").unwrap_err().to_string(), "x.csv:4, column t: 0 does not increase (previous row: 0)");
+        assert!(t.column("U2").unwrap_err().to_string().contains("column U2: missing column"));
+        assert!(parse("").is_err());
+        assert!(parse("t,t\n").unwrap_err().to_string().contains("twice"));
+    }
+}

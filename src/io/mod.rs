@@ -1,0 +1,4 @@
+//! Files in and out: CSV tables and parameter files, with errors that name the file, the line
+//! and the column, and writes that never leave a half-written file.
+
+pub mod csv;

@@ -1,0 +1,191 @@
+//! Model + solver + input → a trajectory, or one communication step at a time. The CLI, the
+//! FMU, identification and diagnosis all run the model through this one door.
+
+pub mod input;
+
+use serde::{Deserialize, Serialize};
+
+use crate::model::{ModelError, Platform};
+use crate::solver::{OdeSystem, Radau5, RhsError, SolverError, Stats, Tolerances};
+pub use input::{Input, Interpolation, Piece, Tone};
+
+/// Relative tolerance of every way of running the model unless the user picks another
+/// (model.md, "Accuracy contract"; the FMU's DefaultExperiment declares the same).
+pub const DEFAULT_RTOL: f64 = 1e-6;
+
+/// Why a simulation could not go on.
+#[derive(Clone, Debug, PartialEq)]
+pub enum SimError {
+    /// The initial state could not be computed or evaluated.
+    Model(ModelError),
+    Solver(SolverError),
+    /// A setting is out of range (named, with its value).
+    Setting(String),
+}
+
+impl std::fmt::Display for SimError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            SimError::Model(e) => write!(f, "{e}"),
+            SimError::Solver(e) => write!(f, "solver: {e}"),
+            SimError::Setting(s) => f.write_str(s),
+        }
+    }
+}
+
+impl std::error::Error for SimError {}
+
+impl From<ModelError> for SimError {
+    fn from(e: ModelError) -> Self {
+        SimError::Model(e)
+    }
+}
+
+impl From<SolverError> for SimError {
+    fn from(e: SolverError) -> Self {
+        SimError::Solver(e)
+    }
+}
+
+/// The platform driven by one smooth piece of input: the solver's view of the model.
+struct Driven<'a> {
+    model: &'a Platform,
+    piece: Piece<'a>,
+}
+
+impl OdeSystem for Driven<'_> {
+    fn dim(&self) -> usize {
+        self.model.n_states()
+    }
+    fn rhs(&self, t: f64, x: &[f64], dx: &mut [f64]) -> Result<(), RhsError> {
+        self.model.rhs(x, self.piece.value(t), dx).map_err(|e| RhsError(e.to_string()))
+    }
+    fn jacobian(&self, t: f64, x: &[f64], jac: &mut [f64]) -> Result<(), RhsError> {
+        self.model.jacobian(x, self.piece.value(t), jac).map_err(|e| RhsError(e.to_string()))
+    }
+}
+
+/// The outputs at one instant: heights h_i and the antenna tip [m].
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Sample {
+    pub t: f64,
+    pub u: [f64; 3],
+    pub h: [f64; 3],
+    pub tip: [f64; 3],
+}
+
+/// A running simulation of the platform: its model, the integrator and the input last applied.
+#[derive(Clone, Debug)]
+pub struct Simulator {
+    model: Platform,
+    solver: Radau5,
+    /// Input value at the current point, to detect jumps between calls.
+    u_now: [f64; 3],
+}
+
+impl Simulator {
+    /// Starts at the rest state at `t0` with relative tolerance `rtol` (atol scaled per state).
+    pub fn new(model: Platform, t0: f64, rtol: f64) -> Result<Simulator, SimError> {
+        let x0 = model.rest_state()?;
+        Simulator::from_state(model, t0, &x0, rtol)
+    }
+
+    /// Starts at state `x0` at `t0`.
+    pub fn from_state(model: Platform, t0: f64, x0: &[f64], rtol: f64) -> Result<Simulator, SimError> {
+        if !(rtol.is_finite() && rtol > 0.0 && rtol < 0.1) {
+            return Err(SimError::Setting(format!("relative tolerance rtol = {rtol:e}: must be in (0, 0.1)")));
+        }
+        if !t0.is_finite() {
+            return Err(SimError::Setting(format!("start time t0 = {t0}: must be finite")));
+        }
+        let tol = Tolerances::scaled(rtol, &model.state_scales());
+        let mut solver = Radau5::new(model.n_states(), tol);
+        let sys = Driven { model: &model, piece: Piece::Constant([0.0; 3]) };
+        // a first step of 1 ns: the electrical modes have a 2.7 ns time constant
+        solver.init(&sys, t0, x0, 1e-9)?;
+        Ok(Simulator { model, solver, u_now: [0.0; 3] })
+    }
+
+    pub fn model(&self) -> &Platform {
+        &self.model
+    }
+
+    pub fn t(&self) -> f64 {
+        self.solver.t()
+    }
+
+    pub fn state(&self) -> &[f64] {
+        self.solver.y()
+    }
+
+    pub fn stats(&self) -> Stats {
+        self.solver.stats()
+    }
+
+    /// The outputs at the current point.
+    pub fn sample(&self) -> Sample {
+        let x = self.solver.y();
+        Sample { t: self.t(), u: self.u_now, h: self.model.heights(x), tip: self.model.tip(x) }
+    }
+
+    /// Makes `piece` the input from now on; restarts the integrator where the input jumps.
+    fn apply(&mut self, piece: Piece<'_>) -> Result<(), SimError> {
+        let u = piece.value(self.t());
+        if u != self.u_now {
+            for (i, v) in u.iter().enumerate() {
+                if !v.is_finite() {
+                    return Err(SimError::Setting(format!("input U{} = {v} at t = {}: must be finite", i + 1, self.t())));
+                }
+            }
+            self.u_now = u;
+            self.solver.restart(&Driven { model: &self.model, piece })?;
+        }
+        Ok(())
+    }
+
+    /// Integrates to `t_end` with the input held at `u` (one co-simulation step).
+    pub fn step_held(&mut self, u: [f64; 3], t_end: f64) -> Result<(), SimError> {
+        let piece = Piece::Constant(u);
+        self.apply(piece)?;
+        self.solver.advance(&Driven { model: &self.model, piece }, t_end)?;
+        Ok(())
+    }
+
+    /// Integrates `input` to `t_end`, calling `on_sample` at t0 and at every multiple of `dt`
+    /// after it up to `t_end` (read from the integrator's dense output inside smooth pieces; the
+    /// integrator stops exactly at every breakpoint of the input and at `t_end`).
+    pub fn run(
+        &mut self,
+        input: &Input,
+        t_end: f64,
+        dt: f64,
+        mut on_sample: impl FnMut(&Sample),
+    ) -> Result<(), SimError> {
+        if !(dt.is_finite() && dt > 0.0) {
+            return Err(SimError::Setting(format!("output step dt = {dt}: must be > 0")));
+        }
+        let t0 = self.t();
+        let last = ((t_end - t0) / dt * (1.0 + 1e-12)).floor().max(0.0) as u64;
+        let mut x = vec![0.0; self.model.n_states()];
+        let mut k: u64 = 0;
+        while self.t() < t_end || k == 0 {
+            let (piece, piece_end) = input.piece_at(self.t());
+            self.apply(piece)?;
+            let seg_end = piece_end.min(t_end);
+            let sys = Driven { model: &self.model, piece };
+            loop {
+                while k <= last && (t0 + k as f64 * dt).min(t_end) <= self.t() {
+                    let ts = (t0 + k as f64 * dt).min(t_end);
+                    self.solver.interpolate(ts, &mut x);
+                    on_sample(&Sample { t: ts, u: input.value(ts), h: self.model.heights(&x), tip: self.model.tip(&x) });
+                    k += 1;
+                }
+                if self.t() >= seg_end {
+                    break;
+                }
+                self.solver.step(&sys, seg_end)?;
+            }
+        }
+        Ok(())
+    }
+}
