@@ -146,11 +146,11 @@ impl Actuator {
         mut set: impl FnMut(usize, usize, f64),
     ) -> Result<(), DomainError> {
         let e = self.eval(x)?;
-        let s = &e.shell;
-        let (d, inv_i) = (s.d, 1.0 / self.inertia);
+        let s = e.shell.curvature();
+        let (d, inv_i) = (e.shell.d, 1.0 / self.inertia);
         // Hessian of H in (θ, l_p, Q2); E = Q2²/(2 C2):
         // E_xy = (V2²/C2) C2_x C2_y − ½ V2² C2_xy,  E_xQ2 = −V2 C2_x / C2
-        let (c2_t, c2_l) = (self.c2_a * s.a_s_t, self.c2_a * s.a_s_l);
+        let (c2_t, c2_l) = (self.c2_a * e.shell.a_s_t, self.c2_a * e.shell.a_s_l);
         let w = e.v2 * e.v2 / e.c2;
         let half_v2sq = 0.5 * e.v2 * e.v2 * self.c2_a;
         let h_tt =
@@ -213,8 +213,11 @@ impl Actuator {
         0.5 * self.lv * theta.sin()
     }
 
-    /// Scale of each state, for absolute tolerances: θ* = π/(2γ2) (where ga vanishes), Lp,
-    /// I θ*/(1 s), and the charges at 100 V command in the quasi-static divider (C2 unzipped).
+    /// Scale of each state, for absolute tolerances: θ* = π/(2γ2) (where ga vanishes); Lp; for p,
+    /// (b + I·1/s) θ*, since a momentum error δp relaxes at the rate b/I and so moves θ by δp/b:
+    /// p is weighted by its effect on θ, not by its own tiny size (≈ 1e-7), which would make the
+    /// error control resolve every fast velocity transient after an input jump; the charges at a
+    /// 100 V command in the quasi-static divider (C2 unzipped).
     pub fn state_scales(&self) -> [f64; N] {
         let theta_star = std::f64::consts::FRAC_PI_2 / self.par.gamma2;
         let v_source = self.par.gamma1 * 100.0;
@@ -222,7 +225,7 @@ impl Actuator {
         [
             theta_star,
             self.lp,
-            self.inertia * theta_star,
+            (self.par.b + self.inertia * 1.0) * theta_star,
             self.par.c1 * i_dc * self.par.r1,
             self.c2_unzipped * i_dc * self.par.r2,
         ]

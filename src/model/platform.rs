@@ -97,6 +97,11 @@ impl Platform {
         Ok(())
     }
 
+    /// Sizes of the diagonal blocks of ∂f/∂x: the actuators are independent.
+    pub fn jacobian_blocks(&self) -> Vec<usize> {
+        vec![actuator::N; 3]
+    }
+
     /// The spec's initial state: each actuator at its U = 0 equilibrium under gravity.
     pub fn rest_state(&self) -> Result<Vec<f64>, ModelError> {
         Ok(self.each(|_, a| a.rest_state())?.concat())

@@ -7,7 +7,8 @@
 //! d   = 2 A_s / l_p = ½ Lv sin δ1
 //! ```
 //!
-//! Second derivatives are needed for the analytic Jacobian (∇²H).
+//! Second derivatives are needed for the analytic Jacobian (∇²H). sin δ1 and cos δ1 come from
+//! the angle-difference formulas, so the right-hand side needs no asin.
 
 use std::f64::consts::PI;
 
@@ -33,17 +34,33 @@ impl std::fmt::Display for DomainError {
 
 impl std::error::Error for DomainError {}
 
-/// δ1, A_s and d at one (θ, l_p) with their partials; subscripts `_t` = ∂/∂θ, `_l` = ∂/∂l_p.
+/// A_s and d at one (θ, l_p) with their first partials; subscripts `_t` = ∂/∂θ, `_l` = ∂/∂l_p.
+/// Second partials come from [`Shell::curvature`], which only the Jacobian needs.
 #[derive(Clone, Copy, Debug)]
 pub struct Shell {
-    pub delta1: f64,
     pub a_s: f64,
     pub a_s_t: f64,
     pub a_s_l: f64,
+    pub d: f64,
+    l_p: f64,
+    lv: f64,
+    /// s = (Lv/l_p) cos(θ/2), the asin argument, and k = 1/√(1 − s²) = asin'(s)
+    s: f64,
+    k: f64,
+    sin_h: f64,
+    sin_d: f64,
+    cos_d: f64,
+    /// ∂δ1/∂θ, ∂δ1/∂l_p
+    dl_t: f64,
+    dl_l: f64,
+}
+
+/// Second partials of A_s and first partials of d.
+#[derive(Clone, Copy, Debug)]
+pub struct Curvature {
     pub a_s_tt: f64,
     pub a_s_tl: f64,
     pub a_s_ll: f64,
-    pub d: f64,
     pub d_t: f64,
     pub d_l: f64,
 }
@@ -52,44 +69,61 @@ impl Shell {
     pub fn new(theta: f64, l_p: f64, lv: f64) -> Result<Shell, DomainError> {
         // s = (Lv/l_p) sin((π − θ)/2) = (Lv/l_p) cos(θ/2)
         let (sin_h, cos_h) = (theta / 2.0).sin_cos();
-        let r = lv / l_p;
-        let s = r * cos_h;
+        let s = lv / l_p * cos_h;
         if !(l_p > 0.0 && s.abs() < 1.0) || !theta.is_finite() {
             return Err(DomainError { theta, l_p, lv });
         }
-        let s_t = -0.5 * r * sin_h;
+        let cos_a = (1.0 - s * s).sqrt();
+        let k = 1.0 / cos_a;
+        // δ1 = (π + θ)/2 − a with sin a = s: sin δ1 and cos δ1 by the angle-difference formulas
+        let sin_d = cos_h * cos_a + sin_h * s;
+        let cos_d = -sin_h * cos_a + cos_h * s;
+        let s_t = -0.5 * lv / l_p * sin_h;
+        let s_l = -s / l_p;
+        let (dl_t, dl_l) = (0.5 - k * s_t, -k * s_l);
+        let q = 0.25 * lv;
+        Ok(Shell {
+            a_s: q * l_p * sin_d,
+            a_s_t: q * l_p * cos_d * dl_t,
+            a_s_l: q * (sin_d + l_p * cos_d * dl_l),
+            d: 0.5 * lv * sin_d,
+            l_p,
+            lv,
+            s,
+            k,
+            sin_h,
+            sin_d,
+            cos_d,
+            dl_t,
+            dl_l,
+        })
+    }
+
+    /// δ1 [rad].
+    pub fn delta1(&self) -> f64 {
+        self.sin_d.atan2(self.cos_d)
+    }
+
+    pub fn curvature(&self) -> Curvature {
+        let Shell { l_p, lv, s, k, sin_h, sin_d, cos_d, dl_t, dl_l, .. } = *self;
+        let s_t = -0.5 * lv / l_p * sin_h;
         let s_l = -s / l_p;
         let s_tt = -0.25 * s;
         let s_tl = -s_t / l_p;
         let s_ll = 2.0 * s / (l_p * l_p);
-
-        // a = asin(s): a' = 1/√(1 − s²) = k, a'' = s k³
-        let k = 1.0 / (1.0 - s * s).sqrt();
+        // a = asin(s): a' = k, a'' = s k³; δ1 = (π + θ)/2 − a
         let k3s = s * k * k * k;
-        let a_t = k * s_t;
-        let a_l = k * s_l;
-        let a_tt = k3s * s_t * s_t + k * s_tt;
-        let a_tl = k3s * s_t * s_l + k * s_tl;
-        let a_ll = k3s * s_l * s_l + k * s_ll;
-
-        let delta1 = 0.5 * (PI + theta) - s.asin();
-        let (dl_t, dl_l) = (0.5 - a_t, -a_l);
-        let (dl_tt, dl_tl, dl_ll) = (-a_tt, -a_tl, -a_ll);
-
-        let (sin_d, cos_d) = delta1.sin_cos();
+        let dl_tt = -(k3s * s_t * s_t + k * s_tt);
+        let dl_tl = -(k3s * s_t * s_l + k * s_tl);
+        let dl_ll = -(k3s * s_l * s_l + k * s_ll);
         let q = 0.25 * lv;
-        Ok(Shell {
-            delta1,
-            a_s: q * l_p * sin_d,
-            a_s_t: q * l_p * cos_d * dl_t,
-            a_s_l: q * (sin_d + l_p * cos_d * dl_l),
+        Curvature {
             a_s_tt: q * l_p * (-sin_d * dl_t * dl_t + cos_d * dl_tt),
             a_s_tl: q * (cos_d * dl_t + l_p * (-sin_d * dl_t * dl_l + cos_d * dl_tl)),
             a_s_ll: q * (2.0 * cos_d * dl_l + l_p * (-sin_d * dl_l * dl_l + cos_d * dl_ll)),
-            d: 0.5 * lv * sin_d,
             d_t: 0.5 * lv * cos_d * dl_t,
             d_l: 0.5 * lv * cos_d * dl_l,
-        })
+        }
     }
 }
 
@@ -103,21 +137,26 @@ mod tests {
     fn partials_match_central_differences() {
         for &(th, l) in &[(0.0, 0.014), (0.02, 0.01395), (-0.01, 0.01401), (0.3, 0.0135)] {
             let s = Shell::new(th, l, LV).unwrap();
+            let c = s.curvature();
             let (ht, hl) = (1e-6, 1e-9);
             let pt = Shell::new(th + ht, l, LV).unwrap();
             let mt = Shell::new(th - ht, l, LV).unwrap();
             let pl = Shell::new(th, l + hl, LV).unwrap();
             let ml = Shell::new(th, l - hl, LV).unwrap();
+            // δ1 as the spec writes it
+            let delta1 = 0.5 * (std::f64::consts::PI + th) - (LV / l * (0.5 * (std::f64::consts::PI - th)).sin()).asin();
+            assert!((s.delta1() - delta1).abs() < 1e-14);
+            assert!((s.a_s - 0.25 * l * LV * delta1.sin()).abs() < 1e-20);
             let close = |a: f64, b: f64, what: &str| {
                 assert!((a - b).abs() <= 1e-6 * b.abs().max(1e-6), "{what}: {a} vs {b}");
             };
             close(s.a_s_t, (pt.a_s - mt.a_s) / (2.0 * ht), "A_s_t");
             close(s.a_s_l, (pl.a_s - ml.a_s) / (2.0 * hl), "A_s_l");
-            close(s.a_s_tt, (pt.a_s_t - mt.a_s_t) / (2.0 * ht), "A_s_tt");
-            close(s.a_s_tl, (pl.a_s_t - ml.a_s_t) / (2.0 * hl), "A_s_tl");
-            close(s.a_s_ll, (pl.a_s_l - ml.a_s_l) / (2.0 * hl), "A_s_ll");
-            close(s.d_t, (pt.d - mt.d) / (2.0 * ht), "d_t");
-            close(s.d_l, (pl.d - ml.d) / (2.0 * hl), "d_l");
+            close(c.a_s_tt, (pt.a_s_t - mt.a_s_t) / (2.0 * ht), "A_s_tt");
+            close(c.a_s_tl, (pl.a_s_t - ml.a_s_t) / (2.0 * hl), "A_s_tl");
+            close(c.a_s_ll, (pl.a_s_l - ml.a_s_l) / (2.0 * hl), "A_s_ll");
+            close(c.d_t, (pt.d - mt.d) / (2.0 * ht), "d_t");
+            close(c.d_l, (pl.d - ml.d) / (2.0 * hl), "d_l");
             close(s.d, 2.0 * s.a_s / l, "d = 2 A_s / l_p");
         }
     }

@@ -63,6 +63,9 @@ impl OdeSystem for Driven<'_> {
     fn jacobian(&self, t: f64, x: &[f64], jac: &mut [f64]) -> Result<(), RhsError> {
         self.model.jacobian(x, self.piece.value(t), jac).map_err(|e| RhsError(e.to_string()))
     }
+    fn jacobian_blocks(&self) -> Vec<usize> {
+        self.model.jacobian_blocks()
+    }
 }
 
 /// The outputs at one instant: heights h_i and the antenna tip [m].

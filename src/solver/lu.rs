@@ -9,17 +9,19 @@ use nalgebra::ComplexField;
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Singular(pub usize);
 
-/// Factors `a` (n×n, column-major) into P A = L U in place; `piv[k]` is the row swapped with k.
-pub fn factor<T>(a: &mut [T], n: usize, piv: &mut [usize]) -> Result<(), Singular>
+/// Factors the diagonal block of `a` (column-major, leading dimension `ld`) that starts at row
+/// and column `o` and has size `m` into P A = L U in place; `piv[k]` is the row (relative to
+/// `o`) swapped with k. Entries outside the block are neither read nor written.
+pub fn factor<T>(a: &mut [T], ld: usize, o: usize, m: usize, piv: &mut [usize]) -> Result<(), Singular>
 where
     T: ComplexField<RealField = f64> + Copy,
 {
-    for k in 0..n {
-        let col = k * n;
+    let at = |r: usize, c: usize| (o + c) * ld + o + r;
+    for k in 0..m {
         let mut p = k;
-        let mut best = a[col + k].norm1();
-        for i in k + 1..n {
-            let v = a[col + i].norm1();
+        let mut best = a[at(k, k)].norm1();
+        for i in k + 1..m {
+            let v = a[at(i, k)].norm1();
             if v > best {
                 best = v;
                 p = i;
@@ -27,23 +29,23 @@ where
         }
         piv[k] = p;
         if best == 0.0 || !best.is_finite() {
-            return Err(Singular(k));
+            return Err(Singular(o + k));
         }
         if p != k {
-            for j in 0..n {
-                a.swap(j * n + k, j * n + p);
+            for j in 0..m {
+                a.swap(at(k, j), at(p, j));
             }
         }
-        let inv = T::one() / a[col + k];
-        for i in k + 1..n {
-            a[col + i] *= inv;
+        let inv = T::one() / a[at(k, k)];
+        for i in k + 1..m {
+            a[at(i, k)] *= inv;
         }
-        for j in k + 1..n {
-            let akj = a[j * n + k];
+        for j in k + 1..m {
+            let akj = a[at(k, j)];
             if akj != T::zero() {
-                for i in k + 1..n {
-                    let l = a[col + i];
-                    a[j * n + i] -= l * akj;
+                for i in k + 1..m {
+                    let l = a[at(i, k)];
+                    a[at(i, j)] -= l * akj;
                 }
             }
         }
@@ -51,31 +53,58 @@ where
     Ok(())
 }
 
-/// Solves A x = b in place with the factors from [`factor`].
-pub fn solve<T>(lu: &[T], n: usize, piv: &[usize], b: &mut [T])
+/// Solves A x = b in place for the block factored by [`factor`] (`b` is the block's part).
+pub fn solve<T>(lu: &[T], ld: usize, o: usize, piv: &[usize], b: &mut [T])
 where
     T: ComplexField<RealField = f64> + Copy,
 {
+    let m = b.len();
+    let at = |r: usize, c: usize| (o + c) * ld + o + r;
     // the factors hold rows in their final order: permute b fully, then substitute
-    for k in 0..n {
+    for k in 0..m {
         b.swap(k, piv[k]);
     }
-    for k in 0..n {
+    for k in 0..m {
         let bk = b[k];
         if bk != T::zero() {
-            for i in k + 1..n {
-                b[i] -= lu[k * n + i] * bk;
+            for i in k + 1..m {
+                b[i] -= lu[at(i, k)] * bk;
             }
         }
     }
-    for k in (0..n).rev() {
-        b[k] /= lu[k * n + k];
+    for k in (0..m).rev() {
+        b[k] /= lu[at(k, k)];
         let bk = b[k];
         if bk != T::zero() {
             for i in 0..k {
-                b[i] -= lu[k * n + i] * bk;
+                b[i] -= lu[at(i, k)] * bk;
             }
         }
+    }
+}
+
+/// Factors a block-diagonal matrix block by block (`blocks`: the sizes, summing to n).
+pub fn factor_blocks<T>(a: &mut [T], n: usize, blocks: &[usize], piv: &mut [usize]) -> Result<(), Singular>
+where
+    T: ComplexField<RealField = f64> + Copy,
+{
+    let mut o = 0;
+    for &m in blocks {
+        factor(a, n, o, m, &mut piv[o..o + m])?;
+        o += m;
+    }
+    Ok(())
+}
+
+/// Solves with the factors of [`factor_blocks`].
+pub fn solve_blocks<T>(lu: &[T], n: usize, blocks: &[usize], piv: &[usize], b: &mut [T])
+where
+    T: ComplexField<RealField = f64> + Copy,
+{
+    let mut o = 0;
+    for &m in blocks {
+        solve(lu, n, o, &piv[o..o + m], &mut b[o..o + m]);
+        o += m;
     }
 }
 
@@ -95,8 +124,8 @@ mod tests {
         let x = DVector::from_fn(n, |i, _| i as f64 - 1.5);
         let b = &m * &x;
         let (mut a, mut piv, mut rhs) = (m.as_slice().to_vec(), vec![0; n], b.as_slice().to_vec());
-        factor(&mut a, n, &mut piv).unwrap();
-        solve(&a, n, &piv, &mut rhs);
+        factor_blocks(&mut a, n, &[n], &mut piv).unwrap();
+        solve_blocks(&a, n, &[n], &piv, &mut rhs);
         for i in 0..n {
             assert!((rhs[i] - x[i]).abs() < 1e-12);
         }
@@ -105,16 +134,34 @@ mod tests {
         let xc = x.map(|v| Complex::new(1.0, v));
         let bc = &mc * &xc;
         let (mut a, mut rhs) = (mc.as_slice().to_vec(), bc.as_slice().to_vec());
-        factor(&mut a, n, &mut piv).unwrap();
-        solve(&a, n, &piv, &mut rhs);
+        factor_blocks(&mut a, n, &[n], &mut piv).unwrap();
+        solve_blocks(&a, n, &[n], &piv, &mut rhs);
         for i in 0..n {
             assert!((rhs[i] - xc[i]).norm() < 1e-12);
         }
     }
 
     #[test]
+    fn block_diagonal_factors_ignore_what_lies_outside_the_blocks() {
+        let n = 5;
+        let blocks = [2, 3];
+        let inside = |r: usize, c: usize| (r < 2) == (c < 2);
+        let m = DMatrix::from_fn(n, n, |r, c| if inside(r, c) { (r + 2 * c) as f64 - 3.0 + if r == c { 9.0 } else { 1.0 } } else { 0.0 });
+        let x = DVector::from_fn(n, |i, _| 1.0 + i as f64);
+        let b = &m * &x;
+        // garbage off the blocks must not matter
+        let mut a = DMatrix::from_fn(n, n, |r, c| if inside(r, c) { m[(r, c)] } else { 1e6 }).as_slice().to_vec();
+        let (mut piv, mut rhs) = (vec![0; n], b.as_slice().to_vec());
+        factor_blocks(&mut a, n, &blocks, &mut piv).unwrap();
+        solve_blocks(&a, n, &blocks, &piv, &mut rhs);
+        for i in 0..n {
+            assert!((rhs[i] - x[i]).abs() < 1e-12, "{rhs:?}");
+        }
+    }
+
+    #[test]
     fn reports_singular_matrices() {
         let mut a = vec![1.0, 2.0, 2.0, 4.0];
-        assert_eq!(factor(&mut a, 2, &mut [0; 2]), Err(Singular(1)));
+        assert_eq!(factor_blocks(&mut a, 2, &[2], &mut [0; 2]), Err(Singular(1)));
     }
 }

@@ -20,6 +20,11 @@ pub trait OdeSystem {
     fn rhs(&self, t: f64, y: &[f64], dy: &mut [f64]) -> Result<(), RhsError>;
     /// ∂f/∂y into `jac`, column-major `dim × dim` (entry (r, c) at `c * dim + r`).
     fn jacobian(&self, t: f64, y: &[f64], jac: &mut [f64]) -> Result<(), RhsError>;
+    /// Sizes of the diagonal blocks when ∂f/∂y is block diagonal (summing to `dim`), so that
+    /// the linear algebra works block by block; one block of `dim` by default.
+    fn jacobian_blocks(&self) -> Vec<usize> {
+        vec![self.dim()]
+    }
 }
 
 /// The system could not be evaluated (for example outside the domain of its equations).
