@@ -5,3 +5,4 @@ pub mod model;
 pub mod solver;
 pub mod simulation;
 pub mod io;
+pub mod plot;

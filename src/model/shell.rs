@@ -10,7 +10,6 @@
 //! Second derivatives are needed for the analytic Jacobian (∇²H). sin δ1 and cos δ1 come from
 //! the angle-difference formulas, so the right-hand side needs no asin.
 
-use std::f64::consts::PI;
 
 /// The model is defined only where the asin argument is below 1, i.e. l_p > Lv cos(θ/2).
 #[derive(Clone, Copy, Debug, PartialEq)]

@@ -1,0 +1,101 @@
+//! `hasel bench`: solver speed on the paper's excitation, with the error against the
+//! independent reference data printed beside the time.
+
+use std::path::{Path, PathBuf};
+use std::time::{Duration, Instant};
+
+use hasel_fmu::io::csv::Table;
+use hasel_fmu::model::{Params, Platform};
+use hasel_fmu::simulation::{DEFAULT_RTOL, Input, Sample, Simulator};
+use hasel_fmu::solver::Stats;
+
+#[derive(clap::Args)]
+pub struct Args {
+    /// Folder of the reference trajectories (sine60_w3pi.csv, zoh1ms_sine60_w3pi.csv)
+    #[arg(long, default_value = concat!(env!("CARGO_MANIFEST_DIR"), "/../shared/data/reference"))]
+    reference: PathBuf,
+    /// Repetitions; the best wall time is reported
+    #[arg(long, default_value_t = 5)]
+    repeat: usize,
+}
+
+/// Largest |Δh| and |Δtip| [µm] against a reference file, over the rows both have.
+fn error_against(path: &Path, samples: &[Sample]) -> Option<(f64, f64)> {
+    let table = Table::read(path).ok()?;
+    let cols: Vec<usize> = ["h1", "h2", "h3", "tip_x", "tip_y", "tip_z"].iter().map(|c| table.find(c)).collect::<Option<_>>()?;
+    let (mut dh, mut dtip): (f64, f64) = (0.0, 0.0);
+    for (row, s) in table.rows.iter().zip(samples) {
+        if (row[0] - s.t).abs() > 1e-9 {
+            return None;
+        }
+        for i in 0..3 {
+            dh = dh.max((row[cols[i]] - s.h[i]).abs());
+            dtip = dtip.max((row[cols[3 + i]] - s.tip[i]).abs());
+        }
+    }
+    Some((dh * 1e6, dtip * 1e6))
+}
+
+fn best<T>(repeat: usize, mut f: impl FnMut() -> T) -> (Duration, T) {
+    let mut out = None;
+    let mut fastest = Duration::MAX;
+    for _ in 0..repeat.max(1) {
+        let start = Instant::now();
+        let r = f();
+        fastest = fastest.min(start.elapsed());
+        out = Some(r);
+    }
+    (fastest, out.expect("at least one repetition"))
+}
+
+fn report(name: &str, wall: Duration, stats: Stats, error: Option<(f64, f64)>, target_ms: f64) {
+    let ms = wall.as_secs_f64() * 1e3;
+    println!("{name}");
+    println!(
+        "  wall {ms:.2} ms (target <= {target_ms} ms: {}) | steps {} (+{} rejected) | f {} | J {} | LU {} | Newton {}",
+        if ms <= target_ms { "met" } else { "MISSED" },
+        stats.accepted,
+        stats.rejected,
+        stats.rhs_evals,
+        stats.jac_evals,
+        stats.decompositions,
+        stats.newton_iterations
+    );
+    match error {
+        Some((dh, dtip)) => println!("  max error vs reference: |dh| {dh:.2e} um, |dtip| {dtip:.2e} um"),
+        None => println!("  (reference data not found: no error figure)"),
+    }
+}
+
+pub fn run(a: Args) -> Result<(), String> {
+    let model = Platform::new(Params::default()).map_err(|e| e.to_string())?;
+    let omega = 3.0 * std::f64::consts::PI;
+    let input = Input::sine(60.0, omega);
+    println!("Radau IIA(5), rtol {DEFAULT_RTOL:e}, 15 states, best of {} runs", a.repeat);
+
+    let (wall, (stats, samples)) = best(a.repeat, || {
+        let mut sim = Simulator::new(model.clone(), 0.0, DEFAULT_RTOL).expect("valid model");
+        let mut samples = Vec::with_capacity(10_001);
+        sim.run(&input, 10.0, 1e-3, |s| samples.push(*s)).expect("the default run succeeds");
+        (sim.stats(), samples)
+    });
+    let error = error_against(&a.reference.join("sine60_w3pi.csv"), &samples);
+    report("10 s of 60 V at 3pi rad/s, outputs every 1 ms (dense output)", wall, stats, error, 5.0);
+
+    let (wall, (stats, samples)) = best(a.repeat, || {
+        let mut sim = Simulator::new(model.clone(), 0.0, DEFAULT_RTOL).expect("valid model");
+        let mut samples = Vec::with_capacity(10_001);
+        samples.push(sim.sample());
+        for k in 0..10_000 {
+            let t = k as f64 * 1e-3;
+            sim.step_held(input.value(t), (k + 1) as f64 * 1e-3).expect("the default run succeeds");
+            let mut s = sim.sample();
+            s.u = input.value(s.t);
+            samples.push(s);
+        }
+        (sim.stats(), samples)
+    });
+    let error = error_against(&a.reference.join("zoh1ms_sine60_w3pi.csv"), &samples);
+    report("10,000 co-simulation steps of 1 ms, input held and changed at every step", wall, stats, error, 50.0);
+    Ok(())
+}

@@ -1,0 +1,41 @@
+//! `hasel`: simulate the HASEL platform, pack it as an FMI 2.0 FMU, benchmark it.
+
+mod bench;
+mod simulate;
+
+use std::process::ExitCode;
+
+use clap::{Parser, Subcommand};
+
+#[derive(Parser)]
+#[command(name = "hasel", version, about = "HASEL-actuated 3PS micro parallel platform: simulation, FMU export, benchmarks")]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Simulate the platform and write h_i(t) and the tip (CSV) and a figure (PNG)
+    Simulate(simulate::Args),
+    /// Print the parameters (defaults, or a file's values over them) as a parameter file
+    Params(simulate::ParamsArgs),
+    /// Measure the solver: wall time, work counters and error against the reference data
+    Bench(bench::Args),
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    let result = match cli.command {
+        Command::Simulate(a) => simulate::run(a),
+        Command::Params(a) => simulate::params(a),
+        Command::Bench(a) => bench::run(a),
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("hasel: error: {e}");
+            ExitCode::FAILURE
+        }
+    }
+}
