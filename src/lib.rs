@@ -1,2 +1,4 @@
 //! hasel-fmu: the HASEL-actuated 3PS micro parallel platform as a library, an FMI 2.0
 //! Co-Simulation FMU and the `hasel` command-line tool.
+
+pub mod fmi2;
