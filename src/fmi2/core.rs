@@ -39,7 +39,12 @@ pub trait FmuCore: Clone + Send + 'static {
 
     /// Start of Initialization Mode (`fmi2EnterInitializationMode`) with the experiment of
     /// `fmi2SetupExperiment`: the core sets its time to `start_time`.
-    fn enter_initialization(&mut self, start_time: f64, stop_time: Option<f64>, tolerance: Option<f64>) -> Result<(), String>;
+    fn enter_initialization(
+        &mut self,
+        start_time: f64,
+        stop_time: Option<f64>,
+        tolerance: Option<f64>,
+    ) -> Result<(), String>;
 
     /// End of Initialization Mode (`fmi2ExitInitializationMode`): the parameters are final,
     /// the initial state is computed; stepping follows.

@@ -49,7 +49,11 @@ unsafe fn out_slice<'a, T>(p: *mut T, n: usize) -> Option<&'a mut [T]> {
 }
 
 /// Runs `f` on the instance behind `c`, catching panics.
-unsafe fn with_instance<M: FmuCore>(c: fmi2Component, func: &str, f: impl FnOnce(&mut Instance<M>) -> Fmi2Status) -> Fmi2Status {
+unsafe fn with_instance<M: FmuCore>(
+    c: fmi2Component,
+    func: &str,
+    f: impl FnOnce(&mut Instance<M>) -> Fmi2Status,
+) -> Fmi2Status {
     if c.is_null() {
         return Fmi2Status::Error;
     }
@@ -59,7 +63,8 @@ unsafe fn with_instance<M: FmuCore>(c: fmi2Component, func: &str, f: impl FnOnce
         Ok(status) => status,
         Err(payload) => {
             let message = panic_message(&*payload);
-            catch_unwind(AssertUnwindSafe(|| inst.on_panic(func, &message))).unwrap_or(Fmi2Status::Fatal)
+            catch_unwind(AssertUnwindSafe(|| inst.on_panic(func, &message)))
+                .unwrap_or(Fmi2Status::Fatal)
         }
     }
 }
@@ -77,22 +82,42 @@ pub unsafe fn instantiate<M: FmuCore>(
         return null_mut();
     }
     let callbacks = unsafe { *functions };
-    let (name, guid, resources) = unsafe { (opt_str(instance_name), opt_str(guid), opt_str(resource_location)) };
+    let (name, guid, resources) = unsafe {
+        (
+            opt_str(instance_name),
+            opt_str(guid),
+            opt_str(resource_location),
+        )
+    };
     let fail = |msg: &str| {
-        Logger::new(callbacks, name.as_deref().unwrap_or(""), false).log(Fmi2Status::Error, &format!("fmi2Instantiate: {msg}"));
+        Logger::new(callbacks, name.as_deref().unwrap_or(""), false)
+            .log(Fmi2Status::Error, &format!("fmi2Instantiate: {msg}"));
         null_mut()
     };
     if fmu_type != FMI2_CO_SIMULATION {
-        return fail(&format!("fmuType = {fmu_type} is not fmi2CoSimulation; the Model Exchange interface is not offered by this FMU"));
+        return fail(&format!(
+            "fmuType = {fmu_type} is not fmi2CoSimulation; the Model Exchange interface is not offered by this FMU"
+        ));
     }
     let (Some(name), Some(guid)) = (name.as_deref(), guid.as_deref()) else {
         return fail("instanceName or fmuGUID is NULL");
     };
     // `visible` needs no handling: the FMU has no user interface (section 2.1.6).
-    match catch_unwind(|| Instance::<M>::instantiate(name, guid, resources.as_deref(), callbacks, logging_on != FMI2_FALSE)) {
+    match catch_unwind(|| {
+        Instance::<M>::instantiate(
+            name,
+            guid,
+            resources.as_deref(),
+            callbacks,
+            logging_on != FMI2_FALSE,
+        )
+    }) {
         Ok(Some(instance)) => Box::into_raw(Box::new(instance)).cast(),
         Ok(None) => null_mut(),
-        Err(payload) => fail(&format!("internal error (panic: {})", panic_message(&*payload))),
+        Err(payload) => fail(&format!(
+            "internal error (panic: {})",
+            panic_message(&*payload)
+        )),
     }
 }
 
@@ -104,14 +129,23 @@ pub unsafe fn free_instance<M: FmuCore>(c: fmi2Component) {
     }
 }
 
-pub unsafe fn set_debug_logging<M: FmuCore>(c: fmi2Component, on: fmi2Boolean, n: usize, categories: *const fmi2String) -> Fmi2Status {
+pub unsafe fn set_debug_logging<M: FmuCore>(
+    c: fmi2Component,
+    on: fmi2Boolean,
+    n: usize,
+    categories: *const fmi2String,
+) -> Fmi2Status {
     const F: &str = "fmi2SetDebugLogging";
     unsafe {
         with_instance::<M>(c, F, |inst| {
-            let Some(pointers) = in_slice(categories, n) else { return inst.null_argument(F, "categories") };
+            let Some(pointers) = in_slice(categories, n) else {
+                return inst.null_argument(F, "categories");
+            };
             let mut names = Vec::with_capacity(n);
             for &p in pointers {
-                let Some(name) = opt_str(p) else { return inst.null_argument(F, "categories[i]") };
+                let Some(name) = opt_str(p) else {
+                    return inst.null_argument(F, "categories[i]");
+                };
                 names.push(name.into_owned());
             }
             inst.set_debug_logging(on != FMI2_FALSE, &names)
@@ -119,18 +153,37 @@ pub unsafe fn set_debug_logging<M: FmuCore>(c: fmi2Component, on: fmi2Boolean, n
     }
 }
 
-pub unsafe fn setup_experiment<M: FmuCore>(c: fmi2Component, tolerance_defined: fmi2Boolean, tolerance: f64, start_time: f64, stop_time_defined: fmi2Boolean, stop_time: f64) -> Fmi2Status {
+pub unsafe fn setup_experiment<M: FmuCore>(
+    c: fmi2Component,
+    tolerance_defined: fmi2Boolean,
+    tolerance: f64,
+    start_time: f64,
+    stop_time_defined: fmi2Boolean,
+    stop_time: f64,
+) -> Fmi2Status {
     let tolerance = (tolerance_defined != FMI2_FALSE).then_some(tolerance);
     let stop_time = (stop_time_defined != FMI2_FALSE).then_some(stop_time);
-    unsafe { with_instance::<M>(c, "fmi2SetupExperiment", |inst| inst.setup_experiment(tolerance, start_time, stop_time)) }
+    unsafe {
+        with_instance::<M>(c, "fmi2SetupExperiment", |inst| {
+            inst.setup_experiment(tolerance, start_time, stop_time)
+        })
+    }
 }
 
 pub unsafe fn enter_initialization_mode<M: FmuCore>(c: fmi2Component) -> Fmi2Status {
-    unsafe { with_instance::<M>(c, "fmi2EnterInitializationMode", |inst| inst.enter_initialization_mode()) }
+    unsafe {
+        with_instance::<M>(c, "fmi2EnterInitializationMode", |inst| {
+            inst.enter_initialization_mode()
+        })
+    }
 }
 
 pub unsafe fn exit_initialization_mode<M: FmuCore>(c: fmi2Component) -> Fmi2Status {
-    unsafe { with_instance::<M>(c, "fmi2ExitInitializationMode", |inst| inst.exit_initialization_mode()) }
+    unsafe {
+        with_instance::<M>(c, "fmi2ExitInitializationMode", |inst| {
+            inst.exit_initialization_mode()
+        })
+    }
 }
 
 pub unsafe fn terminate<M: FmuCore>(c: fmi2Component) -> Fmi2Status {
@@ -141,30 +194,52 @@ pub unsafe fn reset<M: FmuCore>(c: fmi2Component) -> Fmi2Status {
     unsafe { with_instance::<M>(c, "fmi2Reset", |inst| inst.reset()) }
 }
 
-pub unsafe fn get_real<M: FmuCore>(c: fmi2Component, vr: *const fmi2ValueReference, nvr: usize, value: *mut f64) -> Fmi2Status {
+pub unsafe fn get_real<M: FmuCore>(
+    c: fmi2Component,
+    vr: *const fmi2ValueReference,
+    nvr: usize,
+    value: *mut f64,
+) -> Fmi2Status {
     const F: &str = "fmi2GetReal";
     unsafe {
-        with_instance::<M>(c, F, |inst| match (in_slice(vr, nvr), out_slice(value, nvr)) {
-            (Some(vrs), Some(values)) => inst.get_real(vrs, values),
-            (None, _) => inst.null_argument(F, "vr"),
-            (_, None) => inst.null_argument(F, "value"),
+        with_instance::<M>(c, F, |inst| {
+            match (in_slice(vr, nvr), out_slice(value, nvr)) {
+                (Some(vrs), Some(values)) => inst.get_real(vrs, values),
+                (None, _) => inst.null_argument(F, "vr"),
+                (_, None) => inst.null_argument(F, "value"),
+            }
         })
     }
 }
 
-pub unsafe fn set_real<M: FmuCore>(c: fmi2Component, vr: *const fmi2ValueReference, nvr: usize, value: *const f64) -> Fmi2Status {
+pub unsafe fn set_real<M: FmuCore>(
+    c: fmi2Component,
+    vr: *const fmi2ValueReference,
+    nvr: usize,
+    value: *const f64,
+) -> Fmi2Status {
     const F: &str = "fmi2SetReal";
     unsafe {
-        with_instance::<M>(c, F, |inst| match (in_slice(vr, nvr), in_slice(value, nvr)) {
-            (Some(vrs), Some(values)) => inst.set_real(vrs, values),
-            (None, _) => inst.null_argument(F, "vr"),
-            (_, None) => inst.null_argument(F, "value"),
+        with_instance::<M>(c, F, |inst| {
+            match (in_slice(vr, nvr), in_slice(value, nvr)) {
+                (Some(vrs), Some(values)) => inst.set_real(vrs, values),
+                (None, _) => inst.null_argument(F, "vr"),
+                (_, None) => inst.null_argument(F, "value"),
+            }
         })
     }
 }
 
 /// `fmi2Get/Set{Integer,Boolean,String}`; `value` is the value array, of whichever type.
-pub unsafe fn no_variables_of_type<M: FmuCore>(c: fmi2Component, func: &'static str, type_name: &str, setter: bool, vr: *const fmi2ValueReference, nvr: usize, value: *const c_void) -> Fmi2Status {
+pub unsafe fn no_variables_of_type<M: FmuCore>(
+    c: fmi2Component,
+    func: &'static str,
+    type_name: &str,
+    setter: bool,
+    vr: *const fmi2ValueReference,
+    nvr: usize,
+    value: *const c_void,
+) -> Fmi2Status {
     unsafe {
         with_instance::<M>(c, func, |inst| match in_slice(vr, nvr) {
             None => inst.null_argument(func, "vr"),
@@ -216,41 +291,63 @@ pub unsafe fn free_fmu_state<M: FmuCore>(c: fmi2Component, state: *mut fmi2FMUst
     }
 }
 
-pub unsafe fn serialized_fmu_state_size<M: FmuCore>(c: fmi2Component, state: fmi2FMUstate, size: *mut usize) -> Fmi2Status {
+pub unsafe fn serialized_fmu_state_size<M: FmuCore>(
+    c: fmi2Component,
+    state: fmi2FMUstate,
+    size: *mut usize,
+) -> Fmi2Status {
     const F: &str = "fmi2SerializedFMUstateSize";
     unsafe {
-        with_instance::<M>(c, F, |inst| match (state.cast::<Snapshot<M>>().as_ref(), size.is_null()) {
-            (Some(snapshot), false) => {
-                *size = snapshot.to_bytes().len();
-                Fmi2Status::Ok
+        with_instance::<M>(c, F, |inst| {
+            match (state.cast::<Snapshot<M>>().as_ref(), size.is_null()) {
+                (Some(snapshot), false) => {
+                    *size = snapshot.to_bytes().len();
+                    Fmi2Status::Ok
+                }
+                (None, _) => inst.null_argument(F, "FMUstate"),
+                (_, true) => inst.null_argument(F, "size"),
             }
-            (None, _) => inst.null_argument(F, "FMUstate"),
-            (_, true) => inst.null_argument(F, "size"),
         })
     }
 }
 
-pub unsafe fn serialize_fmu_state<M: FmuCore>(c: fmi2Component, state: fmi2FMUstate, bytes: *mut fmi2Byte, size: usize) -> Fmi2Status {
+pub unsafe fn serialize_fmu_state<M: FmuCore>(
+    c: fmi2Component,
+    state: fmi2FMUstate,
+    bytes: *mut fmi2Byte,
+    size: usize,
+) -> Fmi2Status {
     const F: &str = "fmi2SerializeFMUstate";
     unsafe {
         with_instance::<M>(c, F, |inst| {
-            let Some(snapshot) = state.cast::<Snapshot<M>>().as_ref() else { return inst.null_argument(F, "FMUstate") };
+            let Some(snapshot) = state.cast::<Snapshot<M>>().as_ref() else {
+                return inst.null_argument(F, "FMUstate");
+            };
             let data = snapshot.to_bytes();
             if size < data.len() {
                 return inst.argument_error(F, format_args!("buffer of {size} bytes is too small, the state needs {} (fmi2SerializedFMUstateSize)", data.len()));
             }
-            let Some(out) = out_slice(bytes.cast::<u8>(), data.len()) else { return inst.null_argument(F, "serializedState") };
+            let Some(out) = out_slice(bytes.cast::<u8>(), data.len()) else {
+                return inst.null_argument(F, "serializedState");
+            };
             out.copy_from_slice(&data);
             Fmi2Status::Ok
         })
     }
 }
 
-pub unsafe fn deserialize_fmu_state<M: FmuCore>(c: fmi2Component, bytes: *const fmi2Byte, size: usize, state: *mut fmi2FMUstate) -> Fmi2Status {
+pub unsafe fn deserialize_fmu_state<M: FmuCore>(
+    c: fmi2Component,
+    bytes: *const fmi2Byte,
+    size: usize,
+    state: *mut fmi2FMUstate,
+) -> Fmi2Status {
     const F: &str = "fmi2DeSerializeFMUstate";
     unsafe {
         with_instance::<M>(c, F, |inst| {
-            let Some(data) = in_slice(bytes.cast::<u8>(), size) else { return inst.null_argument(F, "serializedState") };
+            let Some(data) = in_slice(bytes.cast::<u8>(), size) else {
+                return inst.null_argument(F, "serializedState");
+            };
             if state.is_null() {
                 return inst.null_argument(F, "FMUstate");
             }
@@ -266,12 +363,25 @@ pub unsafe fn deserialize_fmu_state<M: FmuCore>(c: fmi2Component, bytes: *const 
 }
 
 /// Functions of interfaces or capabilities this FMU does not offer.
-pub unsafe fn not_offered<M: FmuCore>(c: fmi2Component, func: &'static str, what: &str) -> Fmi2Status {
+pub unsafe fn not_offered<M: FmuCore>(
+    c: fmi2Component,
+    func: &'static str,
+    what: &str,
+) -> Fmi2Status {
     unsafe { with_instance::<M>(c, func, |inst| inst.not_offered(func, what)) }
 }
 
-pub unsafe fn do_step<M: FmuCore>(c: fmi2Component, tc: f64, h: f64, no_set_fmu_state_prior: fmi2Boolean) -> Fmi2Status {
-    unsafe { with_instance::<M>(c, "fmi2DoStep", |inst| inst.do_step(tc, h, no_set_fmu_state_prior != FMI2_FALSE)) }
+pub unsafe fn do_step<M: FmuCore>(
+    c: fmi2Component,
+    tc: f64,
+    h: f64,
+    no_set_fmu_state_prior: fmi2Boolean,
+) -> Fmi2Status {
+    unsafe {
+        with_instance::<M>(c, "fmi2DoStep", |inst| {
+            inst.do_step(tc, h, no_set_fmu_state_prior != FMI2_FALSE)
+        })
+    }
 }
 
 pub unsafe fn cancel_step<M: FmuCore>(c: fmi2Component) -> Fmi2Status {
@@ -279,7 +389,12 @@ pub unsafe fn cancel_step<M: FmuCore>(c: fmi2Component) -> Fmi2Status {
 }
 
 /// `fmi2GetStatus`, `fmi2GetIntegerStatus`, `fmi2GetStringStatus`: no value is ever delivered.
-pub unsafe fn get_valueless_status<M: FmuCore>(c: fmi2Component, func: &'static str, kind: fmi2StatusKind, value: *mut c_void) -> Fmi2Status {
+pub unsafe fn get_valueless_status<M: FmuCore>(
+    c: fmi2Component,
+    func: &'static str,
+    kind: fmi2StatusKind,
+    value: *mut c_void,
+) -> Fmi2Status {
     unsafe {
         with_instance::<M>(c, func, |inst| {
             if value.is_null() {
@@ -294,7 +409,11 @@ pub unsafe fn get_valueless_status<M: FmuCore>(c: fmi2Component, func: &'static 
     }
 }
 
-pub unsafe fn get_real_status<M: FmuCore>(c: fmi2Component, kind: fmi2StatusKind, value: *mut f64) -> Fmi2Status {
+pub unsafe fn get_real_status<M: FmuCore>(
+    c: fmi2Component,
+    kind: fmi2StatusKind,
+    value: *mut f64,
+) -> Fmi2Status {
     const F: &str = "fmi2GetRealStatus";
     unsafe {
         with_instance::<M>(c, F, |inst| match value.as_mut() {
@@ -304,7 +423,11 @@ pub unsafe fn get_real_status<M: FmuCore>(c: fmi2Component, kind: fmi2StatusKind
     }
 }
 
-pub unsafe fn get_boolean_status<M: FmuCore>(c: fmi2Component, kind: fmi2StatusKind, value: *mut fmi2Boolean) -> Fmi2Status {
+pub unsafe fn get_boolean_status<M: FmuCore>(
+    c: fmi2Component,
+    kind: fmi2StatusKind,
+    value: *mut fmi2Boolean,
+) -> Fmi2Status {
     const F: &str = "fmi2GetBooleanStatus";
     unsafe {
         with_instance::<M>(c, F, |inst| match value.as_mut() {

@@ -62,34 +62,61 @@ impl<M: FmuCore> Snapshot<M> {
     /// Parses bytes of [`Snapshot::to_bytes`] for the instance with `guid` and `core`.
     pub fn from_bytes(bytes: &[u8], guid: &str, core: &M) -> Result<Self, String> {
         if bytes.len() < MAGIC.len() || &bytes[..MAGIC.len()] != MAGIC {
-            return Err("the bytes are not a serialized FMU state of this FMU type (bad magic)".into());
+            return Err(
+                "the bytes are not a serialized FMU state of this FMU type (bad magic)".into(),
+            );
         }
         if bytes.len() < MAGIC.len() + CHECKSUM_LEN {
-            return Err(format!("the serialized FMU state is truncated ({} bytes)", bytes.len()));
+            return Err(format!(
+                "the serialized FMU state is truncated ({} bytes)",
+                bytes.len()
+            ));
         }
         let (body, sum) = bytes.split_at(bytes.len() - CHECKSUM_LEN);
-        let mut r = Reader { bytes: &body[MAGIC.len()..] };
+        let mut r = Reader {
+            bytes: &body[MAGIC.len()..],
+        };
         let version = r.u32()?;
         if version != FORMAT_VERSION {
-            return Err(format!("serialized FMU state has format version {version}, expected {FORMAT_VERSION}"));
+            return Err(format!(
+                "serialized FMU state has format version {version}, expected {FORMAT_VERSION}"
+            ));
         }
         let guid_len = r.u32()? as usize;
-        let state_guid = std::str::from_utf8(r.take(guid_len)?).map_err(|_| "serialized FMU state has a malformed GUID".to_string())?;
+        let state_guid = std::str::from_utf8(r.take(guid_len)?)
+            .map_err(|_| "serialized FMU state has a malformed GUID".to_string())?;
         if state_guid != guid {
-            return Err(format!("serialized FMU state belongs to GUID {state_guid}, this instance has GUID {guid}"));
+            return Err(format!(
+                "serialized FMU state belongs to GUID {state_guid}, this instance has GUID {guid}"
+            ));
         }
         if checksum(body) != sum {
-            return Err("serialized FMU state is corrupted (checksum mismatch) or truncated".into());
+            return Err(
+                "serialized FMU state is corrupted (checksum mismatch) or truncated".into(),
+            );
         }
         let phase = Phase::from_u8(r.u8()?).ok_or("serialized FMU state has an unknown phase")?;
         let has_experiment = r.flag()?;
-        let experiment = Experiment { start_time: r.f64()?, stop_time: r.opt_f64()?, tolerance: r.opt_f64()? };
-        let core_len = usize::try_from(r.u64()?).map_err(|_| "serialized core state too long".to_string())?;
+        let experiment = Experiment {
+            start_time: r.f64()?,
+            stop_time: r.opt_f64()?,
+            tolerance: r.opt_f64()?,
+        };
+        let core_len =
+            usize::try_from(r.u64()?).map_err(|_| "serialized core state too long".to_string())?;
         let core = core.deserialize_state(r.take(core_len)?)?;
         if !r.bytes.is_empty() {
-            return Err(format!("serialized FMU state has {} unexpected trailing bytes", r.bytes.len()));
+            return Err(format!(
+                "serialized FMU state has {} unexpected trailing bytes",
+                r.bytes.len()
+            ));
         }
-        Ok(Snapshot { guid: guid.to_string(), phase, experiment: has_experiment.then_some(experiment), core })
+        Ok(Snapshot {
+            guid: guid.to_string(),
+            phase,
+            experiment: has_experiment.then_some(experiment),
+            core,
+        })
     }
 }
 
@@ -101,7 +128,10 @@ struct Reader<'a> {
 impl<'a> Reader<'a> {
     fn take(&mut self, n: usize) -> Result<&'a [u8], String> {
         if n > self.bytes.len() {
-            return Err(format!("serialized FMU state is truncated: {n} bytes needed, {} left", self.bytes.len()));
+            return Err(format!(
+                "serialized FMU state is truncated: {n} bytes needed, {} left",
+                self.bytes.len()
+            ));
         }
         let (head, tail) = self.bytes.split_at(n);
         self.bytes = tail;

@@ -17,7 +17,10 @@ use super::core::FmuCore;
 use super::fmu_state::Snapshot;
 use super::logging::Logger;
 use super::model_description::{guid_for, log_categories};
-use super::types::{FMI2_DO_STEP_STATUS, FMI2_LAST_SUCCESSFUL_TIME, FMI2_PENDING_STATUS, FMI2_TERMINATED, Fmi2Status, fmi2CallbackFunctions, fmi2StatusKind};
+use super::types::{
+    FMI2_DO_STEP_STATUS, FMI2_LAST_SUCCESSFUL_TIME, FMI2_PENDING_STATUS, FMI2_TERMINATED,
+    Fmi2Status, fmi2CallbackFunctions, fmi2StatusKind,
+};
 use super::uri::path_from_file_uri;
 use super::variables::{Causality, Initial, Variability, Variable, check_variable_table};
 
@@ -37,7 +40,14 @@ pub enum Phase {
 }
 
 impl Phase {
-    const ALL: [Phase; 6] = [Phase::Instantiated, Phase::InitializationMode, Phase::StepComplete, Phase::StepFailed, Phase::Terminated, Phase::Error];
+    const ALL: [Phase; 6] = [
+        Phase::Instantiated,
+        Phase::InitializationMode,
+        Phase::StepComplete,
+        Phase::StepFailed,
+        Phase::Terminated,
+        Phase::Error,
+    ];
 
     pub fn from_u8(b: u8) -> Option<Phase> {
         Phase::ALL.get(usize::from(b)).copied()
@@ -60,7 +70,13 @@ use Phase::*;
 
 /// States in which `fmi2Get{Real,Integer,Boolean,String}` are allowed (section 4.2.4; in
 /// stepFailed and error for debugging only).
-const GET_PHASES: &[Phase] = &[InitializationMode, StepComplete, StepFailed, Terminated, Error];
+const GET_PHASES: &[Phase] = &[
+    InitializationMode,
+    StepComplete,
+    StepFailed,
+    Terminated,
+    Error,
+];
 /// States in which `fmi2Set{Real,...}` may be called at all; which variables depends on the state.
 const SET_PHASES: &[Phase] = &[Instantiated, InitializationMode, StepComplete];
 /// States in which `fmi2Get*Status` are allowed.
@@ -102,8 +118,17 @@ fn build<M: FmuCore>(resource_dir: Option<&Path>) -> Result<Built<M>, String> {
     let variables = core.variables();
     check_variable_table(&variables).map_err(|e| format!("invalid variable table: {e}"))?;
     let guid = guid_for(&M::model_info(), &variables)?;
-    let index = variables.iter().enumerate().map(|(i, v)| (v.value_reference, i)).collect();
-    Ok(Built { core, variables, index, guid })
+    let index = variables
+        .iter()
+        .enumerate()
+        .map(|(i, v)| (v.value_reference, i))
+        .collect();
+    Ok(Built {
+        core,
+        variables,
+        index,
+        guid,
+    })
 }
 
 /// The message of a caught panic.
@@ -113,6 +138,11 @@ pub fn panic_message(payload: &(dyn std::any::Any + Send)) -> String {
         .map(|s| s.to_string())
         .or_else(|| payload.downcast_ref::<String>().cloned())
         .unwrap_or_else(|| "(no message)".into())
+}
+
+/// An optional number for messages: the value, or "undefined".
+fn optional(x: Option<f64>) -> String {
+    x.map_or("undefined".into(), |x| format!("{x:?}"))
 }
 
 /// Relative tolerance for comparing `currentCommunicationPoint` with the internal time.
@@ -130,7 +160,13 @@ impl<M: FmuCore> Instance<M> {
     /// `fmi2Instantiate` for Co-Simulation (section 2.1.6): creates the core from the
     /// resources, checks the importer's GUID against the one computed for this core. Errors
     /// are logged and give `None`.
-    pub fn instantiate(name: &str, guid: &str, resource_location: Option<&str>, callbacks: fmi2CallbackFunctions, logging_on: bool) -> Option<Self> {
+    pub fn instantiate(
+        name: &str,
+        guid: &str,
+        resource_location: Option<&str>,
+        callbacks: fmi2CallbackFunctions,
+        logging_on: bool,
+    ) -> Option<Self> {
         let logger = Logger::new(callbacks, name, logging_on);
         let fail = |msg: String| {
             logger.log(Fmi2Status::Error, &format!("fmi2Instantiate: {msg}"));
@@ -139,7 +175,11 @@ impl<M: FmuCore> Instance<M> {
         if name.is_empty() {
             return fail("instanceName is empty".into());
         }
-        let resource_dir = match resource_location.filter(|l| !l.is_empty()).map(path_from_file_uri).transpose() {
+        let resource_dir = match resource_location
+            .filter(|l| !l.is_empty())
+            .map(path_from_file_uri)
+            .transpose()
+        {
             Ok(dir) => dir,
             Err(e) => return fail(e),
         };
@@ -148,9 +188,15 @@ impl<M: FmuCore> Instance<M> {
             Err(e) => return fail(format!("cannot create the model: {e}")),
         };
         if built.guid != guid {
-            return fail(format!("GUID {guid} given by the importer does not match the FMU's GUID {}", built.guid));
+            return fail(format!(
+                "GUID {guid} given by the importer does not match the FMU's GUID {}",
+                built.guid
+            ));
         }
-        let categories = log_categories(&M::model_info()).into_iter().map(|(n, _)| n).collect();
+        let categories = log_categories(&M::model_info())
+            .into_iter()
+            .map(|(n, _)| n)
+            .collect();
         let instance = Instance {
             guid: built.guid,
             resource_dir,
@@ -162,7 +208,13 @@ impl<M: FmuCore> Instance<M> {
             variables: built.variables,
             index: built.index,
         };
-        instance.trace(|| format!("fmi2Instantiate: instance of GUID {guid} created, resources {:?}", instance.resource_dir));
+        instance.trace(|| {
+            let resources = instance
+                .resource_dir
+                .as_ref()
+                .map_or("none".into(), |d| d.display().to_string());
+            format!("fmi2Instantiate: instance of GUID {guid} created, resources: {resources}")
+        });
         Some(instance)
     }
 
@@ -173,7 +225,8 @@ impl<M: FmuCore> Instance<M> {
 
     /// Logs an error message of `func` and returns `fmi2Error`.
     fn error(&self, func: &str, msg: impl std::fmt::Display) -> Fmi2Status {
-        self.logger.log(Fmi2Status::Error, &format!("{func}: {msg}"));
+        self.logger
+            .log(Fmi2Status::Error, &format!("{func}: {msg}"));
         Fmi2Status::Error
     }
 
@@ -190,7 +243,14 @@ impl<M: FmuCore> Instance<M> {
             return Ok(());
         }
         let names: Vec<&str> = allowed.iter().map(|p| p.name()).collect();
-        Err(self.error(func, format_args!("not allowed in state {} (allowed in: {})", self.phase.name(), names.join(", "))))
+        Err(self.error(
+            func,
+            format_args!(
+                "not allowed in state {} (allowed in: {})",
+                self.phase.name(),
+                names.join(", ")
+            ),
+        ))
     }
 
     /// Logs a caught panic of `func` and puts the instance into the error state.
@@ -207,21 +267,44 @@ impl<M: FmuCore> Instance<M> {
     /// For functions of interfaces this FMU does not offer (Model Exchange, directional
     /// derivatives, input/output derivatives).
     pub fn not_offered(&self, func: &str, what: &str) -> Fmi2Status {
-        self.error(func, format_args!("{what} is not offered by this FMU (see modelDescription.xml)"))
+        self.error(
+            func,
+            format_args!("{what} is not offered by this FMU (see modelDescription.xml)"),
+        )
     }
 
     /// `fmi2SetDebugLogging` (section 2.1.5); an empty `categories` means all categories.
     pub fn set_debug_logging(&mut self, on: bool, categories: &[String]) -> Fmi2Status {
-        match self.logger.set_debug_logging(on, categories, &self.categories) {
+        match self
+            .logger
+            .set_debug_logging(on, categories, &self.categories)
+        {
             Ok(()) => Fmi2Status::Ok,
-            Err(bad) => self.error("fmi2SetDebugLogging", format_args!("unknown log category {bad:?} (known: {})", self.categories.join(", "))),
+            Err(bad) => self.error(
+                "fmi2SetDebugLogging",
+                format_args!(
+                    "unknown log category {bad:?} (known: {})",
+                    self.categories.join(", ")
+                ),
+            ),
         }
     }
 
     /// `fmi2SetupExperiment` (section 2.1.6).
-    pub fn setup_experiment(&mut self, tolerance: Option<f64>, start_time: f64, stop_time: Option<f64>) -> Fmi2Status {
+    pub fn setup_experiment(
+        &mut self,
+        tolerance: Option<f64>,
+        start_time: f64,
+        stop_time: Option<f64>,
+    ) -> Fmi2Status {
         const F: &str = "fmi2SetupExperiment";
-        self.trace(|| format!("{F}(tolerance={tolerance:?}, startTime={start_time:?}, stopTime={stop_time:?})"));
+        self.trace(|| {
+            format!(
+                "{F}(tolerance={}, startTime={start_time:?}, stopTime={})",
+                optional(tolerance),
+                optional(stop_time)
+            )
+        });
         if let Err(s) = self.require(F, &[Instantiated]) {
             return s;
         }
@@ -229,12 +312,24 @@ impl<M: FmuCore> Instance<M> {
             return self.error(F, format_args!("startTime = {start_time:?} is not finite"));
         }
         if let Some(stop) = stop_time.filter(|s| !(s.is_finite() && *s >= start_time)) {
-            return self.error(F, format_args!("stopTime = {stop:?} is not a finite time >= startTime = {start_time:?}"));
+            return self.error(
+                F,
+                format_args!(
+                    "stopTime = {stop:?} is not a finite time >= startTime = {start_time:?}"
+                ),
+            );
         }
         if let Some(tol) = tolerance.filter(|t| !(t.is_finite() && *t > 0.0)) {
-            return self.error(F, format_args!("tolerance = {tol:?} is not a finite positive number"));
+            return self.error(
+                F,
+                format_args!("tolerance = {tol:?} is not a finite positive number"),
+            );
         }
-        self.experiment = Some(Experiment { start_time, stop_time, tolerance });
+        self.experiment = Some(Experiment {
+            start_time,
+            stop_time,
+            tolerance,
+        });
         Fmi2Status::Ok
     }
 
@@ -246,9 +341,15 @@ impl<M: FmuCore> Instance<M> {
             return s;
         }
         let Some(e) = self.experiment else {
-            return self.error(F, "fmi2SetupExperiment must be called before (section 2.1.6)");
+            return self.error(
+                F,
+                "fmi2SetupExperiment must be called before (section 2.1.6)",
+            );
         };
-        match self.core.enter_initialization(e.start_time, e.stop_time, e.tolerance) {
+        match self
+            .core
+            .enter_initialization(e.start_time, e.stop_time, e.tolerance)
+        {
             Ok(()) => {
                 self.phase = InitializationMode;
                 Fmi2Status::Ok
@@ -299,7 +400,13 @@ impl<M: FmuCore> Instance<M> {
         };
         if built.guid != self.guid {
             self.phase = Error;
-            return self.error(F, format_args!("the resources changed: GUID is now {} instead of {}", built.guid, self.guid));
+            return self.error(
+                F,
+                format_args!(
+                    "the resources changed: GUID is now {} instead of {}",
+                    built.guid, self.guid
+                ),
+            );
         }
         self.core = built.core;
         self.variables = built.variables;
@@ -330,7 +437,9 @@ impl<M: FmuCore> Instance<M> {
             };
             match self.core.get_real(vr) {
                 Ok(x) => *value = x,
-                Err(msg) => return self.error(F, format_args!("{name} (value reference {vr}): {msg}")),
+                Err(msg) => {
+                    return self.error(F, format_args!("{name} (value reference {vr}): {msg}"));
+                }
             }
         }
         Fmi2Status::Ok
@@ -345,7 +454,11 @@ impl<M: FmuCore> Instance<M> {
             && match self.phase {
                 Instantiated => input || matches!(initial, Some(Initial::Exact | Initial::Approx)),
                 InitializationMode => input || initial == Some(Initial::Exact),
-                StepComplete => input || (v.causality == Causality::Parameter && v.variability == Variability::Tunable),
+                StepComplete => {
+                    input
+                        || (v.causality == Causality::Parameter
+                            && v.variability == Variability::Tunable)
+                }
                 _ => false,
             }
     }
@@ -380,10 +493,16 @@ impl<M: FmuCore> Instance<M> {
             let name = self.variables[self.index[&vr]].name.clone();
             self.trace(|| format!("{F}: {name} = {value:?}"));
             if value.is_nan() {
-                return self.error(F, format_args!("{name} (value reference {vr}): value is NaN"));
+                return self.error(
+                    F,
+                    format_args!("{name} (value reference {vr}): value is NaN"),
+                );
             }
             if let Err(msg) = self.core.set_real(vr, value) {
-                return self.error(F, format_args!("{name} (value reference {vr}) = {value:?} rejected: {msg}"));
+                return self.error(
+                    F,
+                    format_args!("{name} (value reference {vr}) = {value:?} rejected: {msg}"),
+                );
             }
         }
         Fmi2Status::Ok
@@ -391,13 +510,22 @@ impl<M: FmuCore> Instance<M> {
 
     /// `fmi2Get/Set{Integer,Boolean,String}`: this FMU has only Real variables, so any value
     /// reference is unknown for these types.
-    pub fn no_variables_of_type(&self, func: &str, type_name: &str, setter: bool, vrs: &[u32]) -> Fmi2Status {
+    pub fn no_variables_of_type(
+        &self,
+        func: &str,
+        type_name: &str,
+        setter: bool,
+        vrs: &[u32],
+    ) -> Fmi2Status {
         if let Err(s) = self.require(func, if setter { SET_PHASES } else { GET_PHASES }) {
             return s;
         }
         match vrs.first() {
             None => Fmi2Status::Ok,
-            Some(vr) => self.error(func, format_args!("unknown value reference {vr}: this FMU has no {type_name} variables")),
+            Some(vr) => self.error(
+                func,
+                format_args!("unknown value reference {vr}: this FMU has no {type_name} variables"),
+            ),
         }
     }
 
@@ -410,7 +538,12 @@ impl<M: FmuCore> Instance<M> {
             return s;
         }
         if !(h.is_finite() && h > 0.0) {
-            return self.error(F, format_args!("communicationStepSize = {h:?} must be finite and > 0 (section 4.2.2)"));
+            return self.error(
+                F,
+                format_args!(
+                    "communicationStepSize = {h:?} must be finite and > 0 (section 4.2.2)"
+                ),
+            );
         }
         let t = self.core.time();
         if !(tc.is_finite() && same_time(t, tc, h)) {
@@ -420,7 +553,13 @@ impl<M: FmuCore> Instance<M> {
             && t + h > stop
             && !same_time(t + h, stop, h)
         {
-            return self.error(F, format_args!("step to {:?} goes past stopTime = {stop:?} (section 2.1.6)", t + h));
+            return self.error(
+                F,
+                format_args!(
+                    "step to {:?} goes past stopTime = {stop:?} (section 2.1.6)",
+                    t + h
+                ),
+            );
         }
         match self.core.do_step(h) {
             Ok(()) => Fmi2Status::Ok,
@@ -446,17 +585,24 @@ impl<M: FmuCore> Instance<M> {
 
     fn unsupported_kind(&self, func: &str, kind: fmi2StatusKind) -> Fmi2Status {
         let why = match kind {
-            FMI2_DO_STEP_STATUS | FMI2_PENDING_STATUS => "is only defined after fmi2DoStep returned fmi2Pending, which this FMU never does",
+            FMI2_DO_STEP_STATUS | FMI2_PENDING_STATUS => {
+                "is only defined after fmi2DoStep returned fmi2Pending, which this FMU never does"
+            }
             0..=3 => "is not provided by this function",
             _ => "is not a valid fmi2StatusKind",
         };
-        self.error(func, format_args!("status kind {kind} {why} (section 4.2.3)"))
+        self.error(
+            func,
+            format_args!("status kind {kind} {why} (section 4.2.3)"),
+        )
     }
 
     /// `fmi2GetStatus` (section 4.2.3): only `fmi2DoStepStatus`, which needs a pending step.
     pub fn get_status(&self, kind: fmi2StatusKind) -> Fmi2Status {
         const F: &str = "fmi2GetStatus";
-        self.require(F, STATUS_PHASES).err().unwrap_or_else(|| self.unsupported_kind(F, kind))
+        self.require(F, STATUS_PHASES)
+            .err()
+            .unwrap_or_else(|| self.unsupported_kind(F, kind))
     }
 
     /// `fmi2GetRealStatus` (section 4.2.3): `fmi2LastSuccessfulTime` is the core's time,
@@ -476,7 +622,9 @@ impl<M: FmuCore> Instance<M> {
     /// `fmi2GetIntegerStatus` (section 4.2.3): FMI 2.0 defines no Integer status.
     pub fn get_integer_status(&self, kind: fmi2StatusKind) -> Fmi2Status {
         const F: &str = "fmi2GetIntegerStatus";
-        self.require(F, STATUS_PHASES).err().unwrap_or_else(|| self.unsupported_kind(F, kind))
+        self.require(F, STATUS_PHASES)
+            .err()
+            .unwrap_or_else(|| self.unsupported_kind(F, kind))
     }
 
     /// `fmi2GetBooleanStatus` (section 4.2.3): `fmi2Terminated` is always false — a
@@ -496,30 +644,56 @@ impl<M: FmuCore> Instance<M> {
     /// `fmi2GetStringStatus` (section 4.2.3): only `fmi2PendingStatus`, which needs a pending step.
     pub fn get_string_status(&self, kind: fmi2StatusKind) -> Fmi2Status {
         const F: &str = "fmi2GetStringStatus";
-        self.require(F, STATUS_PHASES).err().unwrap_or_else(|| self.unsupported_kind(F, kind))
+        self.require(F, STATUS_PHASES)
+            .err()
+            .unwrap_or_else(|| self.unsupported_kind(F, kind))
     }
 
     /// `fmi2GetFMUstate` (section 2.1.8): allowed in every state of this FMU.
     pub fn get_fmu_state(&self) -> Snapshot<M> {
-        self.trace(|| format!("fmi2GetFMUstate at t = {:?} in state {}", self.core.time(), self.phase.name()));
-        Snapshot { guid: self.guid.clone(), phase: self.phase, experiment: self.experiment, core: self.core.clone() }
+        self.trace(|| {
+            format!(
+                "fmi2GetFMUstate at t = {:?} in state {}",
+                self.core.time(),
+                self.phase.name()
+            )
+        });
+        Snapshot {
+            guid: self.guid.clone(),
+            phase: self.phase,
+            experiment: self.experiment,
+            core: self.core.clone(),
+        }
     }
 
     /// `fmi2SetFMUstate` (section 2.1.8): restores core and state machine.
     pub fn set_fmu_state(&mut self, state: &Snapshot<M>) -> Fmi2Status {
         if state.guid != self.guid {
-            return self.error("fmi2SetFMUstate", format_args!("the state belongs to GUID {}, this instance has GUID {}", state.guid, self.guid));
+            return self.error(
+                "fmi2SetFMUstate",
+                format_args!(
+                    "the state belongs to GUID {}, this instance has GUID {}",
+                    state.guid, self.guid
+                ),
+            );
         }
         self.core = state.core.clone();
         self.phase = state.phase;
         self.experiment = state.experiment;
-        self.trace(|| format!("fmi2SetFMUstate: back at t = {:?} in state {}", self.core.time(), self.phase.name()));
+        self.trace(|| {
+            format!(
+                "fmi2SetFMUstate: back at t = {:?} in state {}",
+                self.core.time(),
+                self.phase.name()
+            )
+        });
         Fmi2Status::Ok
     }
 
     /// `fmi2DeSerializeFMUstate` (section 2.1.8): a state from bytes, or a logged error.
     pub fn deserialize_fmu_state(&self, bytes: &[u8]) -> Result<Snapshot<M>, Fmi2Status> {
-        Snapshot::from_bytes(bytes, &self.guid, &self.core).map_err(|e| self.error("fmi2DeSerializeFMUstate", e))
+        Snapshot::from_bytes(bytes, &self.guid, &self.core)
+            .map_err(|e| self.error("fmi2DeSerializeFMUstate", e))
     }
 
     /// Logs an error of `func` for the caller (used by the C layer for buffer sizes).

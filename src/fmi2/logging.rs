@@ -12,7 +12,8 @@ use std::ffi::{CStr, CString};
 use super::types::{Fmi2Status, fmi2CallbackFunctions};
 
 /// Category of debug (OK-level) messages tracing the calls into the FMU.
-pub const LOG_CALLS: &CStr = c"logCalls";
+const LOG_CALLS: &CStr = c"logCalls";
+const LOG_CALLS_NAME: &str = "logCalls";
 const LOG_WARNING: &CStr = c"logStatusWarning";
 const LOG_DISCARD: &CStr = c"logStatusDiscard";
 const LOG_ERROR: &CStr = c"logStatusError";
@@ -21,7 +22,7 @@ const LOG_FATAL: &CStr = c"logStatusFatal";
 /// The categories the wrapper logs with, `(name, description)`, listed in
 /// `<LogCategories>` before the model's own (names from section 2.2.4).
 pub const WRAPPER_CATEGORIES: [(&str, &str); 5] = [
-    ("logCalls", "Trace of the FMI function calls (debug)"),
+    (LOG_CALLS_NAME, "Trace of the FMI function calls (debug)"),
     ("logStatusWarning", "Messages with status fmi2Warning"),
     ("logStatusDiscard", "Messages with status fmi2Discard"),
     ("logStatusError", "Messages with status fmi2Error"),
@@ -44,12 +45,22 @@ fn c_string(text: &str) -> CString {
 
 impl Logger {
     pub fn new(callbacks: fmi2CallbackFunctions, instance_name: &str, debug_on: bool) -> Self {
-        Logger { callbacks, instance_name: c_string(instance_name), debug_on, enabled: None }
+        Logger {
+            callbacks,
+            instance_name: c_string(instance_name),
+            debug_on,
+            enabled: None,
+        }
     }
 
     /// `fmi2SetDebugLogging`: switches debug logging for the given categories (all when the
     /// list is empty). Returns the first unknown category name as the error.
-    pub fn set_debug_logging(&mut self, on: bool, categories: &[String], known: &[String]) -> Result<(), String> {
+    pub fn set_debug_logging(
+        &mut self,
+        on: bool,
+        categories: &[String],
+        known: &[String],
+    ) -> Result<(), String> {
         if let Some(bad) = categories.iter().find(|c| !known.contains(c)) {
             return Err(bad.clone());
         }
@@ -62,12 +73,17 @@ impl Logger {
     pub fn debug_enabled(&self) -> bool {
         self.debug_on
             && self.callbacks.logger.is_some()
-            && self.enabled.as_ref().is_none_or(|set| set.contains(LOG_CALLS.to_str().unwrap_or("")))
+            && self
+                .enabled
+                .as_ref()
+                .is_none_or(|set| set.contains(LOG_CALLS_NAME))
     }
 
     /// Logs `message` with `status`, under the category of that status.
     pub fn log(&self, status: Fmi2Status, message: &str) {
-        let Some(logger) = self.callbacks.logger else { return };
+        let Some(logger) = self.callbacks.logger else {
+            return;
+        };
         let category = match status {
             Fmi2Status::Ok | Fmi2Status::Pending => LOG_CALLS,
             Fmi2Status::Warning => LOG_WARNING,

@@ -70,11 +70,14 @@ pub type fmi2CallbackLogger = Option<
     ),
 >;
 /// `fmi2CallbackAllocateMemory` (unused: the FMU declares `canNotUseMemoryManagementFunctions`).
-pub type fmi2CallbackAllocateMemory = Option<unsafe extern "C" fn(nobj: usize, size: usize) -> *mut c_void>;
+pub type fmi2CallbackAllocateMemory =
+    Option<unsafe extern "C" fn(nobj: usize, size: usize) -> *mut c_void>;
 /// `fmi2CallbackFreeMemory` (unused, see above).
 pub type fmi2CallbackFreeMemory = Option<unsafe extern "C" fn(obj: *mut c_void)>;
 /// `fmi2StepFinished` (unused: `fmi2DoStep` is synchronous and never returns `fmi2Pending`).
-pub type fmi2StepFinished = Option<unsafe extern "C" fn(component_environment: fmi2ComponentEnvironment, status: fmi2Status)>;
+pub type fmi2StepFinished = Option<
+    unsafe extern "C" fn(component_environment: fmi2ComponentEnvironment, status: fmi2Status),
+>;
 
 /// `fmi2CallbackFunctions` (section 2.1.5). Copied by `fmi2Instantiate`.
 #[repr(C)]

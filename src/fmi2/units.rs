@@ -51,7 +51,10 @@ const UNITS: &[(&str, Exponents)] = &[
 
 /// The base-unit exponents of `unit`, or `None` if the unit is not in the table.
 pub fn base_unit(unit: &str) -> Option<Exponents> {
-    UNITS.iter().find(|(name, _)| *name == unit).map(|(_, e)| *e)
+    UNITS
+        .iter()
+        .find(|(name, _)| *name == unit)
+        .map(|(_, e)| *e)
 }
 
 #[cfg(test)]
@@ -97,7 +100,11 @@ mod tests {
                     .filter(|&i| i > 0)
                     .unwrap_or(factor.len());
                 let (sym, pow) = factor.split_at(split);
-                let pow: i32 = if pow.is_empty() { 1 } else { pow.parse().unwrap() };
+                let pow: i32 = if pow.is_empty() {
+                    1
+                } else {
+                    pow.parse().unwrap()
+                };
                 for (t, s) in total.iter_mut().zip(symbol(sym)) {
                     *t += sign * pow * s;
                 }

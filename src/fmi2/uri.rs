@@ -37,10 +37,14 @@ pub fn path_from_file_uri(uri: &str) -> Result<PathBuf, String> {
         .ok_or_else(|| format!("resource location {uri:?} is not a file: URI"))?;
     let path = match rest.strip_prefix("//") {
         Some(authority_and_path) => {
-            let slash = authority_and_path.find('/').unwrap_or(authority_and_path.len());
+            let slash = authority_and_path
+                .find('/')
+                .unwrap_or(authority_and_path.len());
             let (host, path) = authority_and_path.split_at(slash);
             if !(host.is_empty() || host.eq_ignore_ascii_case("localhost")) {
-                return Err(format!("resource location {uri:?} names the remote host {host:?}"));
+                return Err(format!(
+                    "resource location {uri:?} names the remote host {host:?}"
+                ));
             }
             path
         }
@@ -59,15 +63,29 @@ mod tests {
 
     #[test]
     fn accepted_forms() {
-        for uri in ["file:///tmp/fmu/resources", "file:/tmp/fmu/resources", "file://localhost/tmp/fmu/resources"] {
-            assert_eq!(path_from_file_uri(uri).unwrap(), PathBuf::from("/tmp/fmu/resources"), "{uri}");
+        for uri in [
+            "file:///tmp/fmu/resources",
+            "file:/tmp/fmu/resources",
+            "file://localhost/tmp/fmu/resources",
+        ] {
+            assert_eq!(
+                path_from_file_uri(uri).unwrap(),
+                PathBuf::from("/tmp/fmu/resources"),
+                "{uri}"
+            );
         }
-        assert_eq!(path_from_file_uri("file:///a/b/").unwrap(), PathBuf::from("/a/b/"));
+        assert_eq!(
+            path_from_file_uri("file:///a/b/").unwrap(),
+            PathBuf::from("/a/b/")
+        );
     }
 
     #[test]
     fn percent_decoding() {
-        assert_eq!(path_from_file_uri("file:///tmp/my%20fmu/r%C3%A9s%25").unwrap(), PathBuf::from("/tmp/my fmu/rés%"));
+        assert_eq!(
+            path_from_file_uri("file:///tmp/my%20fmu/r%C3%A9s%25").unwrap(),
+            PathBuf::from("/tmp/my fmu/rés%")
+        );
         assert!(path_from_file_uri("file:///tmp/%2").is_err());
         assert!(path_from_file_uri("file:///tmp/%zz").is_err());
         assert!(path_from_file_uri("file:///tmp/%+1").is_err());
@@ -75,7 +93,13 @@ mod tests {
 
     #[test]
     fn rejected_forms() {
-        for uri in ["http://x/y", "/tmp/x", "file://server/share", "file:relative/path", "file://"] {
+        for uri in [
+            "http://x/y",
+            "/tmp/x",
+            "file://server/share",
+            "file:relative/path",
+            "file://",
+        ] {
             assert!(path_from_file_uri(uri).is_err(), "{uri} accepted");
         }
     }

@@ -143,21 +143,29 @@ impl Variable {
     /// The `initial` in force: the declared one or the default of section 2.2.7;
     /// `None` for inputs and the independent variable, which have no `initial`.
     pub fn effective_initial(&self) -> Option<Initial> {
-        self.initial
-            .or_else(|| allowed_initials(self.causality, self.variability).first().copied())
+        self.initial.or_else(|| {
+            allowed_initials(self.causality, self.variability)
+                .first()
+                .copied()
+        })
     }
 
     /// Whether the variable needs a start value: initial exact or approx, or an input
     /// (section 2.2.7, attribute `start`).
     pub fn requires_start(&self) -> bool {
         self.causality == Causality::Input
-            || matches!(self.effective_initial(), Some(Initial::Exact | Initial::Approx))
+            || matches!(
+                self.effective_initial(),
+                Some(Initial::Exact | Initial::Approx)
+            )
     }
 }
 
 fn valid_name(name: &str) -> bool {
     let mut chars = name.chars();
-    chars.next().is_some_and(|c| c.is_ascii_alphabetic() || c == '_')
+    chars
+        .next()
+        .is_some_and(|c| c.is_ascii_alphabetic() || c == '_')
         && chars.all(|c| c.is_ascii_alphanumeric() || c == '_')
 }
 
@@ -165,7 +173,9 @@ fn valid_name(name: &str) -> bool {
 fn check_variable(v: &Variable) -> Result<(), String> {
     let name = &v.name;
     if !valid_name(name) {
-        return Err(format!("variable name {name:?} does not match [A-Za-z_][A-Za-z0-9_]*"));
+        return Err(format!(
+            "variable name {name:?} does not match [A-Za-z_][A-Za-z0-9_]*"
+        ));
     }
     if !combination_allowed(v.causality, v.variability) {
         return Err(format!(
@@ -188,17 +198,23 @@ fn check_variable(v: &Variable) -> Result<(), String> {
     match (v.requires_start(), v.start) {
         (true, None) => return Err(format!("variable {name} needs a start value")),
         (false, Some(s)) => {
-            return Err(format!("variable {name} must not have a start value (has {s:?})"));
+            return Err(format!(
+                "variable {name} must not have a start value (has {s:?})"
+            ));
         }
         (_, Some(s)) if !s.is_finite() => {
-            return Err(format!("variable {name} has a non-finite start value {s:?}"));
+            return Err(format!(
+                "variable {name} has a non-finite start value {s:?}"
+            ));
         }
         _ => {}
     }
     if let Some(unit) = &v.unit
         && units::base_unit(unit).is_none()
     {
-        return Err(format!("variable {name}: unit {unit:?} is not in the unit table"));
+        return Err(format!(
+            "variable {name}: unit {unit:?} is not in the unit table"
+        ));
     }
     Ok(())
 }
@@ -221,7 +237,12 @@ pub fn check_variable_table(vars: &[Variable]) -> Result<(), String> {
             ));
         }
     }
-    if vars.iter().filter(|v| v.causality == Causality::Independent).count() > 1 {
+    if vars
+        .iter()
+        .filter(|v| v.causality == Causality::Independent)
+        .count()
+        > 1
+    {
         return Err("more than one independent variable".into());
     }
     Ok(())
@@ -261,10 +282,18 @@ mod tests {
     fn rejects_duplicates() {
         let mut t = table();
         t[2].name = "u".into();
-        assert!(check_variable_table(&t).unwrap_err().contains("name u is used twice"));
+        assert!(
+            check_variable_table(&t)
+                .unwrap_err()
+                .contains("name u is used twice")
+        );
         let mut t = table();
         t[2].value_reference = 1;
-        assert!(check_variable_table(&t).unwrap_err().contains("value reference 1"));
+        assert!(
+            check_variable_table(&t)
+                .unwrap_err()
+                .contains("value reference 1")
+        );
     }
 
     #[test]
@@ -280,16 +309,32 @@ mod tests {
     fn start_rules() {
         let mut t = table();
         t[0].start = None;
-        assert!(check_variable_table(&t).unwrap_err().contains("k needs a start"));
+        assert!(
+            check_variable_table(&t)
+                .unwrap_err()
+                .contains("k needs a start")
+        );
         let mut t = table();
         t[1].start = None;
-        assert!(check_variable_table(&t).unwrap_err().contains("u needs a start"));
+        assert!(
+            check_variable_table(&t)
+                .unwrap_err()
+                .contains("u needs a start")
+        );
         let mut t = table();
         t[2].start = Some(0.0);
-        assert!(check_variable_table(&t).unwrap_err().contains("y must not have"));
+        assert!(
+            check_variable_table(&t)
+                .unwrap_err()
+                .contains("y must not have")
+        );
         let mut t = table();
         t[2].initial = Some(Initial::Exact);
-        assert!(check_variable_table(&t).unwrap_err().contains("y needs a start"));
+        assert!(
+            check_variable_table(&t)
+                .unwrap_err()
+                .contains("y needs a start")
+        );
         let mut t = table();
         t[0].start = Some(f64::NAN);
         assert!(check_variable_table(&t).is_err());

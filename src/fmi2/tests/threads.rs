@@ -5,7 +5,10 @@ use super::*;
 fn simulate(tau: f64, n: usize) -> Vec<u64> {
     let fmu = Fmu::in_init(0.0);
     assert_eq!(fmu.set(TAU, tau), Fmi2Status::Ok);
-    assert_eq!(unsafe { toy::fmi2ExitInitializationMode(fmu.c) }, Fmi2Status::Ok);
+    assert_eq!(
+        unsafe { toy::fmi2ExitInitializationMode(fmu.c) },
+        Fmi2Status::Ok
+    );
     (0..n)
         .map(|i| {
             assert_eq!(fmu.set(U, (i % 7) as f64), Fmi2Status::Ok);
