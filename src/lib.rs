@@ -1,8 +1,9 @@
 //! hasel-fmu: the HASEL-actuated 3PS micro parallel platform as a library, an FMI 2.0
 //! Co-Simulation FMU and the `hasel` command-line tool.
 
-pub mod model;
-pub mod solver;
-pub mod simulation;
+pub mod fmi2;
 pub mod io;
+pub mod model;
 pub mod plot;
+pub mod simulation;
+pub mod solver;

@@ -1,0 +1,559 @@
+//! The `extern "C"` layer: the 44 functions of `fmi2Functions.h` (FMI 2.0 standard, section
+//! 2.1 and 4.2), generated for one core by [`export_fmi2!`](crate::export_fmi2).
+//!
+//! Each function checks its pointers, converts them to slices and strings, and calls the safe
+//! [`Instance`] method inside `catch_unwind`; nothing unwinds across the C boundary. A caught
+//! panic is logged and gives `fmi2Error` (the instance goes to the error state; other
+//! instances are unaffected because no state is shared). A NULL component gives `fmi2Error`
+//! without a log message, there being no logger to send it to.
+//!
+//! Safety of all functions here: the caller is an FMI 2.0 importer and keeps the pointer and
+//! calling-sequence rules of the standard: `c` is NULL or an instance returned by
+//! `fmi2Instantiate` of this FMU and not yet freed, arrays hold `nvr` elements, strings are
+//! NUL-terminated, FMU states come from this FMU, and one instance is not used by two
+//! threads at once.
+#![allow(clippy::missing_safety_doc)]
+
+use std::borrow::Cow;
+use std::ffi::{CStr, c_char, c_void};
+use std::panic::{AssertUnwindSafe, catch_unwind};
+use std::ptr::null_mut;
+
+use super::core::FmuCore;
+use super::fmu_state::Snapshot;
+use super::instance::{Instance, panic_message};
+use super::logging::Logger;
+use super::types::*;
+
+/// A C string argument; `None` for NULL.
+unsafe fn opt_str<'a>(p: fmi2String) -> Option<Cow<'a, str>> {
+    (!p.is_null()).then(|| unsafe { CStr::from_ptr(p) }.to_string_lossy())
+}
+
+/// An input array of `n` elements; `None` if it is NULL although `n > 0`.
+unsafe fn in_slice<'a, T>(p: *const T, n: usize) -> Option<&'a [T]> {
+    match (n, p.is_null()) {
+        (0, _) => Some(&[]),
+        (_, true) => None,
+        _ => Some(unsafe { std::slice::from_raw_parts(p, n) }),
+    }
+}
+
+/// An output array of `n` elements; `None` if it is NULL although `n > 0`.
+unsafe fn out_slice<'a, T>(p: *mut T, n: usize) -> Option<&'a mut [T]> {
+    match (n, p.is_null()) {
+        (0, _) => Some(&mut []),
+        (_, true) => None,
+        _ => Some(unsafe { std::slice::from_raw_parts_mut(p, n) }),
+    }
+}
+
+/// Runs `f` on the instance behind `c`, catching panics.
+unsafe fn with_instance<M: FmuCore>(
+    c: fmi2Component,
+    func: &str,
+    f: impl FnOnce(&mut Instance<M>) -> Fmi2Status,
+) -> Fmi2Status {
+    if c.is_null() {
+        return Fmi2Status::Error;
+    }
+    // SAFETY: `c` came from `instantiate::<M>` (caller contract) and is used by one thread.
+    let inst = unsafe { &mut *(c as *mut Instance<M>) };
+    match catch_unwind(AssertUnwindSafe(|| f(&mut *inst))) {
+        Ok(status) => status,
+        Err(payload) => {
+            let message = panic_message(&*payload);
+            catch_unwind(AssertUnwindSafe(|| inst.on_panic(func, &message)))
+                .unwrap_or(Fmi2Status::Fatal)
+        }
+    }
+}
+
+pub unsafe fn instantiate<M: FmuCore>(
+    instance_name: fmi2String,
+    fmu_type: fmi2Type,
+    guid: fmi2String,
+    resource_location: fmi2String,
+    functions: *const fmi2CallbackFunctions,
+    _visible: fmi2Boolean,
+    logging_on: fmi2Boolean,
+) -> fmi2Component {
+    if functions.is_null() {
+        return null_mut();
+    }
+    let callbacks = unsafe { *functions };
+    let (name, guid, resources) = unsafe {
+        (
+            opt_str(instance_name),
+            opt_str(guid),
+            opt_str(resource_location),
+        )
+    };
+    let fail = |msg: &str| {
+        Logger::new(callbacks, name.as_deref().unwrap_or(""), false)
+            .log(Fmi2Status::Error, &format!("fmi2Instantiate: {msg}"));
+        null_mut()
+    };
+    if fmu_type != FMI2_CO_SIMULATION {
+        return fail(&format!(
+            "fmuType = {fmu_type} is not fmi2CoSimulation; the Model Exchange interface is not offered by this FMU"
+        ));
+    }
+    let (Some(name), Some(guid)) = (name.as_deref(), guid.as_deref()) else {
+        return fail("instanceName or fmuGUID is NULL");
+    };
+    // `visible` needs no handling: the FMU has no user interface (section 2.1.6).
+    match catch_unwind(|| {
+        Instance::<M>::instantiate(
+            name,
+            guid,
+            resources.as_deref(),
+            callbacks,
+            logging_on != FMI2_FALSE,
+        )
+    }) {
+        Ok(Some(instance)) => Box::into_raw(Box::new(instance)).cast(),
+        Ok(None) => null_mut(),
+        Err(payload) => fail(&format!(
+            "internal error (panic: {})",
+            panic_message(&*payload)
+        )),
+    }
+}
+
+pub unsafe fn free_instance<M: FmuCore>(c: fmi2Component) {
+    if !c.is_null() {
+        // SAFETY: `c` came from `instantiate::<M>` and is not used after this call.
+        let instance = unsafe { Box::from_raw(c.cast::<Instance<M>>()) };
+        let _ = catch_unwind(AssertUnwindSafe(move || drop(instance)));
+    }
+}
+
+pub unsafe fn set_debug_logging<M: FmuCore>(
+    c: fmi2Component,
+    on: fmi2Boolean,
+    n: usize,
+    categories: *const fmi2String,
+) -> Fmi2Status {
+    const F: &str = "fmi2SetDebugLogging";
+    unsafe {
+        with_instance::<M>(c, F, |inst| {
+            let Some(pointers) = in_slice(categories, n) else {
+                return inst.null_argument(F, "categories");
+            };
+            let mut names = Vec::with_capacity(n);
+            for &p in pointers {
+                let Some(name) = opt_str(p) else {
+                    return inst.null_argument(F, "categories[i]");
+                };
+                names.push(name.into_owned());
+            }
+            inst.set_debug_logging(on != FMI2_FALSE, &names)
+        })
+    }
+}
+
+pub unsafe fn setup_experiment<M: FmuCore>(
+    c: fmi2Component,
+    tolerance_defined: fmi2Boolean,
+    tolerance: f64,
+    start_time: f64,
+    stop_time_defined: fmi2Boolean,
+    stop_time: f64,
+) -> Fmi2Status {
+    let tolerance = (tolerance_defined != FMI2_FALSE).then_some(tolerance);
+    let stop_time = (stop_time_defined != FMI2_FALSE).then_some(stop_time);
+    unsafe {
+        with_instance::<M>(c, "fmi2SetupExperiment", |inst| {
+            inst.setup_experiment(tolerance, start_time, stop_time)
+        })
+    }
+}
+
+pub unsafe fn enter_initialization_mode<M: FmuCore>(c: fmi2Component) -> Fmi2Status {
+    unsafe {
+        with_instance::<M>(c, "fmi2EnterInitializationMode", |inst| {
+            inst.enter_initialization_mode()
+        })
+    }
+}
+
+pub unsafe fn exit_initialization_mode<M: FmuCore>(c: fmi2Component) -> Fmi2Status {
+    unsafe {
+        with_instance::<M>(c, "fmi2ExitInitializationMode", |inst| {
+            inst.exit_initialization_mode()
+        })
+    }
+}
+
+pub unsafe fn terminate<M: FmuCore>(c: fmi2Component) -> Fmi2Status {
+    unsafe { with_instance::<M>(c, "fmi2Terminate", |inst| inst.terminate()) }
+}
+
+pub unsafe fn reset<M: FmuCore>(c: fmi2Component) -> Fmi2Status {
+    unsafe { with_instance::<M>(c, "fmi2Reset", |inst| inst.reset()) }
+}
+
+pub unsafe fn get_real<M: FmuCore>(
+    c: fmi2Component,
+    vr: *const fmi2ValueReference,
+    nvr: usize,
+    value: *mut f64,
+) -> Fmi2Status {
+    const F: &str = "fmi2GetReal";
+    unsafe {
+        with_instance::<M>(c, F, |inst| {
+            match (in_slice(vr, nvr), out_slice(value, nvr)) {
+                (Some(vrs), Some(values)) => inst.get_real(vrs, values),
+                (None, _) => inst.null_argument(F, "vr"),
+                (_, None) => inst.null_argument(F, "value"),
+            }
+        })
+    }
+}
+
+pub unsafe fn set_real<M: FmuCore>(
+    c: fmi2Component,
+    vr: *const fmi2ValueReference,
+    nvr: usize,
+    value: *const f64,
+) -> Fmi2Status {
+    const F: &str = "fmi2SetReal";
+    unsafe {
+        with_instance::<M>(c, F, |inst| {
+            match (in_slice(vr, nvr), in_slice(value, nvr)) {
+                (Some(vrs), Some(values)) => inst.set_real(vrs, values),
+                (None, _) => inst.null_argument(F, "vr"),
+                (_, None) => inst.null_argument(F, "value"),
+            }
+        })
+    }
+}
+
+/// `fmi2Get/Set{Integer,Boolean,String}`; `value` is the value array, of whichever type.
+pub unsafe fn no_variables_of_type<M: FmuCore>(
+    c: fmi2Component,
+    func: &'static str,
+    type_name: &str,
+    setter: bool,
+    vr: *const fmi2ValueReference,
+    nvr: usize,
+    value: *const c_void,
+) -> Fmi2Status {
+    unsafe {
+        with_instance::<M>(c, func, |inst| match in_slice(vr, nvr) {
+            None => inst.null_argument(func, "vr"),
+            Some(_) if nvr > 0 && value.is_null() => inst.null_argument(func, "value"),
+            Some(vrs) => inst.no_variables_of_type(func, type_name, setter, vrs),
+        })
+    }
+}
+
+pub unsafe fn get_fmu_state<M: FmuCore>(c: fmi2Component, state: *mut fmi2FMUstate) -> Fmi2Status {
+    const F: &str = "fmi2GetFMUstate";
+    unsafe {
+        with_instance::<M>(c, F, |inst| {
+            if state.is_null() {
+                return inst.null_argument(F, "FMUstate");
+            }
+            let snapshot = inst.get_fmu_state();
+            if (*state).is_null() {
+                *state = Box::into_raw(Box::new(snapshot)).cast();
+            } else {
+                // Section 2.1.8: a non-NULL *FMUstate is a state of this FMU to be reused.
+                *(*state).cast::<Snapshot<M>>() = snapshot;
+            }
+            Fmi2Status::Ok
+        })
+    }
+}
+
+pub unsafe fn set_fmu_state<M: FmuCore>(c: fmi2Component, state: fmi2FMUstate) -> Fmi2Status {
+    const F: &str = "fmi2SetFMUstate";
+    unsafe {
+        with_instance::<M>(c, F, |inst| match state.cast::<Snapshot<M>>().as_ref() {
+            Some(snapshot) => inst.set_fmu_state(snapshot),
+            None => inst.null_argument(F, "FMUstate"),
+        })
+    }
+}
+
+pub unsafe fn free_fmu_state<M: FmuCore>(c: fmi2Component, state: *mut fmi2FMUstate) -> Fmi2Status {
+    unsafe {
+        with_instance::<M>(c, "fmi2FreeFMUstate", |_| {
+            // Section 2.1.8: a NULL pointer is ignored.
+            if !state.is_null() && !(*state).is_null() {
+                drop(Box::from_raw((*state).cast::<Snapshot<M>>()));
+                *state = null_mut();
+            }
+            Fmi2Status::Ok
+        })
+    }
+}
+
+pub unsafe fn serialized_fmu_state_size<M: FmuCore>(
+    c: fmi2Component,
+    state: fmi2FMUstate,
+    size: *mut usize,
+) -> Fmi2Status {
+    const F: &str = "fmi2SerializedFMUstateSize";
+    unsafe {
+        with_instance::<M>(c, F, |inst| {
+            match (state.cast::<Snapshot<M>>().as_ref(), size.is_null()) {
+                (Some(snapshot), false) => {
+                    *size = snapshot.to_bytes().len();
+                    Fmi2Status::Ok
+                }
+                (None, _) => inst.null_argument(F, "FMUstate"),
+                (_, true) => inst.null_argument(F, "size"),
+            }
+        })
+    }
+}
+
+pub unsafe fn serialize_fmu_state<M: FmuCore>(
+    c: fmi2Component,
+    state: fmi2FMUstate,
+    bytes: *mut fmi2Byte,
+    size: usize,
+) -> Fmi2Status {
+    const F: &str = "fmi2SerializeFMUstate";
+    unsafe {
+        with_instance::<M>(c, F, |inst| {
+            let Some(snapshot) = state.cast::<Snapshot<M>>().as_ref() else {
+                return inst.null_argument(F, "FMUstate");
+            };
+            let data = snapshot.to_bytes();
+            if size < data.len() {
+                return inst.argument_error(F, format_args!("buffer of {size} bytes is too small, the state needs {} (fmi2SerializedFMUstateSize)", data.len()));
+            }
+            let Some(out) = out_slice(bytes.cast::<u8>(), data.len()) else {
+                return inst.null_argument(F, "serializedState");
+            };
+            out.copy_from_slice(&data);
+            Fmi2Status::Ok
+        })
+    }
+}
+
+pub unsafe fn deserialize_fmu_state<M: FmuCore>(
+    c: fmi2Component,
+    bytes: *const fmi2Byte,
+    size: usize,
+    state: *mut fmi2FMUstate,
+) -> Fmi2Status {
+    const F: &str = "fmi2DeSerializeFMUstate";
+    unsafe {
+        with_instance::<M>(c, F, |inst| {
+            let Some(data) = in_slice(bytes.cast::<u8>(), size) else {
+                return inst.null_argument(F, "serializedState");
+            };
+            if state.is_null() {
+                return inst.null_argument(F, "FMUstate");
+            }
+            match inst.deserialize_fmu_state(data) {
+                Ok(snapshot) => {
+                    *state = Box::into_raw(Box::new(snapshot)).cast();
+                    Fmi2Status::Ok
+                }
+                Err(status) => status,
+            }
+        })
+    }
+}
+
+/// Functions of interfaces or capabilities this FMU does not offer.
+pub unsafe fn not_offered<M: FmuCore>(
+    c: fmi2Component,
+    func: &'static str,
+    what: &str,
+) -> Fmi2Status {
+    unsafe { with_instance::<M>(c, func, |inst| inst.not_offered(func, what)) }
+}
+
+pub unsafe fn do_step<M: FmuCore>(
+    c: fmi2Component,
+    tc: f64,
+    h: f64,
+    no_set_fmu_state_prior: fmi2Boolean,
+) -> Fmi2Status {
+    unsafe {
+        with_instance::<M>(c, "fmi2DoStep", |inst| {
+            inst.do_step(tc, h, no_set_fmu_state_prior != FMI2_FALSE)
+        })
+    }
+}
+
+pub unsafe fn cancel_step<M: FmuCore>(c: fmi2Component) -> Fmi2Status {
+    unsafe { with_instance::<M>(c, "fmi2CancelStep", |inst| inst.cancel_step()) }
+}
+
+/// `fmi2GetStatus`, `fmi2GetIntegerStatus`, `fmi2GetStringStatus`: no value is ever delivered.
+pub unsafe fn get_valueless_status<M: FmuCore>(
+    c: fmi2Component,
+    func: &'static str,
+    kind: fmi2StatusKind,
+    value: *mut c_void,
+) -> Fmi2Status {
+    unsafe {
+        with_instance::<M>(c, func, |inst| {
+            if value.is_null() {
+                return inst.null_argument(func, "value");
+            }
+            match func {
+                "fmi2GetStatus" => inst.get_status(kind),
+                "fmi2GetIntegerStatus" => inst.get_integer_status(kind),
+                _ => inst.get_string_status(kind),
+            }
+        })
+    }
+}
+
+pub unsafe fn get_real_status<M: FmuCore>(
+    c: fmi2Component,
+    kind: fmi2StatusKind,
+    value: *mut f64,
+) -> Fmi2Status {
+    const F: &str = "fmi2GetRealStatus";
+    unsafe {
+        with_instance::<M>(c, F, |inst| match value.as_mut() {
+            Some(v) => inst.get_real_status(kind, v),
+            None => inst.null_argument(F, "value"),
+        })
+    }
+}
+
+pub unsafe fn get_boolean_status<M: FmuCore>(
+    c: fmi2Component,
+    kind: fmi2StatusKind,
+    value: *mut fmi2Boolean,
+) -> Fmi2Status {
+    const F: &str = "fmi2GetBooleanStatus";
+    unsafe {
+        with_instance::<M>(c, F, |inst| match value.as_mut() {
+            Some(v) => {
+                let mut b = false;
+                let status = inst.get_boolean_status(kind, &mut b);
+                if status == Fmi2Status::Ok {
+                    *v = fmi2Boolean::from(b);
+                }
+                status
+            }
+            None => inst.null_argument(F, "value"),
+        })
+    }
+}
+
+/// The C string returned by `fmi2GetTypesPlatform`/`fmi2GetVersion`.
+pub fn static_c_str(s: &'static CStr) -> *const c_char {
+    s.as_ptr()
+}
+
+/// Exports the 44 functions of `fmi2Functions.h` for the core type `$core` (an
+/// [`FmuCore`](crate::fmi2::core::FmuCore)). Invoke exactly once per shared library, at
+/// item level: `hasel_fmu::export_fmi2!(MyCore);` (inside this crate: `crate::export_fmi2!`).
+#[macro_export]
+macro_rules! export_fmi2 {
+    ($core:ty) => {
+        $crate::__fmi2_functions!([#[unsafe(no_mangle)]] $core);
+    };
+}
+
+/// The functions of [`export_fmi2!`]; the bracketed attributes go on each function (tests
+/// pass none, to get the C-ABI functions without exported symbol names).
+#[doc(hidden)]
+#[macro_export]
+macro_rules! __fmi2_functions {
+    ([$($attr:tt)*] $core:ty) => {
+        $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)] pub extern "C" fn fmi2GetTypesPlatform() -> *const ::std::ffi::c_char { $crate::fmi2::exports::static_c_str($crate::fmi2::types::TYPES_PLATFORM) }
+        $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)] pub extern "C" fn fmi2GetVersion() -> *const ::std::ffi::c_char { $crate::fmi2::exports::static_c_str($crate::fmi2::types::VERSION) }
+        $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)] pub unsafe extern "C" fn fmi2SetDebugLogging(c: $crate::fmi2::types::fmi2Component, logging_on: $crate::fmi2::types::fmi2Boolean, n_categories: usize, categories: *const $crate::fmi2::types::fmi2String) -> $crate::fmi2::types::fmi2Status {
+            unsafe { $crate::fmi2::exports::set_debug_logging::<$core>(c, logging_on, n_categories, categories) }
+        }
+        $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)] pub unsafe extern "C" fn fmi2Instantiate(instance_name: $crate::fmi2::types::fmi2String, fmu_type: $crate::fmi2::types::fmi2Type, fmu_guid: $crate::fmi2::types::fmi2String, fmu_resource_location: $crate::fmi2::types::fmi2String, functions: *const $crate::fmi2::types::fmi2CallbackFunctions, visible: $crate::fmi2::types::fmi2Boolean, logging_on: $crate::fmi2::types::fmi2Boolean) -> $crate::fmi2::types::fmi2Component {
+            unsafe { $crate::fmi2::exports::instantiate::<$core>(instance_name, fmu_type, fmu_guid, fmu_resource_location, functions, visible, logging_on) }
+        }
+        $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)] pub unsafe extern "C" fn fmi2FreeInstance(c: $crate::fmi2::types::fmi2Component) { unsafe { $crate::fmi2::exports::free_instance::<$core>(c) } }
+        $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)] pub unsafe extern "C" fn fmi2SetupExperiment(c: $crate::fmi2::types::fmi2Component, tolerance_defined: $crate::fmi2::types::fmi2Boolean, tolerance: $crate::fmi2::types::fmi2Real, start_time: $crate::fmi2::types::fmi2Real, stop_time_defined: $crate::fmi2::types::fmi2Boolean, stop_time: $crate::fmi2::types::fmi2Real) -> $crate::fmi2::types::fmi2Status {
+            unsafe { $crate::fmi2::exports::setup_experiment::<$core>(c, tolerance_defined, tolerance, start_time, stop_time_defined, stop_time) }
+        }
+        $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)] pub unsafe extern "C" fn fmi2EnterInitializationMode(c: $crate::fmi2::types::fmi2Component) -> $crate::fmi2::types::fmi2Status { unsafe { $crate::fmi2::exports::enter_initialization_mode::<$core>(c) } }
+        $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)] pub unsafe extern "C" fn fmi2ExitInitializationMode(c: $crate::fmi2::types::fmi2Component) -> $crate::fmi2::types::fmi2Status { unsafe { $crate::fmi2::exports::exit_initialization_mode::<$core>(c) } }
+        $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)] pub unsafe extern "C" fn fmi2Terminate(c: $crate::fmi2::types::fmi2Component) -> $crate::fmi2::types::fmi2Status { unsafe { $crate::fmi2::exports::terminate::<$core>(c) } }
+        $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)] pub unsafe extern "C" fn fmi2Reset(c: $crate::fmi2::types::fmi2Component) -> $crate::fmi2::types::fmi2Status { unsafe { $crate::fmi2::exports::reset::<$core>(c) } }
+        $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)] pub unsafe extern "C" fn fmi2GetReal(c: $crate::fmi2::types::fmi2Component, vr: *const $crate::fmi2::types::fmi2ValueReference, nvr: usize, value: *mut $crate::fmi2::types::fmi2Real) -> $crate::fmi2::types::fmi2Status {
+            unsafe { $crate::fmi2::exports::get_real::<$core>(c, vr, nvr, value) }
+        }
+        $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)] pub unsafe extern "C" fn fmi2GetInteger(c: $crate::fmi2::types::fmi2Component, vr: *const $crate::fmi2::types::fmi2ValueReference, nvr: usize, value: *mut $crate::fmi2::types::fmi2Integer) -> $crate::fmi2::types::fmi2Status {
+            unsafe { $crate::fmi2::exports::no_variables_of_type::<$core>(c, "fmi2GetInteger", "Integer", false, vr, nvr, value as *const ::std::ffi::c_void) }
+        }
+        $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)] pub unsafe extern "C" fn fmi2GetBoolean(c: $crate::fmi2::types::fmi2Component, vr: *const $crate::fmi2::types::fmi2ValueReference, nvr: usize, value: *mut $crate::fmi2::types::fmi2Boolean) -> $crate::fmi2::types::fmi2Status {
+            unsafe { $crate::fmi2::exports::no_variables_of_type::<$core>(c, "fmi2GetBoolean", "Boolean", false, vr, nvr, value as *const ::std::ffi::c_void) }
+        }
+        $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)] pub unsafe extern "C" fn fmi2GetString(c: $crate::fmi2::types::fmi2Component, vr: *const $crate::fmi2::types::fmi2ValueReference, nvr: usize, value: *mut $crate::fmi2::types::fmi2String) -> $crate::fmi2::types::fmi2Status {
+            unsafe { $crate::fmi2::exports::no_variables_of_type::<$core>(c, "fmi2GetString", "String", false, vr, nvr, value as *const ::std::ffi::c_void) }
+        }
+        $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)] pub unsafe extern "C" fn fmi2SetReal(c: $crate::fmi2::types::fmi2Component, vr: *const $crate::fmi2::types::fmi2ValueReference, nvr: usize, value: *const $crate::fmi2::types::fmi2Real) -> $crate::fmi2::types::fmi2Status {
+            unsafe { $crate::fmi2::exports::set_real::<$core>(c, vr, nvr, value) }
+        }
+        $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)] pub unsafe extern "C" fn fmi2SetInteger(c: $crate::fmi2::types::fmi2Component, vr: *const $crate::fmi2::types::fmi2ValueReference, nvr: usize, value: *const $crate::fmi2::types::fmi2Integer) -> $crate::fmi2::types::fmi2Status {
+            unsafe { $crate::fmi2::exports::no_variables_of_type::<$core>(c, "fmi2SetInteger", "Integer", true, vr, nvr, value as *const ::std::ffi::c_void) }
+        }
+        $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)] pub unsafe extern "C" fn fmi2SetBoolean(c: $crate::fmi2::types::fmi2Component, vr: *const $crate::fmi2::types::fmi2ValueReference, nvr: usize, value: *const $crate::fmi2::types::fmi2Boolean) -> $crate::fmi2::types::fmi2Status {
+            unsafe { $crate::fmi2::exports::no_variables_of_type::<$core>(c, "fmi2SetBoolean", "Boolean", true, vr, nvr, value as *const ::std::ffi::c_void) }
+        }
+        $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)] pub unsafe extern "C" fn fmi2SetString(c: $crate::fmi2::types::fmi2Component, vr: *const $crate::fmi2::types::fmi2ValueReference, nvr: usize, value: *const $crate::fmi2::types::fmi2String) -> $crate::fmi2::types::fmi2Status {
+            unsafe { $crate::fmi2::exports::no_variables_of_type::<$core>(c, "fmi2SetString", "String", true, vr, nvr, value as *const ::std::ffi::c_void) }
+        }
+        $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)] pub unsafe extern "C" fn fmi2GetFMUstate(c: $crate::fmi2::types::fmi2Component, state: *mut $crate::fmi2::types::fmi2FMUstate) -> $crate::fmi2::types::fmi2Status { unsafe { $crate::fmi2::exports::get_fmu_state::<$core>(c, state) } }
+        $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)] pub unsafe extern "C" fn fmi2SetFMUstate(c: $crate::fmi2::types::fmi2Component, state: $crate::fmi2::types::fmi2FMUstate) -> $crate::fmi2::types::fmi2Status { unsafe { $crate::fmi2::exports::set_fmu_state::<$core>(c, state) } }
+        $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)] pub unsafe extern "C" fn fmi2FreeFMUstate(c: $crate::fmi2::types::fmi2Component, state: *mut $crate::fmi2::types::fmi2FMUstate) -> $crate::fmi2::types::fmi2Status { unsafe { $crate::fmi2::exports::free_fmu_state::<$core>(c, state) } }
+        $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)] pub unsafe extern "C" fn fmi2SerializedFMUstateSize(c: $crate::fmi2::types::fmi2Component, state: $crate::fmi2::types::fmi2FMUstate, size: *mut usize) -> $crate::fmi2::types::fmi2Status {
+            unsafe { $crate::fmi2::exports::serialized_fmu_state_size::<$core>(c, state, size) }
+        }
+        $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)] pub unsafe extern "C" fn fmi2SerializeFMUstate(c: $crate::fmi2::types::fmi2Component, state: $crate::fmi2::types::fmi2FMUstate, serialized_state: *mut $crate::fmi2::types::fmi2Byte, size: usize) -> $crate::fmi2::types::fmi2Status {
+            unsafe { $crate::fmi2::exports::serialize_fmu_state::<$core>(c, state, serialized_state, size) }
+        }
+        $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)] pub unsafe extern "C" fn fmi2DeSerializeFMUstate(c: $crate::fmi2::types::fmi2Component, serialized_state: *const $crate::fmi2::types::fmi2Byte, size: usize, state: *mut $crate::fmi2::types::fmi2FMUstate) -> $crate::fmi2::types::fmi2Status {
+            unsafe { $crate::fmi2::exports::deserialize_fmu_state::<$core>(c, serialized_state, size, state) }
+        }
+        $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)] pub unsafe extern "C" fn fmi2GetDirectionalDerivative(c: $crate::fmi2::types::fmi2Component, _v_unknown_ref: *const $crate::fmi2::types::fmi2ValueReference, _n_unknown: usize, _v_known_ref: *const $crate::fmi2::types::fmi2ValueReference, _n_known: usize, _dv_known: *const $crate::fmi2::types::fmi2Real, _dv_unknown: *mut $crate::fmi2::types::fmi2Real) -> $crate::fmi2::types::fmi2Status {
+            unsafe { $crate::fmi2::exports::not_offered::<$core>(c, "fmi2GetDirectionalDerivative", "providesDirectionalDerivative") }
+        }
+        $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)] pub unsafe extern "C" fn fmi2EnterEventMode(c: $crate::fmi2::types::fmi2Component) -> $crate::fmi2::types::fmi2Status { unsafe { $crate::fmi2::exports::not_offered::<$core>(c, "fmi2EnterEventMode", "the Model Exchange interface") } }
+        $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)] pub unsafe extern "C" fn fmi2NewDiscreteStates(c: $crate::fmi2::types::fmi2Component, _event_info: *mut $crate::fmi2::types::fmi2EventInfo) -> $crate::fmi2::types::fmi2Status { unsafe { $crate::fmi2::exports::not_offered::<$core>(c, "fmi2NewDiscreteStates", "the Model Exchange interface") } }
+        $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)] pub unsafe extern "C" fn fmi2EnterContinuousTimeMode(c: $crate::fmi2::types::fmi2Component) -> $crate::fmi2::types::fmi2Status { unsafe { $crate::fmi2::exports::not_offered::<$core>(c, "fmi2EnterContinuousTimeMode", "the Model Exchange interface") } }
+        $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)] pub unsafe extern "C" fn fmi2CompletedIntegratorStep(c: $crate::fmi2::types::fmi2Component, _no_set_fmu_state_prior_to_current_point: $crate::fmi2::types::fmi2Boolean, _enter_event_mode: *mut $crate::fmi2::types::fmi2Boolean, _terminate_simulation: *mut $crate::fmi2::types::fmi2Boolean) -> $crate::fmi2::types::fmi2Status {
+            unsafe { $crate::fmi2::exports::not_offered::<$core>(c, "fmi2CompletedIntegratorStep", "the Model Exchange interface") }
+        }
+        $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)] pub unsafe extern "C" fn fmi2SetTime(c: $crate::fmi2::types::fmi2Component, _time: $crate::fmi2::types::fmi2Real) -> $crate::fmi2::types::fmi2Status { unsafe { $crate::fmi2::exports::not_offered::<$core>(c, "fmi2SetTime", "the Model Exchange interface") } }
+        $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)] pub unsafe extern "C" fn fmi2SetContinuousStates(c: $crate::fmi2::types::fmi2Component, _x: *const $crate::fmi2::types::fmi2Real, _nx: usize) -> $crate::fmi2::types::fmi2Status { unsafe { $crate::fmi2::exports::not_offered::<$core>(c, "fmi2SetContinuousStates", "the Model Exchange interface") } }
+        $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)] pub unsafe extern "C" fn fmi2GetDerivatives(c: $crate::fmi2::types::fmi2Component, _derivatives: *mut $crate::fmi2::types::fmi2Real, _nx: usize) -> $crate::fmi2::types::fmi2Status { unsafe { $crate::fmi2::exports::not_offered::<$core>(c, "fmi2GetDerivatives", "the Model Exchange interface") } }
+        $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)] pub unsafe extern "C" fn fmi2GetEventIndicators(c: $crate::fmi2::types::fmi2Component, _event_indicators: *mut $crate::fmi2::types::fmi2Real, _ni: usize) -> $crate::fmi2::types::fmi2Status { unsafe { $crate::fmi2::exports::not_offered::<$core>(c, "fmi2GetEventIndicators", "the Model Exchange interface") } }
+        $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)] pub unsafe extern "C" fn fmi2GetContinuousStates(c: $crate::fmi2::types::fmi2Component, _x: *mut $crate::fmi2::types::fmi2Real, _nx: usize) -> $crate::fmi2::types::fmi2Status { unsafe { $crate::fmi2::exports::not_offered::<$core>(c, "fmi2GetContinuousStates", "the Model Exchange interface") } }
+        $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)] pub unsafe extern "C" fn fmi2GetNominalsOfContinuousStates(c: $crate::fmi2::types::fmi2Component, _x_nominal: *mut $crate::fmi2::types::fmi2Real, _nx: usize) -> $crate::fmi2::types::fmi2Status {
+            unsafe { $crate::fmi2::exports::not_offered::<$core>(c, "fmi2GetNominalsOfContinuousStates", "the Model Exchange interface") }
+        }
+        $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)] pub unsafe extern "C" fn fmi2SetRealInputDerivatives(c: $crate::fmi2::types::fmi2Component, _vr: *const $crate::fmi2::types::fmi2ValueReference, _nvr: usize, _order: *const $crate::fmi2::types::fmi2Integer, _value: *const $crate::fmi2::types::fmi2Real) -> $crate::fmi2::types::fmi2Status {
+            unsafe { $crate::fmi2::exports::not_offered::<$core>(c, "fmi2SetRealInputDerivatives", "canInterpolateInputs (input derivatives)") }
+        }
+        $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)] pub unsafe extern "C" fn fmi2GetRealOutputDerivatives(c: $crate::fmi2::types::fmi2Component, _vr: *const $crate::fmi2::types::fmi2ValueReference, _nvr: usize, _order: *const $crate::fmi2::types::fmi2Integer, _value: *mut $crate::fmi2::types::fmi2Real) -> $crate::fmi2::types::fmi2Status {
+            unsafe { $crate::fmi2::exports::not_offered::<$core>(c, "fmi2GetRealOutputDerivatives", "maxOutputDerivativeOrder > 0 (output derivatives)") }
+        }
+        $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)] pub unsafe extern "C" fn fmi2DoStep(c: $crate::fmi2::types::fmi2Component, current_communication_point: $crate::fmi2::types::fmi2Real, communication_step_size: $crate::fmi2::types::fmi2Real, no_set_fmu_state_prior_to_current_point: $crate::fmi2::types::fmi2Boolean) -> $crate::fmi2::types::fmi2Status {
+            unsafe { $crate::fmi2::exports::do_step::<$core>(c, current_communication_point, communication_step_size, no_set_fmu_state_prior_to_current_point) }
+        }
+        $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)] pub unsafe extern "C" fn fmi2CancelStep(c: $crate::fmi2::types::fmi2Component) -> $crate::fmi2::types::fmi2Status { unsafe { $crate::fmi2::exports::cancel_step::<$core>(c) } }
+        $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)] pub unsafe extern "C" fn fmi2GetStatus(c: $crate::fmi2::types::fmi2Component, s: $crate::fmi2::types::fmi2StatusKind, value: *mut $crate::fmi2::types::fmi2Status) -> $crate::fmi2::types::fmi2Status {
+            unsafe { $crate::fmi2::exports::get_valueless_status::<$core>(c, "fmi2GetStatus", s, value as *mut ::std::ffi::c_void) }
+        }
+        $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)] pub unsafe extern "C" fn fmi2GetRealStatus(c: $crate::fmi2::types::fmi2Component, s: $crate::fmi2::types::fmi2StatusKind, value: *mut $crate::fmi2::types::fmi2Real) -> $crate::fmi2::types::fmi2Status { unsafe { $crate::fmi2::exports::get_real_status::<$core>(c, s, value) } }
+        $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)] pub unsafe extern "C" fn fmi2GetIntegerStatus(c: $crate::fmi2::types::fmi2Component, s: $crate::fmi2::types::fmi2StatusKind, value: *mut $crate::fmi2::types::fmi2Integer) -> $crate::fmi2::types::fmi2Status {
+            unsafe { $crate::fmi2::exports::get_valueless_status::<$core>(c, "fmi2GetIntegerStatus", s, value as *mut ::std::ffi::c_void) }
+        }
+        $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)] pub unsafe extern "C" fn fmi2GetBooleanStatus(c: $crate::fmi2::types::fmi2Component, s: $crate::fmi2::types::fmi2StatusKind, value: *mut $crate::fmi2::types::fmi2Boolean) -> $crate::fmi2::types::fmi2Status { unsafe { $crate::fmi2::exports::get_boolean_status::<$core>(c, s, value) } }
+        $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)] pub unsafe extern "C" fn fmi2GetStringStatus(c: $crate::fmi2::types::fmi2Component, s: $crate::fmi2::types::fmi2StatusKind, value: *mut $crate::fmi2::types::fmi2String) -> $crate::fmi2::types::fmi2Status {
+            unsafe { $crate::fmi2::exports::get_valueless_status::<$core>(c, "fmi2GetStringStatus", s, value as *mut ::std::ffi::c_void) }
+        }
+    };
+}
