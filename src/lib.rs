@@ -2,6 +2,8 @@
 //! Co-Simulation FMU and the `hasel` command-line tool.
 
 pub mod fmi2;
+pub mod fmu_core;
+pub mod fmu_pack;
 pub mod io;
 pub mod model;
 pub mod plot;

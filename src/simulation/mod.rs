@@ -13,6 +13,9 @@ pub use input::{Input, Interpolation, Piece, Tone};
 /// (model.md, "Accuracy contract"; the FMU's DefaultExperiment declares the same).
 pub const DEFAULT_RTOL: f64 = 1e-6;
 
+/// First step size [s] from a fresh start: the electrical modes have a 2.7 ns time constant.
+const FIRST_STEP: f64 = 1e-9;
+
 /// Why a simulation could not go on.
 #[derive(Clone, Debug, PartialEq)]
 pub enum SimError {
@@ -84,6 +87,15 @@ pub struct Simulator {
     solver: Radau5,
     /// Input value at the current point, to detect jumps between calls.
     u_now: [f64; 3],
+    /// Scratch copy of the state at the start of a held step, for a rollback on failure.
+    x_start: Vec<f64>,
+}
+
+/// Everything of a [`Simulator`] beyond its model: restoring it replays bit for bit.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct Snapshot {
+    solver: Radau5,
+    u_now: [f64; 3],
 }
 
 impl Simulator {
@@ -104,9 +116,25 @@ impl Simulator {
         let tol = Tolerances::scaled(rtol, &model.state_scales());
         let mut solver = Radau5::new(model.n_states(), tol);
         let sys = Driven { model: &model, piece: Piece::Constant([0.0; 3]) };
-        // a first step of 1 ns: the electrical modes have a 2.7 ns time constant
-        solver.init(&sys, t0, x0, 1e-9)?;
-        Ok(Simulator { model, solver, u_now: [0.0; 3] })
+        solver.init(&sys, t0, x0, FIRST_STEP)?;
+        Ok(Simulator { x_start: x0.to_vec(), model, solver, u_now: [0.0; 3] })
+    }
+
+    /// The integrator's whole state and the input last applied.
+    pub fn snapshot(&self) -> Snapshot {
+        Snapshot { solver: self.solver.clone(), u_now: self.u_now }
+    }
+
+    /// A simulator of `model` continuing exactly from `snapshot`.
+    pub fn from_snapshot(model: Platform, snapshot: Snapshot) -> Result<Simulator, SimError> {
+        if snapshot.solver.y().len() != model.n_states() {
+            return Err(SimError::Setting(format!(
+                "snapshot has {} states, the model {}",
+                snapshot.solver.y().len(),
+                model.n_states()
+            )));
+        }
+        Ok(Simulator { x_start: snapshot.solver.y().to_vec(), model, solver: snapshot.solver, u_now: snapshot.u_now })
     }
 
     pub fn model(&self) -> &Platform {
@@ -146,12 +174,22 @@ impl Simulator {
         Ok(())
     }
 
-    /// Integrates to `t_end` with the input held at `u` (one co-simulation step).
+    /// Integrates to `t_end` with the input held at `u` (one co-simulation step). On failure
+    /// the simulator is back at the start of the step (integrator history restarted).
     pub fn step_held(&mut self, u: [f64; 3], t_end: f64) -> Result<(), SimError> {
+        let (t_start, u_start) = (self.t(), self.u_now);
+        self.x_start.copy_from_slice(self.solver.y());
         let piece = Piece::Constant(u);
-        self.apply(piece)?;
-        self.solver.advance(&Driven { model: &self.model, piece }, t_end)?;
-        Ok(())
+        let result = self
+            .apply(piece)
+            .and_then(|()| Ok(self.solver.advance(&Driven { model: &self.model, piece }, t_end)?));
+        if result.is_err() {
+            let sys = Driven { model: &self.model, piece: Piece::Constant(u_start) };
+            // the state at t_start was evaluable before, so this cannot fail
+            self.solver.init(&sys, t_start, &self.x_start, FIRST_STEP)?;
+            self.u_now = u_start;
+        }
+        result
     }
 
     /// Integrates `input` to `t_end`, calling `on_sample` at t0 and at every multiple of `dt`

@@ -1,6 +1,7 @@
 //! `hasel`: simulate the HASEL platform, pack it as an FMI 2.0 FMU, benchmark it.
 
 mod bench;
+mod fmu;
 mod simulate;
 
 use std::process::ExitCode;
@@ -20,6 +21,10 @@ enum Command {
     Simulate(simulate::Args),
     /// Print the parameters (defaults, or a file's values over them) as a parameter file
     Params(simulate::ParamsArgs),
+    /// Pack the FMI 2.0 Co-Simulation FMU
+    Fmu(fmu::Args),
+    /// Print the FMU's modelDescription.xml
+    Describe(fmu::DescribeArgs),
     /// Measure the solver: wall time, work counters and error against the reference data
     Bench(bench::Args),
 }
@@ -30,6 +35,8 @@ fn main() -> ExitCode {
         Command::Simulate(a) => simulate::run(a),
         Command::Params(a) => simulate::params(a),
         Command::Bench(a) => bench::run(a),
+        Command::Fmu(a) => fmu::run(a),
+        Command::Describe(a) => fmu::describe(a),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -1,0 +1,55 @@
+//! `hasel fmu` and `hasel describe`.
+
+use std::path::PathBuf;
+
+use hasel_fmu::fmu_pack;
+use hasel_fmu::io::csv::write_text_atomic;
+
+use crate::simulate::load_params;
+
+#[derive(clap::Args)]
+pub struct Args {
+    /// Parameter file whose values become the FMU's start values
+    #[arg(long, value_name = "FILE.toml")]
+    params: Option<PathBuf>,
+    /// Where to write the FMU
+    #[arg(long, default_value = "fmu/HaselPlatform.fmu")]
+    out: PathBuf,
+    /// The FMU's shared library (default: libhasel_fmu.so beside this executable)
+    #[arg(long, value_name = "FILE.so")]
+    lib: Option<PathBuf>,
+}
+
+#[derive(clap::Args)]
+pub struct DescribeArgs {
+    /// Parameter file whose values become the start values
+    #[arg(long, value_name = "FILE.toml")]
+    params: Option<PathBuf>,
+    /// Write here instead of standard output
+    #[arg(long, value_name = "FILE.xml")]
+    out: Option<PathBuf>,
+}
+
+pub fn run(a: Args) -> Result<(), String> {
+    let params = load_params(&a.params)?;
+    let lib = match a.lib {
+        Some(p) => p,
+        None => std::env::current_exe()
+            .map_err(|e| format!("cannot locate this executable: {e}"))?
+            .with_file_name("libhasel_fmu.so"),
+    };
+    fmu_pack::pack(&lib, &params, &a.out).map_err(|e| e.to_string())?;
+    println!("wrote {} (GUID {}, library {})", a.out.display(), fmu_pack::guid(&params), lib.display());
+    Ok(())
+}
+
+pub fn describe(a: DescribeArgs) -> Result<(), String> {
+    let xml = fmu_pack::model_description(&load_params(&a.params)?);
+    match a.out {
+        Some(path) => write_text_atomic(&path, &xml).map_err(|e| e.to_string()),
+        None => {
+            print!("{xml}");
+            Ok(())
+        }
+    }
+}

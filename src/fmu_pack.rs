@@ -1,0 +1,145 @@
+//! Packs the FMU archive: `modelDescription.xml`, `binaries/linux64/HaselPlatform.so`,
+//! `documentation/index.html` and `resources/parameters.toml`, all generated from the one
+//! variable table of [`crate::fmu_core`] and one parameter set.
+
+use std::io::Write;
+use std::path::Path;
+
+use crate::fmi2::model_description::{guid_for, model_description_xml};
+use crate::fmi2::variables::{Causality, Variable};
+use crate::fmu_core::{MODEL_IDENTIFIER, RESOURCE_PARAMS, model_info, variables};
+use crate::io::csv::{FileError, write_bytes_atomic};
+use crate::io::params_file;
+use crate::model::Params;
+use crate::simulation::DEFAULT_RTOL;
+
+/// The `modelDescription.xml` of an FMU whose start values are `params`.
+pub fn model_description(params: &Params) -> String {
+    model_description_xml(&model_info(), &variables(params, DEFAULT_RTOL))
+        .expect("the variable table is valid (tested)")
+}
+
+/// The GUID of that description.
+pub fn guid(params: &Params) -> String {
+    guid_for(&model_info(), &variables(params, DEFAULT_RTOL)).expect("the variable table is valid (tested)")
+}
+
+fn escape(s: &str) -> String {
+    s.replace('&', "&amp;").replace('<', "&lt;").replace('>', "&gt;")
+}
+
+fn group(v: &Variable) -> &'static str {
+    match v.causality {
+        Causality::Input => "Inputs",
+        Causality::Output => "Outputs",
+        Causality::Parameter | Causality::CalculatedParameter => "Parameters",
+        _ => "Diagnostic variables",
+    }
+}
+
+/// `documentation/index.html`: the model, its interface and every variable with its unit,
+/// start value and description.
+pub fn documentation(params: &Params) -> String {
+    let vars = variables(params, DEFAULT_RTOL);
+    let info = model_info();
+    let mut html = format!(
+        "<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\"><title>{id}</title>\n\
+         <style>body{{font-family:sans-serif;max-width:60em;margin:2em auto}}table{{border-collapse:collapse}}\
+         td,th{{border:1px solid #ccc;padding:2px 6px;text-align:left}}</style></head><body>\n\
+         <h1>{id}</h1>\n<p>{desc}</p>\n\
+         <p>FMI 2.0 Co-Simulation, GUID <code>{guid}</code>. Each actuator is the port-Hamiltonian \
+         system of Feregrino et al.: state (theta, l_p, p, Q1, Q2), energy H, dynamics \
+         dx/dt = (J - R) grad H + g U; the heights h_i = 1/2 Lv sin(theta_i) drive the 3PS platform, \
+         whose forward kinematics gives the antenna tip. The inputs are held constant over each \
+         communication step; the internal solver is a Radau IIA method of order 5 with error \
+         control (relative tolerance from fmi2SetupExperiment, else the parameter <code>rtol</code>). \
+         The simulation starts from the U = 0 equilibrium under gravity.</p>\n\
+         <p>Default experiment: 0 to {stop} s, step {step} s, tolerance {tol}.</p>\n",
+        id = MODEL_IDENTIFIER,
+        desc = escape(&info.description),
+        guid = guid(params),
+        stop = info.default_experiment.stop_time,
+        step = info.default_experiment.step_size,
+        tol = info.default_experiment.tolerance,
+    );
+    for title in ["Inputs", "Outputs", "Parameters", "Diagnostic variables"] {
+        html.push_str(&format!(
+            "<h2>{title}</h2>\n<table><tr><th>name</th><th>value reference</th><th>unit</th><th>start</th><th>description</th></tr>\n"
+        ));
+        for v in vars.iter().filter(|v| group(v) == title) {
+            html.push_str(&format!(
+                "<tr><td><code>{}</code></td><td>{}</td><td>{}</td><td>{}</td><td>{}</td></tr>\n",
+                v.name,
+                v.value_reference,
+                v.unit.as_deref().unwrap_or(""),
+                v.start.map(|s| format!("{s:?}")).unwrap_or_default(),
+                escape(&v.description)
+            ));
+        }
+        html.push_str("</table>\n");
+    }
+    html.push_str("</body></html>\n");
+    html
+}
+
+/// Writes the FMU to `out` (atomically) from the shared library at `library`.
+pub fn pack(library: &Path, params: &Params, out: &Path) -> Result<(), FileError> {
+    let so = std::fs::read(library).map_err(|e| FileError::new(library, format!("cannot read the FMU library: {e}")))?;
+    if !so.starts_with(b"\x7fELF") {
+        return Err(FileError::new(library, "not an ELF shared library"));
+    }
+    let mut zip = zip::ZipWriter::new(std::io::Cursor::new(Vec::new()));
+    let options = zip::write::SimpleFileOptions::default().compression_method(zip::CompressionMethod::Deflated);
+    let entries: [(String, Vec<u8>); 4] = [
+        ("modelDescription.xml".into(), model_description(params).into_bytes()),
+        (format!("binaries/linux64/{MODEL_IDENTIFIER}.so"), so),
+        ("documentation/index.html".into(), documentation(params).into_bytes()),
+        (format!("resources/{RESOURCE_PARAMS}"), params_file::to_toml(params).into_bytes()),
+    ];
+    let zip_err = |e: String| FileError::new(out, format!("cannot build the archive: {e}"));
+    for (name, bytes) in &entries {
+        zip.start_file(name.as_str(), options).map_err(|e| zip_err(e.to_string()))?;
+        zip.write_all(bytes).map_err(|e| zip_err(e.to_string()))?;
+    }
+    let bytes = zip.finish().map_err(|e| zip_err(e.to_string()))?.into_inner();
+    write_bytes_atomic(out, &bytes)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::fmi2::variables::check_variable_table;
+
+    #[test]
+    fn the_variable_table_follows_the_fmi_rules() {
+        check_variable_table(&variables(&Params::default(), DEFAULT_RTOL)).unwrap();
+    }
+
+    #[test]
+    fn committed_model_description_is_the_generated_one() {
+        let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("modelDescription/modelDescription.xml");
+        let committed = std::fs::read_to_string(&path).unwrap_or_default();
+        assert!(
+            committed == model_description(&Params::default()),
+            "{} differs from the generated description: run `cargo run -- describe --out modelDescription/modelDescription.xml`",
+            path.display()
+        );
+    }
+
+    #[test]
+    fn the_guid_follows_the_start_values() {
+        let mut p = Params::default();
+        let g0 = guid(&p);
+        p.set("Kb_1", 0.31).unwrap();
+        assert_ne!(g0, guid(&p));
+        assert!(model_description(&p).contains(&guid(&p)));
+    }
+
+    #[test]
+    fn documentation_lists_every_variable() {
+        let doc = documentation(&Params::default());
+        for v in variables(&Params::default(), DEFAULT_RTOL) {
+            assert!(doc.contains(&format!("<code>{}</code>", v.name)), "{}", v.name);
+        }
+    }
+}
