@@ -9,7 +9,9 @@ use std::sync::OnceLock;
 use serde::{Deserialize, Serialize};
 
 use crate::fmi2::core::FmuCore;
-use crate::fmi2::variables::{Causality, DefaultExperiment, Initial, ModelInfo, Variability, Variable};
+use crate::fmi2::variables::{
+    Causality, DefaultExperiment, Initial, ModelInfo, Variability, Variable,
+};
 use crate::io::params_file;
 use crate::model::params::{ParamDef, parameters};
 use crate::model::{Params, Platform};
@@ -47,7 +49,11 @@ pub struct Row {
 const STATE_UNITS: [(&str, &str, &str); 5] = [
     ("theta", "rad", "Film rotation angle theta"),
     ("l_p", "m", "Top film length l_p"),
-    ("p", "kg.m/s", "Angular momentum p = I dtheta/dt with the paper's I = Lv m/24 [kg.m]"),
+    (
+        "p",
+        "kg.m/s",
+        "Angular momentum p = I dtheta/dt with the paper's I = Lv m/24 [kg.m]",
+    ),
     ("Q1", "C", "Charge Q1 of the retention capacitor C1"),
     ("Q2", "C", "Charge Q2 of the electrode capacitor C2"),
 ];
@@ -91,12 +97,30 @@ pub fn variables(params: &Params, rtol: f64) -> Vec<Variable> {
         .map(|(vr, row)| {
             let (causality, variability, initial, start) = match row.slot {
                 Slot::Input(_) => (Causality::Input, Variability::Continuous, None, Some(0.0)),
-                Slot::Height(_) | Slot::Tip(_) => (Causality::Output, Variability::Continuous, Some(Initial::Calculated), None),
-                Slot::Param(d) => (Causality::Parameter, Variability::Fixed, Some(Initial::Exact), Some((d.get)(params))),
-                Slot::Rtol => (Causality::Parameter, Variability::Fixed, Some(Initial::Exact), Some(rtol)),
-                Slot::State(_) | Slot::Energy | Slot::SuppliedPower | Slot::DissipatedPower => {
-                    (Causality::Local, Variability::Continuous, Some(Initial::Calculated), None)
-                }
+                Slot::Height(_) | Slot::Tip(_) => (
+                    Causality::Output,
+                    Variability::Continuous,
+                    Some(Initial::Calculated),
+                    None,
+                ),
+                Slot::Param(d) => (
+                    Causality::Parameter,
+                    Variability::Fixed,
+                    Some(Initial::Exact),
+                    Some((d.get)(params)),
+                ),
+                Slot::Rtol => (
+                    Causality::Parameter,
+                    Variability::Fixed,
+                    Some(Initial::Exact),
+                    Some(rtol),
+                ),
+                Slot::State(_) | Slot::Energy | Slot::SuppliedPower | Slot::DissipatedPower => (
+                    Causality::Local,
+                    Variability::Continuous,
+                    Some(Initial::Calculated),
+                    None,
+                ),
             };
             Variable {
                 name: row.name.clone(),
@@ -128,7 +152,10 @@ pub fn model_info() -> ModelInfo {
 
 /// Reads the packed start values from `resources/parameters.toml`, if the FMU has one.
 pub fn resource_params(resource_dir: Option<&Path>) -> Result<Params, String> {
-    match resource_dir.map(|d| d.join(RESOURCE_PARAMS)).filter(|p| p.exists()) {
+    match resource_dir
+        .map(|d| d.join(RESOURCE_PARAMS))
+        .filter(|p| p.exists())
+    {
         Some(path) => params_file::read(&path).map_err(|e| e.to_string()),
         None => Ok(Params::default()),
     }
@@ -239,12 +266,22 @@ impl FmuCore for HaselCore {
                 }
                 self.rtol = value;
             }
-            _ => return Err(format!("{} is computed by the model and cannot be set", row.name)),
+            _ => {
+                return Err(format!(
+                    "{} is computed by the model and cannot be set",
+                    row.name
+                ));
+            }
         }
         Ok(())
     }
 
-    fn enter_initialization(&mut self, start_time: f64, _stop: Option<f64>, tolerance: Option<f64>) -> Result<(), String> {
+    fn enter_initialization(
+        &mut self,
+        start_time: f64,
+        _stop: Option<f64>,
+        tolerance: Option<f64>,
+    ) -> Result<(), String> {
         if let Some(tol) = tolerance
             && !(tol.is_finite() && tol > 0.0 && tol < 0.1)
         {
@@ -261,7 +298,10 @@ impl FmuCore for HaselCore {
     }
 
     fn do_step(&mut self, step: f64) -> Result<(), String> {
-        let sim = self.sim.as_mut().ok_or("the simulation has not been initialized")?;
+        let sim = self
+            .sim
+            .as_mut()
+            .ok_or("the simulation has not been initialized")?;
         let t_end = sim.t() + step;
         sim.step_held(self.u, t_end).map_err(|e| e.to_string())
     }
@@ -283,10 +323,15 @@ impl FmuCore for HaselCore {
     }
 
     fn deserialize_state(&self, bytes: &[u8]) -> Result<Self, String> {
-        let state: State = postcard::from_bytes(bytes).map_err(|e| format!("not a HaselPlatform state: {e}"))?;
+        let state: State =
+            postcard::from_bytes(bytes).map_err(|e| format!("not a HaselPlatform state: {e}"))?;
         let defs: Vec<&ParamDef> = parameters().collect();
         if state.params.len() != defs.len() {
-            return Err(format!("state holds {} parameters, this FMU has {}", state.params.len(), defs.len()));
+            return Err(format!(
+                "state holds {} parameters, this FMU has {}",
+                state.params.len(),
+                defs.len()
+            ));
         }
         let mut params = Params::default();
         for (d, v) in defs.iter().zip(&state.params) {
@@ -299,7 +344,14 @@ impl FmuCore for HaselCore {
             }
             None => None,
         };
-        Ok(HaselCore { params, rtol: state.rtol, tolerance: state.tolerance, u: state.u, t_start: state.t_start, sim })
+        Ok(HaselCore {
+            params,
+            rtol: state.rtol,
+            tolerance: state.tolerance,
+            u: state.u,
+            t_start: state.t_start,
+            sim,
+        })
     }
 }
 

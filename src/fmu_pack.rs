@@ -21,11 +21,14 @@ pub fn model_description(params: &Params) -> String {
 
 /// The GUID of that description.
 pub fn guid(params: &Params) -> String {
-    guid_for(&model_info(), &variables(params, DEFAULT_RTOL)).expect("the variable table is valid (tested)")
+    guid_for(&model_info(), &variables(params, DEFAULT_RTOL))
+        .expect("the variable table is valid (tested)")
 }
 
 fn escape(s: &str) -> String {
-    s.replace('&', "&amp;").replace('<', "&lt;").replace('>', "&gt;")
+    s.replace('&', "&amp;")
+        .replace('<', "&lt;")
+        .replace('>', "&gt;")
 }
 
 fn group(v: &Variable) -> &'static str {
@@ -84,24 +87,39 @@ pub fn documentation(params: &Params) -> String {
 
 /// Writes the FMU to `out` (atomically) from the shared library at `library`.
 pub fn pack(library: &Path, params: &Params, out: &Path) -> Result<(), FileError> {
-    let so = std::fs::read(library).map_err(|e| FileError::new(library, format!("cannot read the FMU library: {e}")))?;
+    let so = std::fs::read(library)
+        .map_err(|e| FileError::new(library, format!("cannot read the FMU library: {e}")))?;
     if !so.starts_with(b"\x7fELF") {
         return Err(FileError::new(library, "not an ELF shared library"));
     }
     let mut zip = zip::ZipWriter::new(std::io::Cursor::new(Vec::new()));
-    let options = zip::write::SimpleFileOptions::default().compression_method(zip::CompressionMethod::Deflated);
+    let options = zip::write::SimpleFileOptions::default()
+        .compression_method(zip::CompressionMethod::Deflated);
     let entries: [(String, Vec<u8>); 4] = [
-        ("modelDescription.xml".into(), model_description(params).into_bytes()),
+        (
+            "modelDescription.xml".into(),
+            model_description(params).into_bytes(),
+        ),
         (format!("binaries/linux64/{MODEL_IDENTIFIER}.so"), so),
-        ("documentation/index.html".into(), documentation(params).into_bytes()),
-        (format!("resources/{RESOURCE_PARAMS}"), params_file::to_toml(params).into_bytes()),
+        (
+            "documentation/index.html".into(),
+            documentation(params).into_bytes(),
+        ),
+        (
+            format!("resources/{RESOURCE_PARAMS}"),
+            params_file::to_toml(params).into_bytes(),
+        ),
     ];
     let zip_err = |e: String| FileError::new(out, format!("cannot build the archive: {e}"));
     for (name, bytes) in &entries {
-        zip.start_file(name.as_str(), options).map_err(|e| zip_err(e.to_string()))?;
+        zip.start_file(name.as_str(), options)
+            .map_err(|e| zip_err(e.to_string()))?;
         zip.write_all(bytes).map_err(|e| zip_err(e.to_string()))?;
     }
-    let bytes = zip.finish().map_err(|e| zip_err(e.to_string()))?.into_inner();
+    let bytes = zip
+        .finish()
+        .map_err(|e| zip_err(e.to_string()))?
+        .into_inner();
     write_bytes_atomic(out, &bytes)
 }
 
@@ -117,7 +135,8 @@ mod tests {
 
     #[test]
     fn committed_model_description_is_the_generated_one() {
-        let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("modelDescription/modelDescription.xml");
+        let path =
+            Path::new(env!("CARGO_MANIFEST_DIR")).join("modelDescription/modelDescription.xml");
         let committed = std::fs::read_to_string(&path).unwrap_or_default();
         assert!(
             committed == model_description(&Params::default()),
@@ -139,7 +158,11 @@ mod tests {
     fn documentation_lists_every_variable() {
         let doc = documentation(&Params::default());
         for v in variables(&Params::default(), DEFAULT_RTOL) {
-            assert!(doc.contains(&format!("<code>{}</code>", v.name)), "{}", v.name);
+            assert!(
+                doc.contains(&format!("<code>{}</code>", v.name)),
+                "{}",
+                v.name
+            );
         }
     }
 }

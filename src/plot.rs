@@ -41,12 +41,21 @@ fn register_font() {
     static FONT: Once = Once::new();
     FONT.call_once(|| {
         // the embedded font is valid TrueType; a failure here would only lose the text
-        let _ = plotters::style::register_font("sans-serif", FontStyle::Normal, dejavu::sans::regular());
+        let _ = plotters::style::register_font(
+            "sans-serif",
+            FontStyle::Normal,
+            dejavu::sans::regular(),
+        );
     });
 }
 
 fn bounds(panel: &Panel) -> ((f64, f64), (f64, f64)) {
-    let (mut x0, mut x1, mut y0, mut y1) = (f64::INFINITY, f64::NEG_INFINITY, f64::INFINITY, f64::NEG_INFINITY);
+    let (mut x0, mut x1, mut y0, mut y1) = (
+        f64::INFINITY,
+        f64::NEG_INFINITY,
+        f64::INFINITY,
+        f64::NEG_INFINITY,
+    );
     for s in &panel.series {
         for &(x, y) in &s.points {
             if x.is_finite() && y.is_finite() {
@@ -72,7 +81,12 @@ fn bounds(panel: &Panel) -> ((f64, f64), (f64, f64)) {
 }
 
 /// Draws `panels` in a grid of `columns` columns into the PNG `path` of `width × height` pixels.
-pub fn draw(path: &Path, panels: &[Panel], columns: usize, (width, height): (u32, u32)) -> Result<(), FileError> {
+pub fn draw(
+    path: &Path,
+    panels: &[Panel],
+    columns: usize,
+    (width, height): (u32, u32),
+) -> Result<(), FileError> {
     register_font();
     let fail = |e: String| FileError::new(path, format!("cannot draw the figure: {e}"));
     let tmp = path.with_extension("tmp.png");
@@ -101,16 +115,20 @@ pub fn draw(path: &Path, panels: &[Panel], columns: usize, (width, height): (u32
                 .map_err(|e| fail(e.to_string()))?;
             for s in &panel.series {
                 let color = PALETTE[s.color % PALETTE.len()];
-                let pts = s.points.iter().copied().filter(|(x, y)| x.is_finite() && y.is_finite());
+                let pts = s
+                    .points
+                    .iter()
+                    .copied()
+                    .filter(|(x, y)| x.is_finite() && y.is_finite());
                 let drawn = if s.dots {
                     chart.draw_series(pts.map(|p| Circle::new(p, 1, color.filled())))
                 } else {
                     chart.draw_series(LineSeries::new(pts, color.stroke_width(2)))
                 }
                 .map_err(|e| fail(e.to_string()))?;
-                drawn
-                    .label(s.label.as_str())
-                    .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], color.stroke_width(3)));
+                drawn.label(s.label.as_str()).legend(move |(x, y)| {
+                    PathElement::new(vec![(x, y), (x + 18, y)], color.stroke_width(3))
+                });
             }
             chart
                 .configure_series_labels()

@@ -32,7 +32,9 @@ impl OdeSystem for WithEnergy<'_> {
         // which the simplified Newton iteration may leave out
         let (n, dim) = (self.model.n_states(), self.dim());
         let mut jx = vec![0.0; n * n];
-        self.model.jacobian(&y[..n], self.input.value(t), &mut jx).map_err(|e| RhsError(e.to_string()))?;
+        self.model
+            .jacobian(&y[..n], self.input.value(t), &mut jx)
+            .map_err(|e| RhsError(e.to_string()))?;
         jac.fill(0.0);
         for c in 0..n {
             jac[c * dim..c * dim + n].copy_from_slice(&jx[c * n..(c + 1) * n]);
@@ -44,7 +46,10 @@ impl OdeSystem for WithEnergy<'_> {
 #[test]
 fn stored_energy_follows_supplied_minus_dissipated_power() {
     let model = Platform::new(Params::default()).unwrap();
-    let sys = WithEnergy { model: &model, input: Input::sine(60.0, 3.0 * std::f64::consts::PI) };
+    let sys = WithEnergy {
+        model: &model,
+        input: Input::sine(60.0, 3.0 * std::f64::consts::PI),
+    };
     let n = model.n_states();
     let mut y0 = model.rest_state().unwrap();
     y0.extend([0.0, 0.0]);
@@ -71,5 +76,8 @@ fn stored_energy_follows_supplied_minus_dissipated_power() {
     );
     // the stored energy changes by ~1e-4 J while ~1e5 J flow through the ports
     assert!(worst < 1e-10, "imbalance {worst:e} of the supplied energy");
-    assert!(worst_abs < 1e-3 * stored_max, "imbalance {worst_abs:e} J against stored {stored_max:e} J");
+    assert!(
+        worst_abs < 1e-3 * stored_max,
+        "imbalance {worst_abs:e} J against stored {stored_max:e} J"
+    );
 }

@@ -32,10 +32,25 @@ impl std::error::Error for FileError {}
 
 impl FileError {
     pub fn new(path: &Path, message: impl Into<String>) -> FileError {
-        FileError { path: path.to_path_buf(), line: None, column: None, message: message.into() }
+        FileError {
+            path: path.to_path_buf(),
+            line: None,
+            column: None,
+            message: message.into(),
+        }
     }
-    pub fn at(path: &Path, line: usize, column: Option<String>, message: impl Into<String>) -> FileError {
-        FileError { path: path.to_path_buf(), line: Some(line), column, message: message.into() }
+    pub fn at(
+        path: &Path,
+        line: usize,
+        column: Option<String>,
+        message: impl Into<String>,
+    ) -> FileError {
+        FileError {
+            path: path.to_path_buf(),
+            line: Some(line),
+            column,
+            message: message.into(),
+        }
     }
 }
 
@@ -53,7 +68,8 @@ impl Table {
     /// Reads `path`: a header of names, then rows of finite numbers; blank lines and lines
     /// starting with `#` are skipped.
     pub fn read(path: &Path) -> Result<Table, FileError> {
-        let text = std::fs::read_to_string(path).map_err(|e| FileError::new(path, format!("cannot read: {e}")))?;
+        let text = std::fs::read_to_string(path)
+            .map_err(|e| FileError::new(path, format!("cannot read: {e}")))?;
         Table::parse(path, &text)
     }
 
@@ -62,14 +78,29 @@ impl Table {
             let l = l.trim();
             !l.is_empty() && !l.starts_with('#')
         });
-        let (header_no, header_line) = lines.next().ok_or_else(|| FileError::new(path, "empty file: expected a header row"))?;
-        let header: Vec<String> = header_line.split(',').map(|s| s.trim().to_string()).collect();
+        let (header_no, header_line) = lines
+            .next()
+            .ok_or_else(|| FileError::new(path, "empty file: expected a header row"))?;
+        let header: Vec<String> = header_line
+            .split(',')
+            .map(|s| s.trim().to_string())
+            .collect();
         for (c, name) in header.iter().enumerate() {
             if name.is_empty() {
-                return Err(FileError::at(path, header_no + 1, Some((c + 1).to_string()), "empty column name in the header"));
+                return Err(FileError::at(
+                    path,
+                    header_no + 1,
+                    Some((c + 1).to_string()),
+                    "empty column name in the header",
+                ));
             }
             if header[..c].contains(name) {
-                return Err(FileError::at(path, header_no + 1, Some(name.clone()), "column appears twice in the header"));
+                return Err(FileError::at(
+                    path,
+                    header_no + 1,
+                    Some(name.clone()),
+                    "column appears twice in the header",
+                ));
             }
         }
         let mut rows = Vec::new();
@@ -87,17 +118,32 @@ impl Table {
             let mut row = Vec::with_capacity(fields.len());
             for (c, f) in fields.iter().enumerate() {
                 let v: f64 = f.trim().parse().map_err(|_| {
-                    FileError::at(path, no + 1, Some(header[c].clone()), format!("'{}' is not a number", f.trim()))
+                    FileError::at(
+                        path,
+                        no + 1,
+                        Some(header[c].clone()),
+                        format!("'{}' is not a number", f.trim()),
+                    )
                 })?;
                 if !v.is_finite() {
-                    return Err(FileError::at(path, no + 1, Some(header[c].clone()), format!("{v} is not a finite number")));
+                    return Err(FileError::at(
+                        path,
+                        no + 1,
+                        Some(header[c].clone()),
+                        format!("{v} is not a finite number"),
+                    ));
                 }
                 row.push(v);
             }
             rows.push(row);
             line_nos.push(no + 1);
         }
-        Ok(Table { path: path.to_path_buf(), header, rows, lines: line_nos })
+        Ok(Table {
+            path: path.to_path_buf(),
+            header,
+            rows,
+            lines: line_nos,
+        })
     }
 
     /// Index of the column `name`, if present.
@@ -107,8 +153,11 @@ impl Table {
 
     /// The column `name`, or an error naming the file and the missing column.
     pub fn column(&self, name: &str) -> Result<Vec<f64>, FileError> {
-        let c = self.find(name).ok_or_else(|| {
-            FileError { path: self.path.clone(), line: Some(1), column: Some(name.into()), message: format!("missing column (the header has {})", self.header.join(",")) }
+        let c = self.find(name).ok_or_else(|| FileError {
+            path: self.path.clone(),
+            line: Some(1),
+            column: Some(name.into()),
+            message: format!("missing column (the header has {})", self.header.join(",")),
         })?;
         Ok(self.rows.iter().map(|r| r[c]).collect())
     }
@@ -122,7 +171,11 @@ impl Table {
                     &self.path,
                     self.lines[k],
                     Some(name.into()),
-                    format!("{} does not increase (previous row: {})", values[k], values[k - 1]),
+                    format!(
+                        "{} does not increase (previous row: {})",
+                        values[k],
+                        values[k - 1]
+                    ),
                 ));
             }
         }
@@ -131,7 +184,11 @@ impl Table {
 }
 
 /// Writes a table to `path` through a temporary file in the same folder, renamed into place.
-pub fn write_atomic(path: &Path, header: &[&str], rows: impl Iterator<Item = Vec<f64>>) -> Result<(), FileError> {
+pub fn write_atomic(
+    path: &Path,
+    header: &[&str],
+    rows: impl Iterator<Item = Vec<f64>>,
+) -> Result<(), FileError> {
     let mut text = header.join(",");
     text.push('\n');
     for row in rows {
@@ -149,10 +206,20 @@ pub fn write_text_atomic(path: &Path, text: &str) -> Result<(), FileError> {
 
 /// Writes `bytes` to `path` through a temporary file renamed into place.
 pub fn write_bytes_atomic(path: &Path, bytes: &[u8]) -> Result<(), FileError> {
-    let dir = path.parent().filter(|d| !d.as_os_str().is_empty()).unwrap_or(Path::new("."));
-    std::fs::create_dir_all(dir).map_err(|e| FileError::new(path, format!("cannot create folder: {e}")))?;
-    let name = path.file_name().ok_or_else(|| FileError::new(path, "not a file path"))?;
-    let tmp = dir.join(format!(".{}.tmp{}", name.to_string_lossy(), std::process::id()));
+    let dir = path
+        .parent()
+        .filter(|d| !d.as_os_str().is_empty())
+        .unwrap_or(Path::new("."));
+    std::fs::create_dir_all(dir)
+        .map_err(|e| FileError::new(path, format!("cannot create folder: {e}")))?;
+    let name = path
+        .file_name()
+        .ok_or_else(|| FileError::new(path, "not a file path"))?;
+    let tmp = dir.join(format!(
+        ".{}.tmp{}",
+        name.to_string_lossy(),
+        std::process::id()
+    ));
     std::fs::write(&tmp, bytes).map_err(|e| FileError::new(path, format!("cannot write: {e}")))?;
     std::fs::rename(&tmp, path).map_err(|e| {
         let _ = std::fs::remove_file(&tmp);
@@ -175,10 +242,21 @@ mod tests {
         let e = parse("t,U1\n0,1,2\n").unwrap_err();
         assert_eq!(e.to_string(), "x.csv:2: 3 fields, the header has 2");
         let e = parse("t,U1\n0,nan\n").unwrap_err();
-        assert!(e.to_string().starts_with("x.csv:2, column U1: NaN is not a finite number"));
+        assert!(
+            e.to_string()
+                .starts_with("x.csv:2, column U1: NaN is not a finite number")
+        );
         let t = parse("# comment\nt,U1\n0,1\n0,2\n").unwrap();
-        assert_eq!(t.check_increasing("t").unwrap_err().to_string(), "x.csv:4, column t: 0 does not increase (previous row: 0)");
-        assert!(t.column("U2").unwrap_err().to_string().contains("column U2: missing column"));
+        assert_eq!(
+            t.check_increasing("t").unwrap_err().to_string(),
+            "x.csv:4, column t: 0 does not increase (previous row: 0)"
+        );
+        assert!(
+            t.column("U2")
+                .unwrap_err()
+                .to_string()
+                .contains("column U2: missing column")
+        );
         assert!(parse("").is_err());
         assert!(parse("t,t\n").unwrap_err().to_string().contains("twice"));
     }

@@ -15,11 +15,24 @@ pub fn read(path: &Path, interpolation: Interpolation) -> Result<Input, FileErro
 /// The sampled voltages of a table already read.
 pub fn from_table(table: &Table, interpolation: Interpolation) -> Result<Input, FileError> {
     let t = table.column("t")?;
-    let cols = [table.column("U1")?, table.column("U2")?, table.column("U3")?];
+    let cols = [
+        table.column("U1")?,
+        table.column("U2")?,
+        table.column("U3")?,
+    ];
     if t.len() < 2 {
-        return Err(FileError::new(&table.path, format!("{} data rows: an input needs at least 2 samples", t.len())));
+        return Err(FileError::new(
+            &table.path,
+            format!("{} data rows: an input needs at least 2 samples", t.len()),
+        ));
     }
     table.check_increasing("t")?;
-    let u = (0..t.len()).map(|k| [cols[0][k], cols[1][k], cols[2][k]]).collect();
-    Ok(Input::Sampled { t, u, interpolation })
+    let u = (0..t.len())
+        .map(|k| [cols[0][k], cols[1][k], cols[2][k]])
+        .collect();
+    Ok(Input::Sampled {
+        t,
+        u,
+        interpolation,
+    })
 }

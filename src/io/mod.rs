@@ -2,6 +2,6 @@
 //! and the column, and writes that never leave a half-written file.
 
 pub mod csv;
-pub mod params_file;
 pub mod input_file;
+pub mod params_file;
 pub mod trajectory;

@@ -5,8 +5,8 @@
 use std::path::Path;
 
 use super::csv::{FileError, write_text_atomic};
-use crate::model::params::{ParamError, parameters};
 use crate::model::Params;
+use crate::model::params::{ParamError, parameters};
 
 /// 1-based line and column of byte offset `at` in `text`.
 fn line_col(text: &str, at: usize) -> (usize, usize) {
@@ -16,7 +16,13 @@ fn line_col(text: &str, at: usize) -> (usize, usize) {
     (line, col)
 }
 
-fn located(path: &Path, text: &str, at: usize, column_name: Option<&str>, message: String) -> FileError {
+fn located(
+    path: &Path,
+    text: &str,
+    at: usize,
+    column_name: Option<&str>,
+    message: String,
+) -> FileError {
     let (line, col) = line_col(text, at);
     let column = column_name.map_or_else(|| col.to_string(), |n| format!("{col} ({n})"));
     FileError::at(path, line, Some(column), message)
@@ -24,7 +30,8 @@ fn located(path: &Path, text: &str, at: usize, column_name: Option<&str>, messag
 
 /// Reads a parameter file over the defaults.
 pub fn read(path: &Path) -> Result<Params, FileError> {
-    let text = std::fs::read_to_string(path).map_err(|e| FileError::new(path, format!("cannot read: {e}")))?;
+    let text = std::fs::read_to_string(path)
+        .map_err(|e| FileError::new(path, format!("cannot read: {e}")))?;
     parse(path, &text, Params::default())
 }
 
@@ -32,17 +39,32 @@ pub fn read(path: &Path) -> Result<Params, FileError> {
 pub fn parse(path: &Path, text: &str, base: Params) -> Result<Params, FileError> {
     let table: toml::Spanned<toml::Table> = toml::from_str(text).map_err(|e| {
         let at = e.span().map_or(0, |s| s.start);
-        located(path, text, at, None, format!("not valid TOML: {}", e.message()))
+        located(
+            path,
+            text,
+            at,
+            None,
+            format!("not valid TOML: {}", e.message()),
+        )
     })?;
     let spans = key_spans(text);
     let mut params = base;
     for (key, value) in table.get_ref() {
-        let at = spans.iter().find(|(k, _)| k == key).map_or(0, |(_, at)| *at);
+        let at = spans
+            .iter()
+            .find(|(k, _)| k == key)
+            .map_or(0, |(_, at)| *at);
         let v = match value {
             toml::Value::Float(f) => *f,
             toml::Value::Integer(i) => *i as f64,
             other => {
-                return Err(located(path, text, at, Some(key), format!("{key} must be a number, not {}", other.type_str())));
+                return Err(located(
+                    path,
+                    text,
+                    at,
+                    Some(key),
+                    format!("{key} must be a number, not {}", other.type_str()),
+                ));
             }
         };
         params.set(key, v).map_err(|e| match e {
@@ -85,10 +107,15 @@ fn key_spans(text: &str) -> Vec<(String, usize)> {
 
 /// The parameters as a TOML document, every parameter with its unit and description.
 pub fn to_toml(params: &Params) -> String {
-    let mut text = String::from("# HASEL platform parameters (SI units); any subset may be given, the rest keep their defaults\n");
+    let mut text = String::from(
+        "# HASEL platform parameters (SI units); any subset may be given, the rest keep their defaults\n",
+    );
     for d in parameters() {
         let value = (d.get)(params);
-        text.push_str(&format!("{} = {:?}  # [{}] {}\n", d.name, value, d.unit, d.description));
+        text.push_str(&format!(
+            "{} = {:?}  # [{}] {}\n",
+            d.name, value, d.unit, d.description
+        ));
     }
     text
 }
@@ -125,15 +152,29 @@ mod tests {
     #[test]
     fn errors_name_line_and_column() {
         let e = parse_str("b_1 = 0.2\n  C1_2 = -1e-10\n").unwrap_err();
-        assert_eq!(e.to_string(), "p.toml:2, column 3 (C1_2): parameter C1_2 = -1e-10: must be finite and > 0");
+        assert_eq!(
+            e.to_string(),
+            "p.toml:2, column 3 (C1_2): parameter C1_2 = -1e-10: must be finite and > 0"
+        );
         let e = parse_str("Kb_1 = 0.3\nKb_9 = 1\n").unwrap_err();
-        assert!(e.to_string().starts_with("p.toml:2, column 1 (Kb_9): unknown parameter 'Kb_9'"), "{e}");
+        assert!(
+            e.to_string()
+                .starts_with("p.toml:2, column 1 (Kb_9): unknown parameter 'Kb_9'"),
+            "{e}"
+        );
         let e = parse_str("Kb_1 = \"x\"\n").unwrap_err();
-        assert!(e.to_string().contains("Kb_1 must be a number, not string"), "{e}");
+        assert!(
+            e.to_string().contains("Kb_1 must be a number, not string"),
+            "{e}"
+        );
         let e = parse_str("Kb_1 = \n").unwrap_err();
         assert!(e.to_string().starts_with("p.toml:1, column"), "{e}");
         assert!(e.to_string().contains("not valid TOML"), "{e}");
         let e = parse_str("Lp = 0.011\n").unwrap_err();
-        assert!(e.to_string().starts_with("p.toml:1, column 1 (Lp): parameter Lp"), "{e}");
+        assert!(
+            e.to_string()
+                .starts_with("p.toml:1, column 1 (Lp): parameter Lp"),
+            "{e}"
+        );
     }
 }

@@ -6,7 +6,9 @@ use std::path::Path;
 use super::csv::{FileError, write_atomic};
 use crate::simulation::Sample;
 
-pub const COLUMNS: [&str; 10] = ["t", "U1", "U2", "U3", "h1", "h2", "h3", "tip_x", "tip_y", "tip_z"];
+pub const COLUMNS: [&str; 10] = [
+    "t", "U1", "U2", "U3", "h1", "h2", "h3", "tip_x", "tip_y", "tip_z",
+];
 
 /// Writes `samples` to `path` atomically.
 pub fn write(path: &Path, samples: &[Sample]) -> Result<(), FileError> {

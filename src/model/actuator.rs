@@ -62,7 +62,10 @@ impl Actuator {
         let par = params.act[i];
         // C2 = ε0 εr w ( le/(2t) + (Le − le)/(2t + Xh) ),  le = Le − (A_T − A_s)/Xh
         let e = params.eps0 * params.eps_r * params.w;
-        let (thin, thick) = (1.0 / (2.0 * params.t_film), 1.0 / (2.0 * params.t_film + params.xh));
+        let (thin, thick) = (
+            1.0 / (2.0 * params.t_film),
+            1.0 / (2.0 * params.t_film + params.xh),
+        );
         let le_0 = params.le - params.a_t / params.xh;
         Actuator {
             par,

@@ -31,7 +31,11 @@ impl Kinematics {
     pub fn new(p: &Params) -> Kinematics {
         let anchor = |a: f64| [p.anchor_radius * a.cos(), p.anchor_radius * a.sin()];
         Kinematics {
-            anchors: [anchor(p.anchor_angle[0]), anchor(p.anchor_angle[1]), anchor(p.anchor_angle[2])],
+            anchors: [
+                anchor(p.anchor_angle[0]),
+                anchor(p.anchor_angle[1]),
+                anchor(p.anchor_angle[2]),
+            ],
             length: p.antenna_length,
         }
     }
@@ -47,7 +51,11 @@ impl Kinematics {
 
     /// FKM: C_p = mean(P_i); n = (P2 − P1) × (P3 − P1) / ‖…‖; Tip = C_p + L n.
     pub fn tip(&self, h: [f64; 3]) -> [f64; 3] {
-        let p = [self.corner(0, h[0]), self.corner(1, h[1]), self.corner(2, h[2])];
+        let p = [
+            self.corner(0, h[0]),
+            self.corner(1, h[1]),
+            self.corner(2, h[2]),
+        ];
         let c_p = (p[0] + p[1] + p[2]) / 3.0;
         let n = (p[1] - p[0]).cross(&(p[2] - p[0])).normalize();
         (c_p + self.length * n).into()
@@ -55,7 +63,11 @@ impl Kinematics {
 
     /// ∂Tip/∂h_j (columns j), from ∂n = (I − n nᵀ) ∂c / ‖c‖ with c = e1 × e2.
     fn tip_jacobian(&self, h: [f64; 3]) -> Matrix3<f64> {
-        let p = [self.corner(0, h[0]), self.corner(1, h[1]), self.corner(2, h[2])];
+        let p = [
+            self.corner(0, h[0]),
+            self.corner(1, h[1]),
+            self.corner(2, h[2]),
+        ];
         let (e1, e2) = (p[1] - p[0], p[2] - p[0]);
         let c = e1.cross(&e2);
         let norm = c.norm();
@@ -81,7 +93,8 @@ impl Kinematics {
         let m = self.anchor_mean();
         let n = Vector3::new(tip[0] - m[0], tip[1] - m[1], tip[2]).normalize();
         let c_p = Vector3::from(tip) - self.length * n;
-        self.anchors.map(|a| c_p.z - (n.x * (a[0] - c_p.x) + n.y * (a[1] - c_p.y)) / n.z)
+        self.anchors
+            .map(|a| c_p.z - (n.x * (a[0] - c_p.x) + n.y * (a[1] - c_p.y)) / n.z)
     }
 
     /// Exact IKM: Newton on the FKM from the closed form, to `1e-15 m`.
@@ -101,7 +114,11 @@ impl Kinematics {
             let jac = k.tip_jacobian(h);
             let mut j = jac;
             j.set_row(2, &(nalgebra::RowVector3::repeat(1.0 / 3.0)));
-            let r = Vector3::new(tip[0] - xy[0], tip[1] - xy[1], (h[0] + h[1] + h[2]) / 3.0 - mean_height);
+            let r = Vector3::new(
+                tip[0] - xy[0],
+                tip[1] - xy[1],
+                (h[0] + h[1] + h[2]) / 3.0 - mean_height,
+            );
             (r, j)
         })
     }
@@ -124,7 +141,9 @@ impl Kinematics {
                 return Ok(h);
             }
         }
-        Err(IkmError(format!("inverse kinematics did not converge (last h = {h:?} m)")))
+        Err(IkmError(format!(
+            "inverse kinematics did not converge (last h = {h:?} m)"
+        )))
     }
 }
 
@@ -140,7 +159,10 @@ mod tests {
     fn level_platform_points_straight_up() {
         let tip = kin().tip([1e-5; 3]);
         // level up to the rounding of the anchors' cos/sin (0.02 m × 1e-16)
-        assert!(tip[0].abs() < 1e-17 && tip[1].abs() < 1e-17, "tip = {tip:?}");
+        assert!(
+            tip[0].abs() < 1e-17 && tip[1].abs() < 1e-17,
+            "tip = {tip:?}"
+        );
         assert!((tip[2] - (1e-5 + 0.05)).abs() < 1e-15);
     }
 
@@ -156,7 +178,11 @@ mod tests {
             let (tp, tm) = (k.tip(hp), k.tip(hm));
             for i in 0..3 {
                 let fd = (tp[i] - tm[i]) / 2e-9;
-                assert!((jac[(i, j)] - fd).abs() < 1e-6, "({i},{j}) {} vs {fd}", jac[(i, j)]);
+                assert!(
+                    (jac[(i, j)] - fd).abs() < 1e-6,
+                    "({i},{j}) {} vs {fd}",
+                    jac[(i, j)]
+                );
             }
         }
     }
@@ -165,11 +191,18 @@ mod tests {
     fn inverse_round_trips() {
         let k = kin();
         let mut worst_closed: f64 = 0.0;
-        for h in [[-5e-6, 2e-4, 1e-4], [1e-4, 1e-4, 1e-4], [0.0, 5e-5, 1.5e-4], [2e-4, -5e-6, 7e-5]] {
+        for h in [
+            [-5e-6, 2e-4, 1e-4],
+            [1e-4, 1e-4, 1e-4],
+            [0.0, 5e-5, 1.5e-4],
+            [2e-4, -5e-6, 7e-5],
+        ] {
             let tip = k.tip(h);
             let exact = k.heights(tip).unwrap();
             let closed = k.heights_closed_form(tip);
-            let xy = k.heights_from_xy([tip[0], tip[1]], (h[0] + h[1] + h[2]) / 3.0).unwrap();
+            let xy = k
+                .heights_from_xy([tip[0], tip[1]], (h[0] + h[1] + h[2]) / 3.0)
+                .unwrap();
             for i in 0..3 {
                 // the exact IKM to 1e-9 µm, the XY inverse as well
                 assert!((exact[i] - h[i]).abs() < 1e-15, "exact {exact:?} vs {h:?}");
@@ -178,6 +211,9 @@ mod tests {
             }
         }
         // model.md: the closed form is off by up to about 0.35 µm on [−5, 200] µm
-        assert!(worst_closed > 1e-8 && worst_closed < 0.4e-6, "closed-form error {worst_closed}");
+        assert!(
+            worst_closed > 1e-8 && worst_closed < 0.4e-6,
+            "closed-form error {worst_closed}"
+        );
     }
 }

@@ -144,8 +144,14 @@ pub struct ParamDef {
 /// A parameter value that breaks its rule, or a name that does not exist.
 #[derive(Clone, Debug, PartialEq)]
 pub enum ParamError {
-    Invalid { name: String, value: f64, rule: String },
-    Unknown { name: String },
+    Invalid {
+        name: String,
+        value: f64,
+        rule: String,
+    },
+    Unknown {
+        name: String,
+    },
 }
 
 impl fmt::Display for ParamError {
@@ -286,7 +292,11 @@ fn check(d: &ParamDef, value: f64) -> Result<(), ParamError> {
     if d.rule.holds(value) {
         Ok(())
     } else {
-        Err(ParamError::Invalid { name: d.name.into(), value, rule: d.rule.text().into() })
+        Err(ParamError::Invalid {
+            name: d.name.into(),
+            value,
+            rule: d.rule.text().into(),
+        })
     }
 }
 
@@ -301,7 +311,11 @@ mod tests {
         sorted.sort();
         sorted.dedup();
         assert_eq!(sorted.len(), names.len());
-        assert!(names.iter().all(|n| n.chars().all(|c| c.is_ascii_alphanumeric() || c == '_')));
+        assert!(
+            names
+                .iter()
+                .all(|n| n.chars().all(|c| c.is_ascii_alphanumeric() || c == '_'))
+        );
     }
 
     #[test]
@@ -324,9 +338,15 @@ mod tests {
     fn bad_values_are_named() {
         let mut p = Params::default();
         let e = p.set("C1_2", -1e-10).unwrap_err();
-        assert_eq!(e.to_string(), "parameter C1_2 = -1e-10: must be finite and > 0");
+        assert_eq!(
+            e.to_string(),
+            "parameter C1_2 = -1e-10: must be finite and > 0"
+        );
         assert!(p.set("R0_1", f64::NAN).is_err());
-        assert!(matches!(p.set("nope", 1.0), Err(ParamError::Unknown { .. })));
+        assert!(matches!(
+            p.set("nope", 1.0),
+            Err(ParamError::Unknown { .. })
+        ));
         p.lp = 0.011;
         assert!(p.validate().unwrap_err().to_string().contains("Lp"));
     }

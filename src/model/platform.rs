@@ -71,7 +71,10 @@ impl Platform {
         mut f: impl FnMut(usize, &Actuator) -> Result<T, DomainError>,
     ) -> Result<[T; 3], ModelError> {
         let wrap = |i: usize, r: Result<T, DomainError>| {
-            r.map_err(|cause| ModelError { actuator: i + 1, cause })
+            r.map_err(|cause| ModelError {
+                actuator: i + 1,
+                cause,
+            })
         };
         Ok([
             wrap(0, f(0, &self.actuators[0]))?,
@@ -92,7 +95,9 @@ impl Platform {
         let (n, dim) = (actuator::N, self.n_states());
         jac.fill(0.0);
         self.each(|i, a| {
-            a.jacobian(block(x, i), u[i], |r, c, v| jac[(n * i + c) * dim + n * i + r] = v)
+            a.jacobian(block(x, i), u[i], |r, c, v| {
+                jac[(n * i + c) * dim + n * i + r] = v
+            })
         })?;
         Ok(())
     }
@@ -124,7 +129,10 @@ impl Platform {
 
     /// Supplied power Σ y_i U_i [W].
     pub fn supplied_power(&self, x: &[f64], u: [f64; 3]) -> Result<f64, ModelError> {
-        Ok(self.each(|i, a| Ok(a.port_output(block(x, i))? * u[i]))?.iter().sum())
+        Ok(self
+            .each(|i, a| Ok(a.port_output(block(x, i))? * u[i]))?
+            .iter()
+            .sum())
     }
 
     /// Dissipated power [W].
@@ -134,12 +142,18 @@ impl Platform {
 
     /// dH/dt along the flow with the large electrical terms cancelled analytically [W].
     pub fn stored_power(&self, x: &[f64], u: [f64; 3]) -> Result<f64, ModelError> {
-        Ok(self.each(|i, a| a.stored_power(block(x, i), u[i]))?.iter().sum())
+        Ok(self
+            .each(|i, a| a.stored_power(block(x, i), u[i]))?
+            .iter()
+            .sum())
     }
 
     /// Per-state scale for absolute tolerances (see [`Actuator::state_scales`]).
     pub fn state_scales(&self) -> Vec<f64> {
-        self.actuators.iter().flat_map(|a| a.state_scales()).collect()
+        self.actuators
+            .iter()
+            .flat_map(|a| a.state_scales())
+            .collect()
     }
 }
 
@@ -201,7 +215,9 @@ mod tests {
                 let fd = (fp[r] - fm[r]) / (2.0 * hc);
                 let an = jac[c * n + r];
                 // compare relative to the row's largest entry times the column's scale
-                let row_scale = (0..n).map(|k| (jac[k * n + r] * scales[k]).abs()).fold(0.0, f64::max);
+                let row_scale = (0..n)
+                    .map(|k| (jac[k * n + r] * scales[k]).abs())
+                    .fold(0.0, f64::max);
                 assert!(
                     (an - fd).abs() * scales[c] <= 1e-6 * row_scale + 1e-300,
                     "J[{r},{c}] analytic {an:e} vs fd {fd:e}"
@@ -239,6 +255,9 @@ mod tests {
         let mut dx = vec![0.0; N_STATES];
         let e = p.rhs(&x, [0.0; 3], &mut dx).unwrap_err();
         assert_eq!(e.actuator, 2);
-        assert!(e.to_string().starts_with("actuator 2: shell geometry undefined"));
+        assert!(
+            e.to_string()
+                .starts_with("actuator 2: shell geometry undefined")
+        );
     }
 }

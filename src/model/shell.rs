@@ -10,7 +10,6 @@
 //! Second derivatives are needed for the analytic Jacobian (∇²H). sin δ1 and cos δ1 come from
 //! the angle-difference formulas, so the right-hand side needs no asin.
 
-
 /// The model is defined only where the asin argument is below 1, i.e. l_p > Lv cos(θ/2).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct DomainError {
@@ -69,7 +68,7 @@ impl Shell {
         // s = (Lv/l_p) sin((π − θ)/2) = (Lv/l_p) cos(θ/2)
         let (sin_h, cos_h) = (theta / 2.0).sin_cos();
         let s = lv / l_p * cos_h;
-        if !(l_p > 0.0 && s.abs() < 1.0) || !theta.is_finite() {
+        if l_p <= 0.0 || s.abs() >= 1.0 || s.is_nan() || !theta.is_finite() {
             return Err(DomainError { theta, l_p, lv });
         }
         let cos_a = (1.0 - s * s).sqrt();
@@ -104,7 +103,18 @@ impl Shell {
     }
 
     pub fn curvature(&self) -> Curvature {
-        let Shell { l_p, lv, s, k, sin_h, sin_d, cos_d, dl_t, dl_l, .. } = *self;
+        let Shell {
+            l_p,
+            lv,
+            s,
+            k,
+            sin_h,
+            sin_d,
+            cos_d,
+            dl_t,
+            dl_l,
+            ..
+        } = *self;
         let s_t = -0.5 * lv / l_p * sin_h;
         let s_l = -s / l_p;
         let s_tt = -0.25 * s;
@@ -134,7 +144,12 @@ mod tests {
 
     #[test]
     fn partials_match_central_differences() {
-        for &(th, l) in &[(0.0, 0.014), (0.02, 0.01395), (-0.01, 0.01401), (0.3, 0.0135)] {
+        for &(th, l) in &[
+            (0.0, 0.014),
+            (0.02, 0.01395),
+            (-0.01, 0.01401),
+            (0.3, 0.0135),
+        ] {
             let s = Shell::new(th, l, LV).unwrap();
             let c = s.curvature();
             let (ht, hl) = (1e-6, 1e-9);
@@ -143,11 +158,15 @@ mod tests {
             let pl = Shell::new(th, l + hl, LV).unwrap();
             let ml = Shell::new(th, l - hl, LV).unwrap();
             // δ1 as the spec writes it
-            let delta1 = 0.5 * (std::f64::consts::PI + th) - (LV / l * (0.5 * (std::f64::consts::PI - th)).sin()).asin();
+            let delta1 = 0.5 * (std::f64::consts::PI + th)
+                - (LV / l * (0.5 * (std::f64::consts::PI - th)).sin()).asin();
             assert!((s.delta1() - delta1).abs() < 1e-14);
             assert!((s.a_s - 0.25 * l * LV * delta1.sin()).abs() < 1e-20);
             let close = |a: f64, b: f64, what: &str| {
-                assert!((a - b).abs() <= 1e-6 * b.abs().max(1e-6), "{what}: {a} vs {b}");
+                assert!(
+                    (a - b).abs() <= 1e-6 * b.abs().max(1e-6),
+                    "{what}: {a} vs {b}"
+                );
             };
             close(s.a_s_t, (pt.a_s - mt.a_s) / (2.0 * ht), "A_s_t");
             close(s.a_s_l, (pl.a_s - ml.a_s) / (2.0 * hl), "A_s_l");

@@ -28,20 +28,37 @@ pub enum Interpolation {
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub enum Input {
     /// Per actuator: offset + Σ tones (sine, offset sine and multisine are all of this form).
-    Tones { offset: [f64; 3], tones: [Vec<Tone>; 3] },
+    Tones {
+        offset: [f64; 3],
+        tones: [Vec<Tone>; 3],
+    },
     /// Samples `u[k]` at strictly increasing `t[k]`; held at the last value after the end.
-    Sampled { t: Vec<f64>, u: Vec<[f64; 3]>, interpolation: Interpolation },
+    Sampled {
+        t: Vec<f64>,
+        u: Vec<[f64; 3]>,
+        interpolation: Interpolation,
+    },
 }
 
 /// The phases of the paper's excitation: 0°, 120°, 240°.
-pub const PAPER_PHASES: [f64; 3] = [0.0, 2.0 * std::f64::consts::FRAC_PI_3, 4.0 * std::f64::consts::FRAC_PI_3];
+pub const PAPER_PHASES: [f64; 3] = [
+    0.0,
+    2.0 * std::f64::consts::FRAC_PI_3,
+    4.0 * std::f64::consts::FRAC_PI_3,
+];
 
 impl Input {
     /// The paper's excitation u_i(t) = U0 sin(ω t + φ_i), φ = 0°, 120°, 240°.
     pub fn sine(u0: f64, omega: f64) -> Input {
         Input::Tones {
             offset: [0.0; 3],
-            tones: PAPER_PHASES.map(|phase| vec![Tone { amplitude: u0, omega, phase }]),
+            tones: PAPER_PHASES.map(|phase| {
+                vec![Tone {
+                    amplitude: u0,
+                    omega,
+                    phase,
+                }]
+            }),
         }
     }
 
@@ -49,20 +66,33 @@ impl Input {
     pub fn offset_sine(u0: f64, omega: f64) -> Input {
         Input::Tones {
             offset: [0.5 * u0; 3],
-            tones: PAPER_PHASES.map(|phase| vec![Tone { amplitude: 0.5 * u0, omega, phase }]),
+            tones: PAPER_PHASES.map(|phase| {
+                vec![Tone {
+                    amplitude: 0.5 * u0,
+                    omega,
+                    phase,
+                }]
+            }),
         }
     }
 
     /// A constant voltage on each actuator.
     pub fn constant(u: [f64; 3]) -> Input {
-        Input::Tones { offset: u, tones: [vec![], vec![], vec![]] }
+        Input::Tones {
+            offset: u,
+            tones: [vec![], vec![], vec![]],
+        }
     }
 
     /// The smooth piece that starts at `t` and the time it ends (a breakpoint, or +∞).
     pub fn piece_at(&self, t: f64) -> (Piece<'_>, f64) {
         match self {
             Input::Tones { offset, tones } => (Piece::Tones { offset, tones }, f64::INFINITY),
-            Input::Sampled { t: ts, u, interpolation } => {
+            Input::Sampled {
+                t: ts,
+                u,
+                interpolation,
+            } => {
                 // index of the sample interval [t_k, t_{k+1}) containing t
                 let k = ts.partition_point(|&tk| tk <= t);
                 if k == 0 {
@@ -77,11 +107,25 @@ impl Input {
                     Interpolation::Linear => {
                         let h = ts[k + 1] - ts[k];
                         let slope = [0, 1, 2].map(|i| (u[k + 1][i] - u[k][i]) / h);
-                        Piece::Hermite { t0: ts[k], h, u0: u[k], u1: u[k + 1], m0: slope, m1: slope }
+                        Piece::Hermite {
+                            t0: ts[k],
+                            h,
+                            u0: u[k],
+                            u1: u[k + 1],
+                            m0: slope,
+                            m1: slope,
+                        }
                     }
                     Interpolation::Pchip => {
                         let (m0, m1) = (pchip_slope(ts, u, k), pchip_slope(ts, u, k + 1));
-                        Piece::Hermite { t0: ts[k], h: ts[k + 1] - ts[k], u0: u[k], u1: u[k + 1], m0, m1 }
+                        Piece::Hermite {
+                            t0: ts[k],
+                            h: ts[k + 1] - ts[k],
+                            u0: u[k],
+                            u1: u[k + 1],
+                            m0,
+                            m1,
+                        }
                     }
                 };
                 (piece, ts[k + 1])
@@ -122,9 +166,19 @@ fn pchip_slope(t: &[f64], u: &[[f64; 3]], k: usize) -> [f64; 3] {
 #[derive(Clone, Copy, Debug)]
 pub enum Piece<'a> {
     Constant([f64; 3]),
-    Tones { offset: &'a [f64; 3], tones: &'a [Vec<Tone>; 3] },
+    Tones {
+        offset: &'a [f64; 3],
+        tones: &'a [Vec<Tone>; 3],
+    },
     /// Cubic Hermite on [t0, t0 + h] with end values u0, u1 and end slopes m0, m1.
-    Hermite { t0: f64, h: f64, u0: [f64; 3], u1: [f64; 3], m0: [f64; 3], m1: [f64; 3] },
+    Hermite {
+        t0: f64,
+        h: f64,
+        u0: [f64; 3],
+        u1: [f64; 3],
+        m0: [f64; 3],
+        m1: [f64; 3],
+    },
 }
 
 impl Piece<'_> {
@@ -133,12 +187,27 @@ impl Piece<'_> {
             Piece::Constant(u) => u,
             Piece::Tones { offset, tones } => [0, 1, 2].map(|i| {
                 offset[i]
-                    + tones[i].iter().map(|c| c.amplitude * (c.omega * t + c.phase).sin()).sum::<f64>()
+                    + tones[i]
+                        .iter()
+                        .map(|c| c.amplitude * (c.omega * t + c.phase).sin())
+                        .sum::<f64>()
             }),
-            Piece::Hermite { t0, h, u0, u1, m0, m1 } => {
+            Piece::Hermite {
+                t0,
+                h,
+                u0,
+                u1,
+                m0,
+                m1,
+            } => {
                 let s = (t - t0) / h;
                 let (s2, s3) = (s * s, s * s * s);
-                let (h00, h10, h01, h11) = (2.0 * s3 - 3.0 * s2 + 1.0, s3 - 2.0 * s2 + s, -2.0 * s3 + 3.0 * s2, s3 - s2);
+                let (h00, h10, h01, h11) = (
+                    2.0 * s3 - 3.0 * s2 + 1.0,
+                    s3 - 2.0 * s2 + s,
+                    -2.0 * s3 + 3.0 * s2,
+                    s3 - s2,
+                );
                 [0, 1, 2].map(|i| h00 * u0[i] + h10 * h * m0[i] + h01 * u1[i] + h11 * h * m1[i])
             }
         }
@@ -162,19 +231,35 @@ mod tests {
     fn sampled_pieces_end_at_the_next_sample() {
         let t = vec![0.0, 1.0, 2.0, 3.0];
         let u = vec![[0.0; 3], [1.0; 3], [3.0; 3], [2.0; 3]];
-        for interp in [Interpolation::ZeroOrderHold, Interpolation::Linear, Interpolation::Pchip] {
-            let inp = Input::Sampled { t: t.clone(), u: u.clone(), interpolation: interp };
+        for interp in [
+            Interpolation::ZeroOrderHold,
+            Interpolation::Linear,
+            Interpolation::Pchip,
+        ] {
+            let inp = Input::Sampled {
+                t: t.clone(),
+                u: u.clone(),
+                interpolation: interp,
+            };
             let (piece, end) = inp.piece_at(1.0);
             assert_eq!(end, 2.0);
             assert_eq!(piece.value(1.0), [1.0; 3]);
             let at_end = piece.value(2.0)[0];
-            let want = if interp == Interpolation::ZeroOrderHold { 1.0 } else { 3.0 };
+            let want = if interp == Interpolation::ZeroOrderHold {
+                1.0
+            } else {
+                3.0
+            };
             assert!((at_end - want).abs() < 1e-14, "{interp:?}: {at_end}");
             assert_eq!(inp.piece_at(7.0).1, f64::INFINITY);
             assert_eq!(inp.value(7.0), [2.0; 3]);
         }
         // the monotone cubic does not overshoot the local maximum at t = 2
-        let inp = Input::Sampled { t, u, interpolation: Interpolation::Pchip };
+        let inp = Input::Sampled {
+            t,
+            u,
+            interpolation: Interpolation::Pchip,
+        };
         assert!((0..=100).all(|k| inp.value(1.0 + k as f64 / 50.0)[0] <= 3.0));
     }
 }

@@ -61,10 +61,14 @@ impl OdeSystem for Driven<'_> {
         self.model.n_states()
     }
     fn rhs(&self, t: f64, x: &[f64], dx: &mut [f64]) -> Result<(), RhsError> {
-        self.model.rhs(x, self.piece.value(t), dx).map_err(|e| RhsError(e.to_string()))
+        self.model
+            .rhs(x, self.piece.value(t), dx)
+            .map_err(|e| RhsError(e.to_string()))
     }
     fn jacobian(&self, t: f64, x: &[f64], jac: &mut [f64]) -> Result<(), RhsError> {
-        self.model.jacobian(x, self.piece.value(t), jac).map_err(|e| RhsError(e.to_string()))
+        self.model
+            .jacobian(x, self.piece.value(t), jac)
+            .map_err(|e| RhsError(e.to_string()))
     }
     fn jacobian_blocks(&self) -> Vec<usize> {
         self.model.jacobian_blocks()
@@ -106,23 +110,43 @@ impl Simulator {
     }
 
     /// Starts at state `x0` at `t0`.
-    pub fn from_state(model: Platform, t0: f64, x0: &[f64], rtol: f64) -> Result<Simulator, SimError> {
+    pub fn from_state(
+        model: Platform,
+        t0: f64,
+        x0: &[f64],
+        rtol: f64,
+    ) -> Result<Simulator, SimError> {
         if !(rtol.is_finite() && rtol > 0.0 && rtol < 0.1) {
-            return Err(SimError::Setting(format!("relative tolerance rtol = {rtol:e}: must be in (0, 0.1)")));
+            return Err(SimError::Setting(format!(
+                "relative tolerance rtol = {rtol:e}: must be in (0, 0.1)"
+            )));
         }
         if !t0.is_finite() {
-            return Err(SimError::Setting(format!("start time t0 = {t0}: must be finite")));
+            return Err(SimError::Setting(format!(
+                "start time t0 = {t0}: must be finite"
+            )));
         }
         let tol = Tolerances::scaled(rtol, &model.state_scales());
         let mut solver = Radau5::new(model.n_states(), tol);
-        let sys = Driven { model: &model, piece: Piece::Constant([0.0; 3]) };
+        let sys = Driven {
+            model: &model,
+            piece: Piece::Constant([0.0; 3]),
+        };
         solver.init(&sys, t0, x0, FIRST_STEP)?;
-        Ok(Simulator { x_start: x0.to_vec(), model, solver, u_now: [0.0; 3] })
+        Ok(Simulator {
+            x_start: x0.to_vec(),
+            model,
+            solver,
+            u_now: [0.0; 3],
+        })
     }
 
     /// The integrator's whole state and the input last applied.
     pub fn snapshot(&self) -> Snapshot {
-        Snapshot { solver: self.solver.clone(), u_now: self.u_now }
+        Snapshot {
+            solver: self.solver.clone(),
+            u_now: self.u_now,
+        }
     }
 
     /// A simulator of `model` continuing exactly from `snapshot`.
@@ -134,7 +158,12 @@ impl Simulator {
                 model.n_states()
             )));
         }
-        Ok(Simulator { x_start: snapshot.solver.y().to_vec(), model, solver: snapshot.solver, u_now: snapshot.u_now })
+        Ok(Simulator {
+            x_start: snapshot.solver.y().to_vec(),
+            model,
+            solver: snapshot.solver,
+            u_now: snapshot.u_now,
+        })
     }
 
     pub fn model(&self) -> &Platform {
@@ -156,7 +185,12 @@ impl Simulator {
     /// The outputs at the current point.
     pub fn sample(&self) -> Sample {
         let x = self.solver.y();
-        Sample { t: self.t(), u: self.u_now, h: self.model.heights(x), tip: self.model.tip(x) }
+        Sample {
+            t: self.t(),
+            u: self.u_now,
+            h: self.model.heights(x),
+            tip: self.model.tip(x),
+        }
     }
 
     /// Makes `piece` the input from now on; restarts the integrator where the input jumps.
@@ -165,11 +199,18 @@ impl Simulator {
         if u != self.u_now {
             for (i, v) in u.iter().enumerate() {
                 if !v.is_finite() {
-                    return Err(SimError::Setting(format!("input U{} = {v} at t = {}: must be finite", i + 1, self.t())));
+                    return Err(SimError::Setting(format!(
+                        "input U{} = {v} at t = {}: must be finite",
+                        i + 1,
+                        self.t()
+                    )));
                 }
             }
             self.u_now = u;
-            self.solver.restart(&Driven { model: &self.model, piece })?;
+            self.solver.restart(&Driven {
+                model: &self.model,
+                piece,
+            })?;
         }
         Ok(())
     }
@@ -180,11 +221,20 @@ impl Simulator {
         let (t_start, u_start) = (self.t(), self.u_now);
         self.x_start.copy_from_slice(self.solver.y());
         let piece = Piece::Constant(u);
-        let result = self
-            .apply(piece)
-            .and_then(|()| Ok(self.solver.advance(&Driven { model: &self.model, piece }, t_end)?));
+        let result = self.apply(piece).and_then(|()| {
+            Ok(self.solver.advance(
+                &Driven {
+                    model: &self.model,
+                    piece,
+                },
+                t_end,
+            )?)
+        });
         if result.is_err() {
-            let sys = Driven { model: &self.model, piece: Piece::Constant(u_start) };
+            let sys = Driven {
+                model: &self.model,
+                piece: Piece::Constant(u_start),
+            };
             // the state at t_start was evaluable before, so this cannot fail
             self.solver.init(&sys, t_start, &self.x_start, FIRST_STEP)?;
             self.u_now = u_start;
@@ -203,7 +253,9 @@ impl Simulator {
         mut on_sample: impl FnMut(&Sample),
     ) -> Result<(), SimError> {
         if !(dt.is_finite() && dt > 0.0) {
-            return Err(SimError::Setting(format!("output step dt = {dt}: must be > 0")));
+            return Err(SimError::Setting(format!(
+                "output step dt = {dt}: must be > 0"
+            )));
         }
         let t0 = self.t();
         let last = ((t_end - t0) / dt * (1.0 + 1e-12)).floor().max(0.0) as u64;
@@ -213,12 +265,20 @@ impl Simulator {
             let (piece, piece_end) = input.piece_at(self.t());
             self.apply(piece)?;
             let seg_end = piece_end.min(t_end);
-            let sys = Driven { model: &self.model, piece };
+            let sys = Driven {
+                model: &self.model,
+                piece,
+            };
             loop {
                 while k <= last && (t0 + k as f64 * dt).min(t_end) <= self.t() {
                     let ts = (t0 + k as f64 * dt).min(t_end);
                     self.solver.interpolate(ts, &mut x);
-                    on_sample(&Sample { t: ts, u: input.value(ts), h: self.model.heights(&x), tip: self.model.tip(&x) });
+                    on_sample(&Sample {
+                        t: ts,
+                        u: input.value(ts),
+                        h: self.model.heights(&x),
+                        tip: self.model.tip(&x),
+                    });
                     k += 1;
                 }
                 if self.t() >= seg_end {

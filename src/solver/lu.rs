@@ -12,7 +12,13 @@ pub struct Singular(pub usize);
 /// Factors the diagonal block of `a` (column-major, leading dimension `ld`) that starts at row
 /// and column `o` and has size `m` into P A = L U in place; `piv[k]` is the row (relative to
 /// `o`) swapped with k. Entries outside the block are neither read nor written.
-pub fn factor<T>(a: &mut [T], ld: usize, o: usize, m: usize, piv: &mut [usize]) -> Result<(), Singular>
+pub fn factor<T>(
+    a: &mut [T],
+    ld: usize,
+    o: usize,
+    m: usize,
+    piv: &mut [usize],
+) -> Result<(), Singular>
 where
     T: ComplexField<RealField = f64> + Copy,
 {
@@ -61,8 +67,8 @@ where
     let m = b.len();
     let at = |r: usize, c: usize| (o + c) * ld + o + r;
     // the factors hold rows in their final order: permute b fully, then substitute
-    for k in 0..m {
-        b.swap(k, piv[k]);
+    for (k, &p) in piv.iter().enumerate().take(m) {
+        b.swap(k, p);
     }
     for k in 0..m {
         let bk = b[k];
@@ -84,7 +90,12 @@ where
 }
 
 /// Factors a block-diagonal matrix block by block (`blocks`: the sizes, summing to n).
-pub fn factor_blocks<T>(a: &mut [T], n: usize, blocks: &[usize], piv: &mut [usize]) -> Result<(), Singular>
+pub fn factor_blocks<T>(
+    a: &mut [T],
+    n: usize,
+    blocks: &[usize],
+    piv: &mut [usize],
+) -> Result<(), Singular>
 where
     T: ComplexField<RealField = f64> + Copy,
 {
@@ -146,11 +157,19 @@ mod tests {
         let n = 5;
         let blocks = [2, 3];
         let inside = |r: usize, c: usize| (r < 2) == (c < 2);
-        let m = DMatrix::from_fn(n, n, |r, c| if inside(r, c) { (r + 2 * c) as f64 - 3.0 + if r == c { 9.0 } else { 1.0 } } else { 0.0 });
+        let m = DMatrix::from_fn(n, n, |r, c| {
+            if inside(r, c) {
+                (r + 2 * c) as f64 - 3.0 + if r == c { 9.0 } else { 1.0 }
+            } else {
+                0.0
+            }
+        });
         let x = DVector::from_fn(n, |i, _| 1.0 + i as f64);
         let b = &m * &x;
         // garbage off the blocks must not matter
-        let mut a = DMatrix::from_fn(n, n, |r, c| if inside(r, c) { m[(r, c)] } else { 1e6 }).as_slice().to_vec();
+        let mut a = DMatrix::from_fn(n, n, |r, c| if inside(r, c) { m[(r, c)] } else { 1e6 })
+            .as_slice()
+            .to_vec();
         let (mut piv, mut rhs) = (vec![0; n], b.as_slice().to_vec());
         factor_blocks(&mut a, n, &blocks, &mut piv).unwrap();
         solve_blocks(&a, n, &blocks, &piv, &mut rhs);
@@ -162,6 +181,9 @@ mod tests {
     #[test]
     fn reports_singular_matrices() {
         let mut a = vec![1.0, 2.0, 2.0, 4.0];
-        assert_eq!(factor_blocks(&mut a, 2, &[2], &mut [0; 2]), Err(Singular(1)));
+        assert_eq!(
+            factor_blocks(&mut a, 2, &[2], &mut [0; 2]),
+            Err(Singular(1))
+        );
     }
 }

@@ -50,7 +50,10 @@ impl std::fmt::Display for SolverError {
                 write!(f, "step size {h:e} s too small at t = {t} s ({reason})")
             }
             SolverError::TooManySteps { t, limit } => {
-                write!(f, "more than {limit} steps without reaching the end, at t = {t} s")
+                write!(
+                    f,
+                    "more than {limit} steps without reaching the end, at t = {t} s"
+                )
             }
             SolverError::Rhs { t, message } => write!(f, "at t = {t} s: {message}"),
         }
@@ -69,7 +72,10 @@ pub struct Tolerances {
 impl Tolerances {
     /// Absolute tolerances scaled to each state's size: atol_i = rtol · scale_i.
     pub fn scaled(rtol: f64, scales: &[f64]) -> Tolerances {
-        Tolerances { rtol, atol: scales.iter().map(|s| rtol * s).collect() }
+        Tolerances {
+            rtol,
+            atol: scales.iter().map(|s| rtol * s).collect(),
+        }
     }
 }
 

@@ -20,17 +20,43 @@ const C1M1: f64 = C1 - 1.0;
 const C2M1: f64 = C2 - 1.0;
 const C1MC2: f64 = C1 - C2;
 /// Error-estimate weights (Hairer & Wanner IV.8.20, scaled by 1/γ0).
-const DD: [f64; 3] = [-(13.0 + 7.0 * SQRT6) / 3.0, (-13.0 + 7.0 * SQRT6) / 3.0, -1.0 / 3.0];
+const DD: [f64; 3] = [
+    -(13.0 + 7.0 * SQRT6) / 3.0,
+    (-13.0 + 7.0 * SQRT6) / 3.0,
+    -1.0 / 3.0,
+];
 /// T and T⁻¹ with T⁻¹ A⁻¹ T = diag(γ, [[α, −β], [β, α]]) (verified in the tests).
+#[allow(clippy::excessive_precision)] // the published 20-digit values, rounded by the compiler
 const T: [[f64; 3]; 3] = [
-    [9.123_239_487_089_294_3e-2, -0.141_255_295_020_954_21, -3.002_919_410_514_742_4e-2],
-    [0.241_717_932_707_107_02, 0.204_129_352_293_799_93, 0.382_942_112_757_261_94],
+    [
+        9.123_239_487_089_294_3e-2,
+        -0.141_255_295_020_954_21,
+        -3.002_919_410_514_742_4e-2,
+    ],
+    [
+        0.241_717_932_707_107_02,
+        0.204_129_352_293_799_93,
+        0.382_942_112_757_261_94,
+    ],
     [0.966_048_182_615_092_94, 1.0, 0.0],
 ];
+#[allow(clippy::excessive_precision)]
 const TI: [[f64; 3]; 3] = [
-    [4.325_579_890_063_155_4, 0.339_199_251_815_809_87, 0.541_770_539_935_874_87],
-    [-4.178_718_591_551_904_7, -0.327_682_820_761_062_39, 0.476_623_554_500_550_45],
-    [-0.502_872_634_945_786_88, 2.571_926_949_855_605_4, -0.596_039_204_828_224_92],
+    [
+        4.325_579_890_063_155_4,
+        0.339_199_251_815_809_87,
+        0.541_770_539_935_874_87,
+    ],
+    [
+        -4.178_718_591_551_904_7,
+        -0.327_682_820_761_062_39,
+        0.476_623_554_500_550_45,
+    ],
+    [
+        -0.502_872_634_945_786_88,
+        2.571_926_949_855_605_4,
+        -0.596_039_204_828_224_92,
+    ],
 ];
 /// Newton iterations per step at most.
 const NIT: usize = 7;
@@ -168,7 +194,13 @@ impl Radau5 {
     }
 
     /// Starts at (t, y) with a first step of `h0` seconds, forgetting all history.
-    pub fn init<S: OdeSystem>(&mut self, sys: &S, t: f64, y: &[f64], h0: f64) -> Result<(), SolverError> {
+    pub fn init<S: OdeSystem>(
+        &mut self,
+        sys: &S,
+        t: f64,
+        y: &[f64],
+        h0: f64,
+    ) -> Result<(), SolverError> {
         self.t = t;
         self.y.copy_from_slice(y);
         self.h = h0;
@@ -179,7 +211,11 @@ impl Radau5 {
         self.first = true;
         self.reject = false;
         self.blocks = sys.jacobian_blocks();
-        assert_eq!(self.blocks.iter().sum::<usize>(), self.n, "Jacobian blocks must cover the states");
+        assert_eq!(
+            self.blocks.iter().sum::<usize>(),
+            self.n,
+            "Jacobian blocks must cover the states"
+        );
         self.update_scal();
         self.restart(sys)
     }
@@ -191,7 +227,10 @@ impl Radau5 {
     /// shrinks the step if the jump needs it.
     pub fn restart<S: OdeSystem>(&mut self, sys: &S) -> Result<(), SolverError> {
         sys.rhs(self.t, &self.y, &mut self.f0)
-            .map_err(|e| SolverError::Rhs { t: self.t, message: e.0 })?;
+            .map_err(|e| SolverError::Rhs {
+                t: self.t,
+                message: e.0,
+            })?;
         self.stats.rhs_evals += 1;
         self.after_jump = true;
         self.faccon = 1.0;
@@ -225,7 +264,10 @@ impl Radau5 {
         let mut steps = 0;
         while self.t < t_end {
             if steps == self.max_steps {
-                return Err(SolverError::TooManySteps { t: self.t, limit: self.max_steps });
+                return Err(SolverError::TooManySteps {
+                    t: self.t,
+                    limit: self.max_steps,
+                });
             }
             self.step(sys, t_end)?;
             steps += 1;
@@ -242,9 +284,9 @@ impl Radau5 {
         }
         let s = (t - self.t) / self.h_old;
         let n = self.n;
-        for i in 0..n {
+        for (i, o) in out.iter_mut().enumerate().take(n) {
             let (a1, a2, a3) = (self.cont[i], self.cont[n + i], self.cont[2 * n + i]);
-            out[i] = self.y[i] + s * (a1 + (s - C2M1) * (a2 + (s - C1M1) * a3));
+            *o = self.y[i] + s * (a1 + (s - C2M1) * (a2 + (s - C1M1) * a3));
         }
     }
 
@@ -268,27 +310,30 @@ impl Radau5 {
             }
             if self.need_jac {
                 sys.jacobian(self.t, &self.y, &mut self.jac)
-                    .map_err(|e| SolverError::Rhs { t: self.t, message: e.0 })?;
+                    .map_err(|e| SolverError::Rhs {
+                        t: self.t,
+                        message: e.0,
+                    })?;
                 self.stats.jac_evals += 1;
                 self.need_jac = false;
                 self.jac_current = true;
                 self.lu_h = f64::NAN;
             }
-            // (a step cut to land on t_end differs from the factored h by rounding only)
-            if !((h - self.lu_h).abs() <= 1e-12 * h) {
-                if let Err(lu::Singular(col)) = self.decompose(h, gamma, alpha, beta) {
-                    h *= 0.5;
-                    self.reject = true;
-                    last = false;
-                    if 0.1 * h <= self.t.abs() * UROUND {
-                        return Err(SolverError::StepTooSmall {
-                            t: self.t,
-                            h,
-                            reason: format!("singular iteration matrix at column {col}"),
-                        });
-                    }
-                    continue;
+            // (a step cut to land on t_end differs from the factored h by rounding only;
+            // lu_h is NaN when there are no factors)
+            let factored = (h - self.lu_h).abs() <= 1e-12 * h;
+            if !factored && let Err(lu::Singular(col)) = self.decompose(h, gamma, alpha, beta) {
+                h *= 0.5;
+                self.reject = true;
+                last = false;
+                if 0.1 * h <= self.t.abs() * UROUND {
+                    return Err(SolverError::StepTooSmall {
+                        t: self.t,
+                        h,
+                        reason: format!("singular iteration matrix at column {col}"),
+                    });
                 }
+                continue;
             }
             self.starting_values(h);
             let newt = match self.newton(sys, h, gamma, alpha, beta) {
@@ -299,7 +344,11 @@ impl Radau5 {
                     last = false;
                     self.need_jac = !self.jac_current;
                     if 0.1 * h <= self.t.abs() * UROUND {
-                        return Err(SolverError::StepTooSmall { t: self.t, h, reason });
+                        return Err(SolverError::StepTooSmall {
+                            t: self.t,
+                            h,
+                            reason,
+                        });
                     }
                     continue;
                 }
@@ -321,7 +370,11 @@ impl Radau5 {
                     last = false;
                     self.need_jac = !self.jac_current;
                     if 0.1 * h <= self.t.abs() * UROUND {
-                        return Err(SolverError::StepTooSmall { t: self.t, h, reason: e.0 });
+                        return Err(SolverError::StepTooSmall {
+                            t: self.t,
+                            h,
+                            reason: e.0,
+                        });
                     }
                     continue;
                 }
@@ -406,13 +459,20 @@ impl Radau5 {
                 zi[k] = cq[k] * (a1 + (cq[k] - C2M1) * (a2 + (cq[k] - C1M1) * a3));
                 self.z[k * n + i] = zi[k];
             }
-            for k in 0..3 {
-                self.w[k * n + i] = TI[k][0] * zi[0] + TI[k][1] * zi[1] + TI[k][2] * zi[2];
+            for (k, ti) in TI.iter().enumerate() {
+                self.w[k * n + i] = ti[0] * zi[0] + ti[1] * zi[1] + ti[2] * zi[2];
             }
         }
     }
 
-    fn newton<S: OdeSystem>(&mut self, sys: &S, h: f64, gamma: f64, alpha: f64, beta: f64) -> Newton {
+    fn newton<S: OdeSystem>(
+        &mut self,
+        sys: &S,
+        h: f64,
+        gamma: f64,
+        alpha: f64,
+        beta: f64,
+    ) -> Newton {
         let n = self.n;
         let (fac1, alphn, betan) = (gamma / h, alpha / h, beta / h);
         self.faccon = self.faccon.max(UROUND).powf(0.8);
@@ -423,7 +483,11 @@ impl Radau5 {
                 for i in 0..n {
                     self.work[i] = self.y[i] + self.z[k * n + i];
                 }
-                if let Err(e) = sys.rhs(self.t + c * h, &self.work, &mut self.stage_f[k * n..(k + 1) * n]) {
+                if let Err(e) = sys.rhs(
+                    self.t + c * h,
+                    &self.work,
+                    &mut self.stage_f[k * n..(k + 1) * n],
+                ) {
                     return Newton::Failed(0.5, e.0);
                 }
             }
@@ -431,11 +495,18 @@ impl Radau5 {
             self.stats.newton_iterations += 1;
             // right-hand sides of the transformed, decoupled linear systems
             for i in 0..n {
-                let f = [self.stage_f[i], self.stage_f[n + i], self.stage_f[2 * n + i]];
+                let f = [
+                    self.stage_f[i],
+                    self.stage_f[n + i],
+                    self.stage_f[2 * n + i],
+                ];
                 let a = [0, 1, 2].map(|k| TI[k][0] * f[0] + TI[k][1] * f[1] + TI[k][2] * f[2]);
                 let (w1, w2, w3) = (self.w[i], self.w[n + i], self.w[2 * n + i]);
                 self.z[i] = a[0] - fac1 * w1;
-                self.rhs2[i] = Complex::new(a[1] - alphn * w2 + betan * w3, a[2] - alphn * w3 - betan * w2);
+                self.rhs2[i] = Complex::new(
+                    a[1] - alphn * w2 + betan * w3,
+                    a[2] - alphn * w3 - betan * w2,
+                );
             }
             lu::solve_blocks(&self.e1, n, &self.blocks, &self.piv1, &mut self.z[..n]);
             lu::solve_blocks(&self.e2, n, &self.blocks, &self.piv2, &mut self.rhs2);
@@ -454,15 +525,23 @@ impl Radau5 {
             }
             if newt > 1 && newt < NIT {
                 let thq = dyno / dynold;
-                self.theta = if newt == 2 { thq } else { (thq * thqold).sqrt() };
+                self.theta = if newt == 2 {
+                    thq
+                } else {
+                    (thq * thqold).sqrt()
+                };
                 thqold = thq;
                 if self.theta < 0.99 {
                     self.faccon = self.theta / (1.0 - self.theta);
-                    let dyth = self.faccon * dyno * self.theta.powi((NIT - 1 - newt) as i32) / self.fnewt;
+                    let dyth =
+                        self.faccon * dyno * self.theta.powi((NIT - 1 - newt) as i32) / self.fnewt;
                     if dyth >= 1.0 {
                         let qnewt = dyth.clamp(1e-4, 20.0);
                         let factor = 0.8 * qnewt.powf(-1.0 / (4.0 + (NIT - 1 - newt) as f64));
-                        return Newton::Failed(factor, "Newton iteration converging too slowly".into());
+                        return Newton::Failed(
+                            factor,
+                            "Newton iteration converging too slowly".into(),
+                        );
                     }
                 } else {
                     return Newton::Failed(0.5, "Newton iteration diverging".into());
@@ -525,7 +604,9 @@ impl Radau5 {
     }
 
     fn weighted_norm(&self) -> f64 {
-        let sum: f64 = (0..self.n).map(|i| (self.err_vec[i] / self.scal[i]).powi(2)).sum();
+        let sum: f64 = (0..self.n)
+            .map(|i| (self.err_vec[i] / self.scal[i]).powi(2))
+            .sum();
         (sum / self.n as f64).sqrt().max(1e-10)
     }
 
@@ -606,14 +687,24 @@ mod tests {
 
     #[test]
     fn solves_robertson_to_the_known_solution() {
-        let tol = Tolerances { rtol: 1e-8, atol: vec![1e-12, 1e-16, 1e-12] };
+        let tol = Tolerances {
+            rtol: 1e-8,
+            atol: vec![1e-12, 1e-16, 1e-12],
+        };
         let mut s = Radau5::new(3, tol);
         s.init(&Robertson, 0.0, &[1.0, 0.0, 0.0], 1e-8).unwrap();
         s.advance(&Robertson, 40.0).unwrap();
         // reference values at t = 40 (Hairer & Wanner's test set)
-        let want = [0.715_827_068_742_2, 9.185_534_764_529_9e-6, 0.284_163_745_722_3];
-        for i in 0..3 {
-            assert!((s.y()[i] - want[i]).abs() <= 1e-7 * want[i], "y{i} = {} vs {}", s.y()[i], want[i]);
+        let want = [
+            0.715_827_068_742_2,
+            9.185_534_764_529_9e-6,
+            0.284_163_745_722_3,
+        ];
+        for (y, w) in s.y().iter().zip(want) {
+            assert!(
+                (y - w).abs() <= 1e-7 * w,
+                "y = {y} vs {w}"
+            );
         }
         assert_eq!(s.t(), 40.0);
         assert!(s.stats().accepted < 400, "{:?}", s.stats());
@@ -641,7 +732,13 @@ mod tests {
 
     #[test]
     fn dense_output_and_exact_stops_are_accurate() {
-        let mut s = Radau5::new(1, Tolerances { rtol: 1e-9, atol: vec![1e-12] });
+        let mut s = Radau5::new(
+            1,
+            Tolerances {
+                rtol: 1e-9,
+                atol: vec![1e-12],
+            },
+        );
         s.init(&Forced, 0.0, &[1.0], 1e-4).unwrap();
         let mut out = [0.0];
         let mut t_out: f64 = 0.0;
@@ -659,7 +756,10 @@ mod tests {
 
     #[test]
     fn a_copy_replays_bit_for_bit() {
-        let tol = Tolerances { rtol: 1e-6, atol: vec![1e-10, 1e-14, 1e-10] };
+        let tol = Tolerances {
+            rtol: 1e-6,
+            atol: vec![1e-10, 1e-14, 1e-10],
+        };
         let mut s = Radau5::new(3, tol);
         s.init(&Robertson, 0.0, &[1.0, 0.0, 0.0], 1e-8).unwrap();
         s.advance(&Robertson, 0.3).unwrap();
@@ -667,8 +767,10 @@ mod tests {
         s.advance(&Robertson, 5.0).unwrap();
         let mut replay = saved;
         replay.advance(&Robertson, 5.0).unwrap();
-        assert_eq!(s.y().iter().map(|v| v.to_bits()).collect::<Vec<_>>(),
-                   replay.y().iter().map(|v| v.to_bits()).collect::<Vec<_>>());
+        assert_eq!(
+            s.y().iter().map(|v| v.to_bits()).collect::<Vec<_>>(),
+            replay.y().iter().map(|v| v.to_bits()).collect::<Vec<_>>()
+        );
         assert_eq!(s.stats(), replay.stats());
     }
 
@@ -692,7 +794,13 @@ mod tests {
 
     #[test]
     fn leaving_the_domain_is_reported_not_a_nan() {
-        let mut s = Radau5::new(1, Tolerances { rtol: 1e-6, atol: vec![1e-9] });
+        let mut s = Radau5::new(
+            1,
+            Tolerances {
+                rtol: 1e-6,
+                atol: vec![1e-9],
+            },
+        );
         s.init(&Undefined, 0.0, &[0.0], 1e-3).unwrap();
         let e = s.advance(&Undefined, 5.0).unwrap_err();
         assert!(matches!(e, SolverError::StepTooSmall { .. }), "{e}");

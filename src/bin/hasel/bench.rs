@@ -22,7 +22,10 @@ pub struct Args {
 /// Largest |Δh| and |Δtip| [µm] against a reference file, over the rows both have.
 fn error_against(path: &Path, samples: &[Sample]) -> Option<(f64, f64)> {
     let table = Table::read(path).ok()?;
-    let cols: Vec<usize> = ["h1", "h2", "h3", "tip_x", "tip_y", "tip_z"].iter().map(|c| table.find(c)).collect::<Option<_>>()?;
+    let cols: Vec<usize> = ["h1", "h2", "h3", "tip_x", "tip_y", "tip_z"]
+        .iter()
+        .map(|c| table.find(c))
+        .collect::<Option<_>>()?;
     let (mut dh, mut dtip): (f64, f64) = (0.0, 0.0);
     for (row, s) in table.rows.iter().zip(samples) {
         if (row[0] - s.t).abs() > 1e-9 {
@@ -62,7 +65,9 @@ fn report(name: &str, wall: Duration, stats: Stats, error: Option<(f64, f64)>, t
         stats.newton_iterations
     );
     match error {
-        Some((dh, dtip)) => println!("  max error vs reference: |dh| {dh:.2e} um, |dtip| {dtip:.2e} um"),
+        Some((dh, dtip)) => {
+            println!("  max error vs reference: |dh| {dh:.2e} um, |dtip| {dtip:.2e} um")
+        }
         None => println!("  (reference data not found: no error figure)"),
     }
 }
@@ -71,16 +76,26 @@ pub fn run(a: Args) -> Result<(), String> {
     let model = Platform::new(Params::default()).map_err(|e| e.to_string())?;
     let omega = 3.0 * std::f64::consts::PI;
     let input = Input::sine(60.0, omega);
-    println!("Radau IIA(5), rtol {DEFAULT_RTOL:e}, 15 states, best of {} runs", a.repeat);
+    println!(
+        "Radau IIA(5), rtol {DEFAULT_RTOL:e}, 15 states, best of {} runs",
+        a.repeat
+    );
 
     let (wall, (stats, samples)) = best(a.repeat, || {
         let mut sim = Simulator::new(model.clone(), 0.0, DEFAULT_RTOL).expect("valid model");
         let mut samples = Vec::with_capacity(10_001);
-        sim.run(&input, 10.0, 1e-3, |s| samples.push(*s)).expect("the default run succeeds");
+        sim.run(&input, 10.0, 1e-3, |s| samples.push(*s))
+            .expect("the default run succeeds");
         (sim.stats(), samples)
     });
     let error = error_against(&a.reference.join("sine60_w3pi.csv"), &samples);
-    report("10 s of 60 V at 3pi rad/s, outputs every 1 ms (dense output)", wall, stats, error, 5.0);
+    report(
+        "10 s of 60 V at 3pi rad/s, outputs every 1 ms (dense output)",
+        wall,
+        stats,
+        error,
+        5.0,
+    );
 
     let (wall, (stats, samples)) = best(a.repeat, || {
         let mut sim = Simulator::new(model.clone(), 0.0, DEFAULT_RTOL).expect("valid model");
@@ -88,7 +103,8 @@ pub fn run(a: Args) -> Result<(), String> {
         samples.push(sim.sample());
         for k in 0..10_000 {
             let t = k as f64 * 1e-3;
-            sim.step_held(input.value(t), (k + 1) as f64 * 1e-3).expect("the default run succeeds");
+            sim.step_held(input.value(t), (k + 1) as f64 * 1e-3)
+                .expect("the default run succeeds");
             let mut s = sim.sample();
             s.u = input.value(s.t);
             samples.push(s);
@@ -96,6 +112,12 @@ pub fn run(a: Args) -> Result<(), String> {
         (sim.stats(), samples)
     });
     let error = error_against(&a.reference.join("zoh1ms_sine60_w3pi.csv"), &samples);
-    report("10,000 co-simulation steps of 1 ms, input held and changed at every step", wall, stats, error, 50.0);
+    report(
+        "10,000 co-simulation steps of 1 ms, input held and changed at every step",
+        wall,
+        stats,
+        error,
+        50.0,
+    );
     Ok(())
 }

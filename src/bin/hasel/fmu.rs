@@ -39,7 +39,12 @@ pub fn run(a: Args) -> Result<(), String> {
             .with_file_name("libhasel_fmu.so"),
     };
     fmu_pack::pack(&lib, &params, &a.out).map_err(|e| e.to_string())?;
-    println!("wrote {} (GUID {}, library {})", a.out.display(), fmu_pack::guid(&params), lib.display());
+    println!(
+        "wrote {} (GUID {}, library {})",
+        a.out.display(),
+        fmu_pack::guid(&params),
+        lib.display()
+    );
     Ok(())
 }
 

@@ -9,7 +9,11 @@ use std::process::ExitCode;
 use clap::{Parser, Subcommand};
 
 #[derive(Parser)]
-#[command(name = "hasel", version, about = "HASEL-actuated 3PS micro parallel platform: simulation, FMU export, benchmarks")]
+#[command(
+    name = "hasel",
+    version,
+    about = "HASEL-actuated 3PS micro parallel platform: simulation, FMU export, benchmarks"
+)]
 struct Cli {
     #[command(subcommand)]
     command: Command,

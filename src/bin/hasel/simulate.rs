@@ -117,7 +117,10 @@ pub fn run(a: Args) -> Result<(), String> {
 
     let bar = (t_end >= 30.0).then(|| {
         let bar = ProgressBar::new((t_end * 1000.0) as u64);
-        bar.set_style(ProgressStyle::with_template("{bar:40} {percent}% of simulated time, eta {eta}").expect("valid template"));
+        bar.set_style(
+            ProgressStyle::with_template("{bar:40} {percent}% of simulated time, eta {eta}")
+                .expect("valid template"),
+        );
         bar
     });
     let started = Instant::now();
@@ -136,7 +139,12 @@ pub fn run(a: Args) -> Result<(), String> {
 
     let stats = sim.stats();
     let range = |f: &dyn Fn(&Sample) -> f64| {
-        let (lo, hi) = samples.iter().map(f).fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), v| (l.min(v), h.max(v)));
+        let (lo, hi) = samples
+            .iter()
+            .map(f)
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), v| {
+                (l.min(v), h.max(v))
+            });
         (hi - lo) * 1e6
     };
     println!(
@@ -178,12 +186,26 @@ pub fn run_panels(samples: &[Sample]) -> Vec<Panel> {
         })
         .collect();
     vec![
-        Panel { title: "Actuator heights".into(), x_label: "t [s]".into(), y_label: "h [um]".into(), series: heights, equal_axes: false },
+        Panel {
+            title: "Actuator heights".into(),
+            x_label: "t [s]".into(),
+            y_label: "h [um]".into(),
+            series: heights,
+            equal_axes: false,
+        },
         Panel {
             title: "Antenna tip".into(),
             x_label: "tip x [um]".into(),
             y_label: "tip y [um]".into(),
-            series: vec![Series { label: "tip path".into(), points: samples.iter().map(|s| (s.tip[0] * um, s.tip[1] * um)).collect(), color: 3, dots: false }],
+            series: vec![Series {
+                label: "tip path".into(),
+                points: samples
+                    .iter()
+                    .map(|s| (s.tip[0] * um, s.tip[1] * um))
+                    .collect(),
+                color: 3,
+                dots: false,
+            }],
             equal_axes: true,
         },
     ]
