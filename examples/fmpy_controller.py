@@ -26,7 +26,7 @@ the height responds about linearly, h ~ 0.03 um/V^2 at low voltage), and U = sqr
 The integral finds the operating voltage; it is frozen while v is clamped at 0 (anti-windup).
 Since the input is held over the step, the setpoint is the reference at the step's end. With
 KP = 1e9 V^2/m and KI = 1e10 V^2/(m s) the tip stays within about 1 um of the circle; much
-higher gains make the lightly damped actuator 2 ring.
+higher gains (3x) make the lightly damped actuator 2 oscillate at the step rate.
 """
 import argparse
 import math
