@@ -31,14 +31,23 @@ fn fmu_path() -> PathBuf {
 
 /// The 1 ms ZOH reference: rows of t, U1..U3, h1..h3, tip_x..tip_z.
 fn reference() -> Vec<[f64; 10]> {
-    let path = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../shared/data/reference/zoh1ms_sine60_w3pi.csv");
+    let path = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("../shared/data/reference/zoh1ms_sine60_w3pi.csv");
     let text = std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
     let mut lines = text.lines();
-    assert_eq!(lines.next(), Some("t,U1,U2,U3,h1,h2,h3,tip_x,tip_y,tip_z"), "unexpected header in {}", path.display());
+    assert_eq!(
+        lines.next(),
+        Some("t,U1,U2,U3,h1,h2,h3,tip_x,tip_y,tip_z"),
+        "unexpected header in {}",
+        path.display()
+    );
     let rows: Vec<[f64; 10]> = lines
         .filter(|l| !l.trim().is_empty())
         .map(|l| {
-            let v: Vec<f64> = l.split(',').map(|x| x.trim().parse().expect("a number")).collect();
+            let v: Vec<f64> = l
+                .split(',')
+                .map(|x| x.trim().parse().expect("a number"))
+                .collect();
             v.try_into().expect("10 columns")
         })
         .collect();
@@ -48,7 +57,8 @@ fn reference() -> Vec<[f64; 10]> {
 
 fn import() -> Fmi2Import {
     let path = fmu_path();
-    fmi::import::from_path(&path).unwrap_or_else(|e| panic!("the fmi crate cannot import {}: {e}", path.display()))
+    fmi::import::from_path(&path)
+        .unwrap_or_else(|e| panic!("the fmi crate cannot import {}: {e}", path.display()))
 }
 
 /// The value references of `names`, looked up in the imported model description.
@@ -65,7 +75,9 @@ fn value_refs<const N: usize>(import: &Fmi2Import, names: [&str; N]) -> [u32; N]
 
 /// A fresh instance, initialized at t = 0 with the default tolerance and no stop time.
 fn initialized(import: &Fmi2Import, name: &str) -> InstanceCS {
-    let mut inst = import.instantiate_cs(name, false, false).unwrap_or_else(|e| panic!("fmi2Instantiate failed: {e}"));
+    let mut inst = import
+        .instantiate_cs(name, false, false)
+        .unwrap_or_else(|e| panic!("fmi2Instantiate failed: {e}"));
     Common::setup_experiment(&mut inst, None, 0.0, None).expect("fmi2SetupExperiment");
     Common::enter_initialization_mode(&mut inst).expect("fmi2EnterInitializationMode");
     Common::exit_initialization_mode(&mut inst).expect("fmi2ExitInitializationMode");
@@ -81,11 +93,14 @@ fn run(import: &Fmi2Import, name: &str, rows: &[[f64; 10]]) -> Vec<[f64; 6]> {
     let mut out = Vec::with_capacity(rows.len() - 1);
     let mut t = 0.0;
     for (k, row) in rows[..rows.len() - 1].iter().enumerate() {
-        inst.set_real(&u_refs, &row[1..4]).unwrap_or_else(|e| panic!("fmi2SetReal at step {k}: {e}"));
-        inst.do_step(t, STEP, true).unwrap_or_else(|e| panic!("fmi2DoStep at step {k} (t = {t}): {e}"));
+        inst.set_real(&u_refs, &row[1..4])
+            .unwrap_or_else(|e| panic!("fmi2SetReal at step {k}: {e}"));
+        inst.do_step(t, STEP, true)
+            .unwrap_or_else(|e| panic!("fmi2DoStep at step {k} (t = {t}): {e}"));
         t += STEP;
         let mut y = [0.0; 6];
-        inst.get_real(&y_refs, &mut y).unwrap_or_else(|e| panic!("fmi2GetReal at step {k}: {e}"));
+        inst.get_real(&y_refs, &mut y)
+            .unwrap_or_else(|e| panic!("fmi2GetReal at step {k}: {e}"));
         out.push(y);
     }
     Common::terminate(&mut inst).expect("fmi2Terminate");
@@ -99,7 +114,13 @@ fn fmi_crate_reproduces_the_zoh_reference() {
     let import = import();
     let md = import.model_description();
     assert_eq!(md.fmi_version, "2.0");
-    assert_eq!(md.co_simulation.as_ref().expect("a Co-Simulation FMU").model_identifier, "HaselPlatform");
+    assert_eq!(
+        md.co_simulation
+            .as_ref()
+            .expect("a Co-Simulation FMU")
+            .model_identifier,
+        "HaselPlatform"
+    );
 
     let rows = reference();
     let out = run(&import, "reference", &rows);
@@ -111,7 +132,10 @@ fn fmi_crate_reproduces_the_zoh_reference() {
             motion[i] = (motion[i].0.min(y[i]), motion[i].1.max(y[i]));
         }
     }
-    println!("fmi crate vs zoh1ms reference: max |dh| = {:.3e} um", max_dh * 1e6);
+    println!(
+        "fmi crate vs zoh1ms reference: max |dh| = {:.3e} um",
+        max_dh * 1e6
+    );
     // the input really moved every actuator, so the comparison is not between two rest states
     assert!(motion.iter().all(|(lo, hi)| hi - lo > 5e-6), "{motion:?}");
     assert!(max_dh <= 0.01e-6, "max |dh| = {max_dh:e} m exceeds 0.01 um");
@@ -135,11 +159,18 @@ fn four_threads_agree_bit_for_bit_with_one() {
                 })
             })
             .collect();
-        handles.into_iter().map(|h| h.join().expect("a stepping thread panicked")).collect()
+        handles
+            .into_iter()
+            .map(|h| h.join().expect("a stepping thread panicked"))
+            .collect()
     });
-    let bits = |run: &[[f64; 6]]| -> Vec<[u64; 6]> { run.iter().map(|y| y.map(f64::to_bits)).collect() };
+    let bits =
+        |run: &[[f64; 6]]| -> Vec<[u64; 6]> { run.iter().map(|y| y.map(f64::to_bits)).collect() };
     for (i, r) in results.iter().enumerate() {
         assert_eq!(r.len(), single.len());
-        assert!(bits(r) == bits(&single), "thread {i} differs from the single-threaded run");
+        assert!(
+            bits(r) == bits(&single),
+            "thread {i} differs from the single-threaded run"
+        );
     }
 }
