@@ -1,0 +1,12 @@
+#!/usr/bin/env bash
+# Benchmarks that print their figures: the solver (hasel bench), and the packed FMU through a
+# Rust importer (the fmi crate) and through fmpy.
+source "$(dirname "${BASH_SOURCE[0]}")/lib.sh"
+ensure_apt
+build_fmu
+step "solver: hasel bench"
+./target/release/hasel bench
+step "FMU through the Rust fmi crate"
+cargo run -q --release --example bench_fmu -- fmu/HaselPlatform.fmu
+step "FMU through fmpy (Python's per-call overhead dominates)"
+python ci/demo.py --fmu fmu/HaselPlatform.fmu --out out/fmu_demo.png
