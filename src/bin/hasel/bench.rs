@@ -20,7 +20,7 @@ pub struct Args {
 }
 
 /// Largest |Δh| and |Δtip| [µm] against a reference file, over the rows both have.
-fn error_against(path: &Path, samples: &[Sample]) -> Option<(f64, f64)> {
+pub(crate) fn error_against(path: &Path, samples: &[Sample]) -> Option<(f64, f64)> {
     let table = Table::read(path).ok()?;
     let cols: Vec<usize> = ["h1", "h2", "h3", "tip_x", "tip_y", "tip_z"]
         .iter()
@@ -39,7 +39,7 @@ fn error_against(path: &Path, samples: &[Sample]) -> Option<(f64, f64)> {
     Some((dh * 1e6, dtip * 1e6))
 }
 
-fn best<T>(repeat: usize, mut f: impl FnMut() -> T) -> (Duration, T) {
+pub(crate) fn best<T>(repeat: usize, mut f: impl FnMut() -> T) -> (Duration, T) {
     let mut out = None;
     let mut fastest = Duration::MAX;
     for _ in 0..repeat.max(1) {
@@ -89,6 +89,8 @@ pub fn run(a: Args) -> Result<(), String> {
         (sim.stats(), samples)
     });
     let error = error_against(&a.reference.join("sine60_w3pi.csv"), &samples);
+    #[cfg(feature = "compare")]
+    let sine_row = (wall, stats, error);
     report(
         "10 s of 60 V at 3pi rad/s, outputs every 1 ms (dense output)",
         wall,
@@ -119,5 +121,20 @@ pub fn run(a: Args) -> Result<(), String> {
         error,
         50.0,
     );
+    #[cfg(feature = "compare")]
+    {
+        use crate::compare::{Case, case_row};
+        let ours = vec![
+            case_row(
+                "Radau IIA(5)",
+                Case::Sine,
+                sine_row.0,
+                sine_row.1,
+                sine_row.2.map(|e| e.0),
+            ),
+            case_row("Radau IIA(5)", Case::Held, wall, stats, error.map(|e| e.0)),
+        ];
+        crate::compare::print(&model, DEFAULT_RTOL, a.repeat, &a.reference, ours)?;
+    }
     Ok(())
 }

@@ -1,6 +1,8 @@
 //! `hasel`: simulate the HASEL platform, pack it as an FMI 2.0 FMU, benchmark it.
 
 mod bench;
+#[cfg(feature = "compare")]
+mod compare;
 mod fmu;
 mod simulate;
 
