@@ -6,5 +6,7 @@ ensure_apt
 build_fmu
 step "Rust tests"
 cargo test --release --all-targets
+step "the library-solver comparison of hasel bench compiles (feature compare, diffsol)"
+cargo check -q --features compare --bin hasel
 step "Python tests of the packed FMU"
 python -m pytest tests/python -q -p no:cacheprovider

@@ -85,12 +85,9 @@ fn sampled_inputs_with_each_interpolation() {
         Interpolation::ZeroOrderHold,
         Interpolation::Linear,
         Interpolation::Pchip,
+        Interpolation::Spline,
     ] {
-        let input = Input::Sampled {
-            t: t.clone(),
-            u: u.clone(),
-            interpolation,
-        };
+        let input = Input::sampled(t.clone(), u.clone(), interpolation).unwrap();
         check(
             &format!("sampled every 2.5 ms, {interpolation:?}"),
             input,

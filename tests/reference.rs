@@ -82,11 +82,7 @@ fn zero_order_hold_steps_match_the_reference() {
     let table = reference("zoh1ms_sine60_w3pi.csv");
     let t = table.column("t").unwrap();
     let u: Vec<[f64; 3]> = table.rows.iter().map(|r| [r[1], r[2], r[3]]).collect();
-    let input = Input::Sampled {
-        t,
-        u,
-        interpolation: Interpolation::ZeroOrderHold,
-    };
+    let input = Input::sampled(t, u, Interpolation::ZeroOrderHold).unwrap();
     let mut sim = Simulator::new(Platform::new(Params::default()).unwrap(), 0.0, 1e-6).unwrap();
     let mut out = Vec::new();
     sim.run(&input, 2.0, 1e-3, |s| out.push(*s)).unwrap();

@@ -27,12 +27,6 @@ pub fn from_table(table: &Table, interpolation: Interpolation) -> Result<Input, 
         ));
     }
     table.check_increasing("t")?;
-    let u = (0..t.len())
-        .map(|k| [cols[0][k], cols[1][k], cols[2][k]])
-        .collect();
-    Ok(Input::Sampled {
-        t,
-        u,
-        interpolation,
-    })
+    let u = (0..t.len()).map(|k| [cols[0][k], cols[1][k], cols[2][k]]).collect();
+    Input::sampled(t, u, interpolation).map_err(|e| FileError::new(&table.path, e))
 }

@@ -53,8 +53,8 @@ pub(crate) fn best<T>(repeat: usize, mut f: impl FnMut() -> T) -> (Duration, T) 
 
 fn report(name: &str, wall: Duration, stats: Stats, error: Option<(f64, f64)>, target_ms: f64) {
     let ms = wall.as_secs_f64() * 1e3;
-    println!("{name}");
-    println!(
+    say!("{name}");
+    say!(
         "  wall {ms:.2} ms (target <= {target_ms} ms: {}) | steps {} (+{} rejected) | f {} | J {} | LU {} | Newton {}",
         if ms <= target_ms { "met" } else { "MISSED" },
         stats.accepted,
@@ -66,9 +66,9 @@ fn report(name: &str, wall: Duration, stats: Stats, error: Option<(f64, f64)>, t
     );
     match error {
         Some((dh, dtip)) => {
-            println!("  max error vs reference: |dh| {dh:.2e} um, |dtip| {dtip:.2e} um")
+            say!("  max error vs reference: |dh| {dh:.2e} um, |dtip| {dtip:.2e} um")
         }
-        None => println!("  (reference data not found: no error figure)"),
+        None => say!("  (reference data not found: no error figure)"),
     }
 }
 
@@ -76,7 +76,7 @@ pub fn run(a: Args) -> Result<(), String> {
     let model = Platform::new(Params::default()).map_err(|e| e.to_string())?;
     let omega = 3.0 * std::f64::consts::PI;
     let input = Input::sine(60.0, omega);
-    println!(
+    say!(
         "Radau IIA(5), rtol {DEFAULT_RTOL:e}, 15 states, best of {} runs",
         a.repeat
     );

@@ -343,7 +343,7 @@ pub fn print(
                     work,
                     dh: dh_against(reference, case, &samples),
                 }),
-                None => println!(
+                None => say!(
                     "{} on {}: failed: {}",
                     method.name(),
                     case.name(),
@@ -353,18 +353,18 @@ pub fn print(
         }
     }
     rows.sort_by_key(|r| r.case != Case::Sine);
-    println!();
-    println!(
+    say!();
+    say!(
         "Side by side with a library solver (diffsol 0.18, dense nalgebra LU, analytic Jacobian), \
          rtol {rtol:e}, atol_i = rtol*scale_i, best of {repeat}"
     );
-    println!(
+    say!(
         "{:<17} | {:<15} | {:>9} | {:>17} | {:>9} | {:>7} | {:>7} | {:>13}",
         "solver", "case", "wall ms", "steps (+rej)", "f evals", "J evals", "LU", "max |dh| um"
     );
-    println!("{}", "-".repeat(17 + 15 + 9 + 17 + 9 + 7 + 7 + 13 + 7 * 3));
+    say!("{}", "-".repeat(17 + 15 + 9 + 17 + 9 + 7 + 7 + 13 + 7 * 3));
     for r in &rows {
-        println!(
+        say!(
             "{:<17} | {:<15} | {:>9.2} | {:>17} | {:>9} | {:>7} | {:>7} | {:>13}",
             r.solver,
             r.case.name(),
@@ -376,7 +376,7 @@ pub fn print(
             r.dh.map_or("n/a".to_string(), |d| format!("{d:.2e}")),
         );
     }
-    println!(
+    say!(
         "  diffsol: Newton-failure cap (default 50 per solve) lifted; rej = error-test + Newton \
          failures; the held case restarts at every step (new dy, diffsol's initial step-size rule)"
     );

@@ -39,7 +39,7 @@ pub fn run(a: Args) -> Result<(), String> {
             .with_file_name("libhasel_fmu.so"),
     };
     fmu_pack::pack(&lib, &params, &a.out).map_err(|e| e.to_string())?;
-    println!(
+    say!(
         "wrote {} (GUID {}, library {})",
         a.out.display(),
         fmu_pack::guid(&params),
@@ -53,7 +53,7 @@ pub fn describe(a: DescribeArgs) -> Result<(), String> {
     match a.out {
         Some(path) => write_text_atomic(&path, &xml).map_err(|e| e.to_string()),
         None => {
-            print!("{xml}");
+            say_raw!("{xml}");
             Ok(())
         }
     }

@@ -1,5 +1,22 @@
 //! `hasel`: simulate the HASEL platform, pack it as an FMI 2.0 FMU, benchmark it.
 
+/// `println!` that ends quietly when standard output is closed (`hasel simulate | head`)
+/// instead of panicking.
+macro_rules! say {
+    ($($arg:tt)*) => {{
+        use std::io::Write as _;
+        let _ = writeln!(std::io::stdout(), $($arg)*);
+    }};
+}
+
+/// `print!` likewise.
+macro_rules! say_raw {
+    ($($arg:tt)*) => {{
+        use std::io::Write as _;
+        let _ = write!(std::io::stdout(), $($arg)*);
+    }};
+}
+
 mod bench;
 #[cfg(feature = "compare")]
 mod compare;

@@ -21,8 +21,8 @@ pub struct Args {
     #[arg(long, value_name = "FILE.csv")]
     input: Option<PathBuf>,
     /// How --input is read between samples: zoh (held, as a co-simulation master does),
-    /// linear, or pchip (monotone cubic, smooth)
-    #[arg(long, default_value = "zoh", value_parser = ["zoh", "linear", "pchip"])]
+    /// linear, pchip (monotone cubic) or spline (natural cubic, C², fastest for dense smooth data)
+    #[arg(long, default_value = "zoh", value_parser = ["zoh", "linear", "pchip", "spline"])]
     interp: String,
     /// Parameter file (TOML, any subset of `hasel params`)
     #[arg(long, value_name = "FILE.toml")]
@@ -78,7 +78,7 @@ pub fn params(a: ParamsArgs) -> Result<(), String> {
     match a.out {
         Some(path) => params_file::write(&path, &p).map_err(|e| e.to_string()),
         None => {
-            print!("{}", params_file::to_toml(&p));
+            say_raw!("{}", params_file::to_toml(&p));
             Ok(())
         }
     }
@@ -89,14 +89,12 @@ pub fn run(a: Args) -> Result<(), String> {
     let interpolation = match a.interp.as_str() {
         "linear" => Interpolation::Linear,
         "pchip" => Interpolation::Pchip,
+        "spline" => Interpolation::Spline,
         _ => Interpolation::ZeroOrderHold,
     };
     let (input, default_end) = if let Some(path) = &a.input {
         let input = input_file::read(path, interpolation).map_err(|e| e.to_string())?;
-        let end = match &input {
-            Input::Sampled { t, .. } => t[t.len() - 1],
-            Input::Tones { .. } => 10.0,
-        };
+        let end = input.last_sample().unwrap_or(10.0);
         (input, end)
     } else if let Some(s) = &a.offset_sine {
         let (u0, w) = pair("offset-sine", s)?;
@@ -144,7 +142,7 @@ pub fn run(a: Args) -> Result<(), String> {
         let (lo, hi) = steady.iter().map(f).fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), v| (l.min(v), h.max(v)));
         (hi - lo) * 1e6
     };
-    println!(
+    say!(
         "simulated {t_end} s in {:.1} ms: {} steps ({} rejected), {} f and {} Jacobian evaluations",
         wall.as_secs_f64() * 1e3,
         stats.accepted,
@@ -152,7 +150,7 @@ pub fn run(a: Args) -> Result<(), String> {
         stats.rhs_evals,
         stats.jac_evals
     );
-    println!(
+    say!(
         "second half of the run: peak-to-peak stroke h1/h2/h3 {:.1} / {:.1} / {:.1} um; tip path {:.1} x {:.1} um (X x Y)",
         range(&|s| s.h[0]),
         range(&|s| s.h[1]),
@@ -162,11 +160,11 @@ pub fn run(a: Args) -> Result<(), String> {
     );
     if let Some(path) = &a.out {
         trajectory::write(path, &samples).map_err(|e| e.to_string())?;
-        println!("wrote {}", path.display());
+        say!("wrote {}", path.display());
     }
     if let Some(path) = &a.plot {
         plot::draw(path, &run_panels(&samples), 2, (1400, 560)).map_err(|e| e.to_string())?;
-        println!("wrote {}", path.display());
+        say!("wrote {}", path.display());
     }
     Ok(())
 }
