@@ -4,6 +4,7 @@
 pub mod fmi2;
 pub mod fmu_core;
 pub mod fmu_pack;
+pub mod identify;
 pub mod io;
 pub mod model;
 pub mod plot;

@@ -5,7 +5,10 @@ use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
 fn hasel(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_hasel")).args(args).output().expect("hasel runs")
+    Command::new(env!("CARGO_BIN_EXE_hasel"))
+        .args(args)
+        .output()
+        .expect("hasel runs")
 }
 
 fn scratch(name: &str) -> PathBuf {
@@ -27,7 +30,17 @@ fn s(p: &Path) -> &str {
 fn simulate_writes_the_trajectory_and_the_figure() {
     let dir = scratch("ok");
     let (csv, png) = (dir.join("run.csv"), dir.join("run.png"));
-    let o = hasel(&["simulate", "--sine", "60,11", "--t-end", "0.5", "--out", s(&csv), "--plot", s(&png)]);
+    let o = hasel(&[
+        "simulate",
+        "--sine",
+        "60,11",
+        "--t-end",
+        "0.5",
+        "--out",
+        s(&csv),
+        "--plot",
+        s(&png),
+    ]);
     assert!(o.status.success(), "{}", stderr(&o));
     let text = std::fs::read_to_string(&csv).unwrap();
     let mut lines = text.lines();
@@ -42,10 +55,23 @@ fn a_sampled_input_file_drives_the_run() {
     let input = dir.join("u.csv");
     std::fs::write(&input, "t,U1,U2,U3\n0,0,0,0\n0.1,50,0,0\n0.2,50,20,0\n").unwrap();
     let out = dir.join("run.csv");
-    let o = hasel(&["simulate", "--input", s(&input), "--interp", "pchip", "--dt", "0.01", "--out", s(&out)]);
+    let o = hasel(&[
+        "simulate",
+        "--input",
+        s(&input),
+        "--interp",
+        "pchip",
+        "--dt",
+        "0.01",
+        "--out",
+        s(&out),
+    ]);
     assert!(o.status.success(), "{}", stderr(&o));
     // the run ends at the last sample by default
-    assert_eq!(std::fs::read_to_string(&out).unwrap().lines().count(), 1 + 21);
+    assert_eq!(
+        std::fs::read_to_string(&out).unwrap().lines().count(),
+        1 + 21
+    );
 }
 
 #[test]
@@ -56,16 +82,31 @@ fn a_bad_input_file_is_located_and_nothing_is_written() {
     let out = dir.join("run.csv");
     let o = hasel(&["simulate", "--input", s(&input), "--out", s(&out)]);
     assert!(!o.status.success());
-    assert!(stderr(&o).contains(&format!("{}:3, column U2: 'x' is not a number", input.display())), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains(&format!(
+            "{}:3, column U2: 'x' is not a number",
+            input.display()
+        )),
+        "{}",
+        stderr(&o)
+    );
     assert!(!out.exists());
 
     std::fs::write(&input, "t,U1,U3\n0,0,0\n0.1,5,0\n").unwrap();
     let o = hasel(&["simulate", "--input", s(&input)]);
-    assert!(stderr(&o).contains("column U2: missing column"), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("column U2: missing column"),
+        "{}",
+        stderr(&o)
+    );
 
     std::fs::write(&input, "t,U1,U2,U3\n0,0,0,0\n0,5,0,0\n").unwrap();
     let o = hasel(&["simulate", "--input", s(&input)]);
-    assert!(stderr(&o).contains(":3, column t: 0 does not increase"), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains(":3, column t: 0 does not increase"),
+        "{}",
+        stderr(&o)
+    );
 }
 
 #[test]
@@ -76,13 +117,23 @@ fn a_bad_parameter_file_is_located() {
     let o = hasel(&["simulate", "--params", s(&params), "--t-end", "0.1"]);
     assert!(!o.status.success());
     let msg = stderr(&o);
-    assert!(msg.contains(&format!("{}:2, column 1 (C1_2): parameter C1_2 = -2e-10: must be finite and > 0", params.display())), "{msg}");
+    assert!(
+        msg.contains(&format!(
+            "{}:2, column 1 (C1_2): parameter C1_2 = -2e-10: must be finite and > 0",
+            params.display()
+        )),
+        "{msg}"
+    );
 }
 
 #[test]
 fn bad_flags_are_named() {
     let o = hasel(&["simulate", "--sine", "60,fast"]);
-    assert!(stderr(&o).contains("--sine 60,fast: expected two numbers U0,OMEGA"), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("--sine 60,fast: expected two numbers U0,OMEGA"),
+        "{}",
+        stderr(&o)
+    );
     let o = hasel(&["simulate", "--rtol", "2", "--t-end", "0.1"]);
     assert!(stderr(&o).contains("rtol = 2e0"), "{}", stderr(&o));
 }
@@ -93,7 +144,11 @@ fn params_round_trip_through_the_command() {
     let p = dir.join("p.toml");
     std::fs::write(&p, "b_1 = 0.2\n").unwrap();
     let out = dir.join("all.toml");
-    assert!(hasel(&["params", "--params", s(&p), "--out", s(&out)]).status.success());
+    assert!(
+        hasel(&["params", "--params", s(&p), "--out", s(&out)])
+            .status
+            .success()
+    );
     let text = std::fs::read_to_string(&out).unwrap();
     assert!(text.contains("b_1 = 0.2  # [N.m.s/rad]"), "{text}");
     assert!(text.contains("Kb_2 = 0.3  #"), "{text}");
@@ -106,6 +161,27 @@ fn packing_refuses_a_file_that_is_not_a_library() {
     std::fs::write(&fake, "not elf").unwrap();
     let out = dir.join("x.fmu");
     let o = hasel(&["fmu", "--lib", s(&fake), "--out", s(&out)]);
-    assert!(stderr(&o).contains("not an ELF shared library"), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("not an ELF shared library"),
+        "{}",
+        stderr(&o)
+    );
+    assert!(!out.exists());
+}
+
+#[test]
+fn identify_refuses_bad_data_and_writes_nothing() {
+    let dir = scratch("identify");
+    let exp = dir.join("e.csv");
+    let o = hasel(&["synth", "--t-end", "2", "--noise", "0.01", "--out", s(&exp)]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let text = std::fs::read_to_string(&exp).unwrap();
+    assert!(text.starts_with("t,U1,U2,U3,h1,h2,h3\n"));
+    let bad = dir.join("bad.csv");
+    std::fs::write(&bad, text.replacen("h2", "height2", 1)).unwrap();
+    let out = dir.join("out");
+    let o = hasel(&["identify", s(&exp), "--validate", s(&bad), "--out", s(&out)]);
+    assert!(!o.status.success());
+    assert!(stderr(&o).contains(&format!("{}:1, column height2: unknown column", bad.display())), "{}", stderr(&o));
     assert!(!out.exists());
 }

@@ -27,6 +27,8 @@ pub fn from_table(table: &Table, interpolation: Interpolation) -> Result<Input, 
         ));
     }
     table.check_increasing("t")?;
-    let u = (0..t.len()).map(|k| [cols[0][k], cols[1][k], cols[2][k]]).collect();
+    let u = (0..t.len())
+        .map(|k| [cols[0][k], cols[1][k], cols[2][k]])
+        .collect();
     Input::sampled(t, u, interpolation).map_err(|e| FileError::new(&table.path, e))
 }

@@ -137,6 +137,8 @@ pub struct ParamDef {
     pub unit: &'static str,
     pub description: &'static str,
     pub rule: Rule,
+    /// The actuator (0-based) a per-actuator parameter belongs to; `None` for common ones.
+    pub actuator: Option<usize>,
     pub get: fn(&Params) -> f64,
     pub set: fn(&mut Params, f64),
 }
@@ -181,6 +183,7 @@ macro_rules! actuator_rows {
             unit: $unit,
             description: concat!($desc, " of actuator ", $i),
             rule: Rule::$rule,
+            actuator: Some($i - 1),
             get: |p| p.act[$i - 1].$field,
             set: |p, v| p.act[$i - 1].$field = v,
         }
@@ -195,6 +198,7 @@ macro_rules! common_rows {
                 unit: $unit,
                 description: $desc,
                 rule: Rule::$rule,
+                actuator: None,
                 get: |p| p.$field $([$idx])?,
                 set: |p, v| p.$field $([$idx])? = v,
             },

@@ -43,46 +43,86 @@ pub struct Samples {
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub enum Input {
     /// Per actuator: offset + Σ tones (sine, offset sine and multisine are all of this form).
-    Tones { offset: [f64; 3], tones: [Vec<Tone>; 3] },
+    Tones {
+        offset: [f64; 3],
+        tones: [Vec<Tone>; 3],
+    },
     /// Sampled voltages, held at the first value before the first sample and at the last after.
     Sampled(Samples),
 }
 
 /// The phases of the paper's excitation: 0°, 120°, 240°.
-pub const PAPER_PHASES: [f64; 3] = [0.0, 2.0 * std::f64::consts::FRAC_PI_3, 4.0 * std::f64::consts::FRAC_PI_3];
+pub const PAPER_PHASES: [f64; 3] = [
+    0.0,
+    2.0 * std::f64::consts::FRAC_PI_3,
+    4.0 * std::f64::consts::FRAC_PI_3,
+];
 
 impl Input {
     /// The paper's excitation u_i(t) = U0 sin(ω t + φ_i), φ = 0°, 120°, 240°.
     pub fn sine(u0: f64, omega: f64) -> Input {
-        Input::Tones { offset: [0.0; 3], tones: PAPER_PHASES.map(|phase| vec![Tone { amplitude: u0, omega, phase }]) }
+        Input::Tones {
+            offset: [0.0; 3],
+            tones: PAPER_PHASES.map(|phase| {
+                vec![Tone {
+                    amplitude: u0,
+                    omega,
+                    phase,
+                }]
+            }),
+        }
     }
 
     /// The unipolar form u_i(t) = U0 (1 + sin(ω t + φ_i)) / 2.
     pub fn offset_sine(u0: f64, omega: f64) -> Input {
         Input::Tones {
             offset: [0.5 * u0; 3],
-            tones: PAPER_PHASES.map(|phase| vec![Tone { amplitude: 0.5 * u0, omega, phase }]),
+            tones: PAPER_PHASES.map(|phase| {
+                vec![Tone {
+                    amplitude: 0.5 * u0,
+                    omega,
+                    phase,
+                }]
+            }),
         }
     }
 
     /// A constant voltage on each actuator.
     pub fn constant(u: [f64; 3]) -> Input {
-        Input::Tones { offset: u, tones: [vec![], vec![], vec![]] }
+        Input::Tones {
+            offset: u,
+            tones: [vec![], vec![], vec![]],
+        }
     }
 
     /// A sampled input; at least two samples, strictly increasing finite times, finite values.
-    pub fn sampled(t: Vec<f64>, u: Vec<[f64; 3]>, interpolation: Interpolation) -> Result<Input, String> {
+    pub fn sampled(
+        t: Vec<f64>,
+        u: Vec<[f64; 3]>,
+        interpolation: Interpolation,
+    ) -> Result<Input, String> {
         if t.len() != u.len() {
-            return Err(format!("{} sample times but {} voltage samples", t.len(), u.len()));
+            return Err(format!(
+                "{} sample times but {} voltage samples",
+                t.len(),
+                u.len()
+            ));
         }
         if t.len() < 2 {
-            return Err(format!("{} samples: a sampled input needs at least 2", t.len()));
+            return Err(format!(
+                "{} samples: a sampled input needs at least 2",
+                t.len()
+            ));
         }
         if let Some(k) = (0..t.len()).find(|&k| !t[k].is_finite()) {
             return Err(format!("sample {k}: time {} is not finite", t[k]));
         }
         if let Some(k) = (1..t.len()).find(|&k| t[k] <= t[k - 1]) {
-            return Err(format!("sample {k}: time {} does not increase from {}", t[k], t[k - 1]));
+            return Err(format!(
+                "sample {k}: time {} does not increase from {}",
+                t[k],
+                t[k - 1]
+            ));
         }
         if let Some(k) = (0..u.len()).find(|&k| !u[k].iter().all(|v| v.is_finite())) {
             return Err(format!("sample {k}: voltages {:?} are not finite", u[k]));
@@ -92,7 +132,12 @@ impl Input {
             Interpolation::Spline => spline_slopes(&t, &u),
             Interpolation::ZeroOrderHold | Interpolation::Linear => Vec::new(),
         };
-        Ok(Input::Sampled(Samples { t, u, interpolation, slopes }))
+        Ok(Input::Sampled(Samples {
+            t,
+            u,
+            interpolation,
+            slopes,
+        }))
     }
 
     /// The last sample time of a sampled input.
@@ -106,7 +151,9 @@ impl Input {
     /// The smooth piece that starts at `t` and the time it ends (a breakpoint, or +∞).
     pub fn piece_at(&self, t: f64) -> (Piece<'_>, f64) {
         let s = match self {
-            Input::Tones { offset, tones } => return (Piece::Tones { offset, tones }, f64::INFINITY),
+            Input::Tones { offset, tones } => {
+                return (Piece::Tones { offset, tones }, f64::INFINITY);
+            }
             Input::Sampled(s) => s,
         };
         let (ts, u) = (&s.t, &s.u);
@@ -119,7 +166,14 @@ impl Input {
             return (Piece::Constant(u[k - 1]), f64::INFINITY);
         }
         let k = k - 1;
-        let segment = |m0: [f64; 3], m1: [f64; 3]| Piece::Hermite { t0: ts[k], h: ts[k + 1] - ts[k], u0: u[k], u1: u[k + 1], m0, m1 };
+        let segment = |m0: [f64; 3], m1: [f64; 3]| Piece::Hermite {
+            t0: ts[k],
+            h: ts[k + 1] - ts[k],
+            u0: u[k],
+            u1: u[k + 1],
+            m0,
+            m1,
+        };
         match s.interpolation {
             Interpolation::ZeroOrderHold => (Piece::Constant(u[k]), ts[k + 1]),
             Interpolation::Linear => {
@@ -166,7 +220,9 @@ fn pchip_slope(t: &[f64], u: &[[f64; 3]], k: usize) -> [f64; 3] {
 fn spline_slopes(t: &[f64], u: &[[f64; 3]]) -> Vec<[f64; 3]> {
     let n = t.len();
     let h: Vec<f64> = (0..n - 1).map(|k| t[k + 1] - t[k]).collect();
-    let d: Vec<[f64; 3]> = (0..n - 1).map(|k| [0, 1, 2].map(|i| (u[k + 1][i] - u[k][i]) / h[k])).collect();
+    let d: Vec<[f64; 3]> = (0..n - 1)
+        .map(|k| [0, 1, 2].map(|i| (u[k + 1][i] - u[k][i]) / h[k]))
+        .collect();
     // rows: sub a, diagonal b, super c, right-hand side r
     let (mut a, mut b, mut c) = (vec![0.0; n], vec![0.0; n], vec![0.0; n]);
     let mut r = vec![[0.0; 3]; n];
@@ -194,9 +250,19 @@ fn spline_slopes(t: &[f64], u: &[[f64; 3]]) -> Vec<[f64; 3]> {
 #[derive(Clone, Copy, Debug)]
 pub enum Piece<'a> {
     Constant([f64; 3]),
-    Tones { offset: &'a [f64; 3], tones: &'a [Vec<Tone>; 3] },
+    Tones {
+        offset: &'a [f64; 3],
+        tones: &'a [Vec<Tone>; 3],
+    },
     /// Cubic Hermite on [t0, t0 + h] with end values u0, u1 and end slopes m0, m1.
-    Hermite { t0: f64, h: f64, u0: [f64; 3], u1: [f64; 3], m0: [f64; 3], m1: [f64; 3] },
+    Hermite {
+        t0: f64,
+        h: f64,
+        u0: [f64; 3],
+        u1: [f64; 3],
+        m0: [f64; 3],
+        m1: [f64; 3],
+    },
     /// The natural cubic spline through all samples, on [t_first, t_last].
     Spline(&'a Samples),
 }
@@ -204,7 +270,12 @@ pub enum Piece<'a> {
 /// Cubic Hermite value at s ∈ [0, 1] of an interval of length h.
 fn hermite(s: f64, h: f64, u0: [f64; 3], u1: [f64; 3], m0: [f64; 3], m1: [f64; 3]) -> [f64; 3] {
     let (s2, s3) = (s * s, s * s * s);
-    let (h00, h10, h01, h11) = (2.0 * s3 - 3.0 * s2 + 1.0, s3 - 2.0 * s2 + s, -2.0 * s3 + 3.0 * s2, s3 - s2);
+    let (h00, h10, h01, h11) = (
+        2.0 * s3 - 3.0 * s2 + 1.0,
+        s3 - 2.0 * s2 + s,
+        -2.0 * s3 + 3.0 * s2,
+        s3 - s2,
+    );
     [0, 1, 2].map(|i| h00 * u0[i] + h10 * h * m0[i] + h01 * u1[i] + h11 * h * m1[i])
 }
 
@@ -213,13 +284,31 @@ impl Piece<'_> {
         match *self {
             Piece::Constant(u) => u,
             Piece::Tones { offset, tones } => [0, 1, 2].map(|i| {
-                offset[i] + tones[i].iter().map(|c| c.amplitude * (c.omega * t + c.phase).sin()).sum::<f64>()
+                offset[i]
+                    + tones[i]
+                        .iter()
+                        .map(|c| c.amplitude * (c.omega * t + c.phase).sin())
+                        .sum::<f64>()
             }),
-            Piece::Hermite { t0, h, u0, u1, m0, m1 } => hermite((t - t0) / h, h, u0, u1, m0, m1),
+            Piece::Hermite {
+                t0,
+                h,
+                u0,
+                u1,
+                m0,
+                m1,
+            } => hermite((t - t0) / h, h, u0, u1, m0, m1),
             Piece::Spline(s) => {
                 let k = s.t.partition_point(|&tk| tk <= t).clamp(1, s.t.len() - 1) - 1;
                 let h = s.t[k + 1] - s.t[k];
-                hermite((t - s.t[k]) / h, h, s.u[k], s.u[k + 1], s.slopes[k], s.slopes[k + 1])
+                hermite(
+                    (t - s.t[k]) / h,
+                    h,
+                    s.u[k],
+                    s.u[k + 1],
+                    s.slopes[k],
+                    s.slopes[k + 1],
+                )
             }
         }
     }
@@ -242,14 +331,30 @@ mod tests {
     fn sampled_pieces_end_at_the_next_sample() {
         let t = vec![0.0, 1.0, 2.0, 3.0];
         let u = vec![[0.0; 3], [1.0; 3], [3.0; 3], [2.0; 3]];
-        for interp in [Interpolation::ZeroOrderHold, Interpolation::Linear, Interpolation::Pchip, Interpolation::Spline] {
+        for interp in [
+            Interpolation::ZeroOrderHold,
+            Interpolation::Linear,
+            Interpolation::Pchip,
+            Interpolation::Spline,
+        ] {
             let inp = Input::sampled(t.clone(), u.clone(), interp).unwrap();
             let (piece, end) = inp.piece_at(1.0);
             // the C² spline is one piece over all samples
-            assert_eq!(end, if interp == Interpolation::Spline { 3.0 } else { 2.0 });
+            assert_eq!(
+                end,
+                if interp == Interpolation::Spline {
+                    3.0
+                } else {
+                    2.0
+                }
+            );
             assert_eq!(piece.value(1.0), [1.0; 3]);
             let at_end = piece.value(2.0)[0];
-            let want = if interp == Interpolation::ZeroOrderHold { 1.0 } else { 3.0 };
+            let want = if interp == Interpolation::ZeroOrderHold {
+                1.0
+            } else {
+                3.0
+            };
             assert!((at_end - want).abs() < 1e-14, "{interp:?}: {at_end}");
             assert_eq!(inp.piece_at(7.0).1, f64::INFINITY);
             assert_eq!(inp.value(7.0), [2.0; 3]);
@@ -261,8 +366,13 @@ mod tests {
 
     #[test]
     fn the_spline_is_twice_continuously_differentiable_and_natural() {
-        let t: Vec<f64> = (0..12).map(|k| k as f64 * 0.3 + 0.01 * (k * k) as f64).collect();
-        let u: Vec<[f64; 3]> = t.iter().map(|&x| [x.sin(), x * x, 1.0 / (1.0 + x)]).collect();
+        let t: Vec<f64> = (0..12)
+            .map(|k| k as f64 * 0.3 + 0.01 * (k * k) as f64)
+            .collect();
+        let u: Vec<[f64; 3]> = t
+            .iter()
+            .map(|&x| [x.sin(), x * x, 1.0 / (1.0 + x)])
+            .collect();
         let inp = Input::sampled(t.clone(), u.clone(), Interpolation::Spline).unwrap();
         let d2 = |x: f64, i: usize| {
             let e = 1e-4;
@@ -272,7 +382,10 @@ mod tests {
             let e = 1e-3;
             for (i, uki) in u[k].iter().enumerate() {
                 assert!((inp.value(t[k])[i] - uki).abs() < 1e-14);
-                assert!((d2(t[k] - e, i) - d2(t[k] + e, i)).abs() < 0.05, "u'' jumps at knot {k}");
+                assert!(
+                    (d2(t[k] - e, i) - d2(t[k] + e, i)).abs() < 0.05,
+                    "u'' jumps at knot {k}"
+                );
             }
         }
         assert!(d2(t[0] + 1e-3, 0).abs() < 0.05 && d2(t[11] - 1e-3, 1).abs() < 0.1);
@@ -280,8 +393,24 @@ mod tests {
 
     #[test]
     fn bad_samples_are_refused() {
-        assert!(Input::sampled(vec![0.0], vec![[0.0; 3]], Interpolation::Linear).unwrap_err().contains("at least 2"));
-        assert!(Input::sampled(vec![0.0, 0.0], vec![[0.0; 3]; 2], Interpolation::Linear).unwrap_err().contains("does not increase"));
-        assert!(Input::sampled(vec![0.0, 1.0], vec![[0.0; 3], [f64::NAN; 3]], Interpolation::Linear).unwrap_err().contains("not finite"));
+        assert!(
+            Input::sampled(vec![0.0], vec![[0.0; 3]], Interpolation::Linear)
+                .unwrap_err()
+                .contains("at least 2")
+        );
+        assert!(
+            Input::sampled(vec![0.0, 0.0], vec![[0.0; 3]; 2], Interpolation::Linear)
+                .unwrap_err()
+                .contains("does not increase")
+        );
+        assert!(
+            Input::sampled(
+                vec![0.0, 1.0],
+                vec![[0.0; 3], [f64::NAN; 3]],
+                Interpolation::Linear
+            )
+            .unwrap_err()
+            .contains("not finite")
+        );
     }
 }

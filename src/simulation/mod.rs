@@ -244,13 +244,23 @@ impl Simulator {
 
     /// Integrates `input` to `t_end`, calling `on_sample` at t0 and at every multiple of `dt`
     /// after it up to `t_end`.
-    pub fn run(&mut self, input: &Input, t_end: f64, dt: f64, on_sample: impl FnMut(&Sample)) -> Result<(), SimError> {
+    pub fn run(
+        &mut self,
+        input: &Input,
+        t_end: f64,
+        dt: f64,
+        on_sample: impl FnMut(&Sample),
+    ) -> Result<(), SimError> {
         if !(dt.is_finite() && dt > 0.0) {
-            return Err(SimError::Setting(format!("output step dt = {dt}: must be > 0")));
+            return Err(SimError::Setting(format!(
+                "output step dt = {dt}: must be > 0"
+            )));
         }
         let t0 = self.t();
         let last = ((t_end - t0) / dt * (1.0 + 1e-12)).floor().max(0.0) as u64;
-        let times: Vec<f64> = (0..=last).map(|k| (t0 + k as f64 * dt).min(t_end)).collect();
+        let times: Vec<f64> = (0..=last)
+            .map(|k| (t0 + k as f64 * dt).min(t_end))
+            .collect();
         self.run_at(input, &times, on_sample)
     }
 
@@ -258,10 +268,23 @@ impl Simulator {
     /// calling `on_sample` at each: outputs come from the integrator's dense output inside
     /// smooth pieces; the integrator stops exactly at every breakpoint of the input and at the
     /// last time.
-    pub fn run_at(&mut self, input: &Input, times: &[f64], mut on_sample: impl FnMut(&Sample)) -> Result<(), SimError> {
-        let Some(&t_end) = times.last() else { return Ok(()) };
-        if let Some(k) = (0..times.len()).find(|&k| !times[k].is_finite() || times[k] < self.t() || (k > 0 && times[k] < times[k - 1])) {
-            return Err(SimError::Setting(format!("output time {} (number {k}) is not increasing from t = {}", times[k], self.t())));
+    pub fn run_at(
+        &mut self,
+        input: &Input,
+        times: &[f64],
+        mut on_sample: impl FnMut(&Sample),
+    ) -> Result<(), SimError> {
+        let Some(&t_end) = times.last() else {
+            return Ok(());
+        };
+        if let Some(k) = (0..times.len()).find(|&k| {
+            !times[k].is_finite() || times[k] < self.t() || (k > 0 && times[k] < times[k - 1])
+        }) {
+            return Err(SimError::Setting(format!(
+                "output time {} (number {k}) is not increasing from t = {}",
+                times[k],
+                self.t()
+            )));
         }
         let mut x = vec![0.0; self.model.n_states()];
         let mut k = 0;
@@ -269,11 +292,19 @@ impl Simulator {
             let (piece, piece_end) = input.piece_at(self.t());
             self.apply(piece)?;
             let seg_end = piece_end.min(t_end);
-            let sys = Driven { model: &self.model, piece };
+            let sys = Driven {
+                model: &self.model,
+                piece,
+            };
             loop {
                 while k < times.len() && times[k] <= self.t() {
                     self.solver.interpolate(times[k], &mut x);
-                    on_sample(&Sample { t: times[k], u: input.value(times[k]), h: self.model.heights(&x), tip: self.model.tip(&x) });
+                    on_sample(&Sample {
+                        t: times[k],
+                        u: input.value(times[k]),
+                        h: self.model.heights(&x),
+                        tip: self.model.tip(&x),
+                    });
                     k += 1;
                 }
                 if self.t() >= seg_end {

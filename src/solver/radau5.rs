@@ -701,10 +701,7 @@ mod tests {
             0.284_163_745_722_3,
         ];
         for (y, w) in s.y().iter().zip(want) {
-            assert!(
-                (y - w).abs() <= 1e-7 * w,
-                "y = {y} vs {w}"
-            );
+            assert!((y - w).abs() <= 1e-7 * w, "y = {y} vs {w}");
         }
         assert_eq!(s.t(), 40.0);
         assert!(s.stats().accepted < 400, "{:?}", s.stats());

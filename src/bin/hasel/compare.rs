@@ -360,7 +360,14 @@ pub fn print(
     );
     say!(
         "{:<17} | {:<15} | {:>9} | {:>17} | {:>9} | {:>7} | {:>7} | {:>13}",
-        "solver", "case", "wall ms", "steps (+rej)", "f evals", "J evals", "LU", "max |dh| um"
+        "solver",
+        "case",
+        "wall ms",
+        "steps (+rej)",
+        "f evals",
+        "J evals",
+        "LU",
+        "max |dh| um"
     );
     say!("{}", "-".repeat(17 + 15 + 9 + 17 + 9 + 7 + 7 + 13 + 7 * 3));
     for r in &rows {

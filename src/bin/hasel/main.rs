@@ -21,6 +21,7 @@ mod bench;
 #[cfg(feature = "compare")]
 mod compare;
 mod fmu;
+mod identify;
 mod simulate;
 
 use std::process::ExitCode;
@@ -48,6 +49,10 @@ enum Command {
     Fmu(fmu::Args),
     /// Print the FMU's modelDescription.xml
     Describe(fmu::DescribeArgs),
+    /// Estimate parameters from measured experiments (Levenberg-Marquardt on the simulation error)
+    Identify(identify::Args),
+    /// Write a synthetic experiment from the model, with measurement noise
+    Synth(identify::SynthArgs),
     /// Measure the solver: wall time, work counters and error against the reference data
     Bench(bench::Args),
 }
@@ -59,6 +64,8 @@ fn main() -> ExitCode {
         Command::Params(a) => simulate::params(a),
         Command::Bench(a) => bench::run(a),
         Command::Fmu(a) => fmu::run(a),
+        Command::Identify(a) => identify::run(a),
+        Command::Synth(a) => identify::synth(a),
         Command::Describe(a) => fmu::describe(a),
     };
     match result {

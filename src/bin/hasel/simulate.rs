@@ -54,7 +54,7 @@ pub struct ParamsArgs {
     out: Option<PathBuf>,
 }
 
-fn pair(flag: &str, text: &str) -> Result<(f64, f64), String> {
+pub fn pair(flag: &str, text: &str) -> Result<(f64, f64), String> {
     let parts: Vec<&str> = text.split(',').map(str::trim).collect();
     let num = |s: &str| s.parse::<f64>().ok().filter(|v| v.is_finite());
     match parts.as_slice() {
@@ -139,7 +139,12 @@ pub fn run(a: Args) -> Result<(), String> {
     // strokes over the second half of the run, past the start-up transient
     let steady = &samples[samples.len() / 2..];
     let range = |f: &dyn Fn(&Sample) -> f64| {
-        let (lo, hi) = steady.iter().map(f).fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), v| (l.min(v), h.max(v)));
+        let (lo, hi) = steady
+            .iter()
+            .map(f)
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), v| {
+                (l.min(v), h.max(v))
+            });
         (hi - lo) * 1e6
     };
     say!(

@@ -1,0 +1,196 @@
+//! `hasel identify` and `hasel synth`.
+
+use std::path::PathBuf;
+
+use hasel_fmu::identify::synth::{self, Columns, Spec};
+use hasel_fmu::identify::{self, Experiment, Options, report};
+use hasel_fmu::io::csv::write_atomic;
+use hasel_fmu::io::input_file;
+use hasel_fmu::simulation::{DEFAULT_RTOL, Input, Interpolation};
+
+use crate::simulate::{load_params, pair};
+
+#[derive(clap::Args)]
+pub struct Args {
+    /// Estimation experiments: CSV with t,U1,U2,U3 and any of h1..h3, tip_x, tip_y, tip_z
+    #[arg(required = true, value_name = "EXPERIMENT.csv")]
+    experiments: Vec<PathBuf>,
+    /// Validation experiments (fits only, not used to estimate)
+    #[arg(long, num_args = 1.., value_name = "EXPERIMENT.csv")]
+    validate: Vec<PathBuf>,
+    /// Output folder: identification.json, fitted.toml, report.md and figures
+    #[arg(long, value_name = "DIR")]
+    out: PathBuf,
+    /// Starting parameters (a parameter file over the defaults)
+    #[arg(long, value_name = "FILE.toml")]
+    params: Option<PathBuf>,
+    /// Parameters to estimate, comma separated (default Kb, b, gamma1, gamma2 of each actuator)
+    #[arg(long, value_delimiter = ',', value_name = "NAME,NAME,...")]
+    free: Vec<String>,
+    /// Bounds of a parameter, NAME=LO:HI (default [start/20, start*20])
+    #[arg(long = "bound", value_name = "NAME=LO:HI")]
+    bounds: Vec<String>,
+}
+
+#[derive(clap::Args)]
+pub struct SynthArgs {
+    /// The paper's excitation U0·sin(ω t + φ_i) [V, rad/s] (default 60,3π)
+    #[arg(long, value_name = "U0,OMEGA", conflicts_with_all = ["offset_sine", "input"])]
+    sine: Option<String>,
+    /// The unipolar excitation U0·(1 + sin(ω t + φ_i))/2 [V, rad/s]
+    #[arg(long, value_name = "U0,OMEGA", conflicts_with = "input")]
+    offset_sine: Option<String>,
+    /// Sampled voltages t,U1,U2,U3 (read as a natural cubic spline)
+    #[arg(long, value_name = "FILE.csv")]
+    input: Option<PathBuf>,
+    /// The true parameters (a parameter file over the defaults)
+    #[arg(long, value_name = "FILE.toml")]
+    params: Option<PathBuf>,
+    /// Override one true parameter, NAME=VALUE (repeatable)
+    #[arg(long = "set", value_name = "NAME=VALUE")]
+    set: Vec<String>,
+    /// Measurement noise: standard deviation as a fraction of each output's range
+    #[arg(long, default_value_t = 0.0)]
+    noise: f64,
+    /// Recorded outputs: h (h1..h3) or tip (tip_x, tip_y, as the paper's laser)
+    #[arg(long, default_value = "h", value_parser = ["h", "tip"])]
+    columns: String,
+    /// Seed of the noise
+    #[arg(long, default_value_t = 1)]
+    seed: u64,
+    #[arg(long, default_value_t = 10.0)]
+    t_end: f64,
+    /// Sample interval [s]
+    #[arg(long, default_value_t = 1e-3)]
+    dt: f64,
+    #[arg(long, value_name = "FILE.csv")]
+    out: PathBuf,
+}
+
+fn read_all(paths: &[PathBuf]) -> Result<Vec<Experiment>, String> {
+    paths
+        .iter()
+        .map(|p| Experiment::read(p).map_err(|e| e.to_string()))
+        .collect()
+}
+
+pub fn run(a: Args) -> Result<(), String> {
+    let start = load_params(&a.params)?;
+    let estimation = read_all(&a.experiments)?;
+    let validation = read_all(&a.validate)?;
+    let mut opts = Options::default();
+    if !a.free.is_empty() {
+        opts.free = a.free.clone();
+    }
+    for b in &a.bounds {
+        let (name, range) = b
+            .split_once('=')
+            .ok_or_else(|| format!("--bound {b}: expected NAME=LO:HI"))?;
+        let (lo, hi) = range
+            .split_once(':')
+            .ok_or_else(|| format!("--bound {b}: expected NAME=LO:HI"))?;
+        let num = |s: &str| {
+            s.trim()
+                .parse::<f64>()
+                .map_err(|_| format!("--bound {b}: '{s}' is not a number"))
+        };
+        opts.bounds
+            .insert(name.trim().to_string(), (num(lo)?, num(hi)?));
+    }
+    let id = identify::identify(&start, &estimation, &validation, &opts)?;
+    report::write(&a.out, &id, &estimation, &validation).map_err(|e| e.to_string())?;
+    say!(
+        "identified in {:.2} s: {} iterations, {} simulations",
+        id.seconds,
+        id.iterations,
+        id.simulations
+    );
+    for e in id.estimates.iter().filter(|e| e.estimated) {
+        let (lo, hi) = e.ci95.expect("estimated");
+        say!(
+            "  {:<10} {:>12.6} (start {:.6}), 95 % interval [{:.6}, {:.6}]",
+            e.name,
+            e.value,
+            e.prior,
+            lo,
+            hi
+        );
+    }
+    for (n, reason) in &id.not_identifiable {
+        say!("  {n:<10} not identifiable from these data, held at its start value: {reason}");
+    }
+    for (title, fits) in [
+        ("estimation", &id.estimation),
+        ("validation", &id.validation),
+    ] {
+        for f in fits.iter() {
+            let list: Vec<String> = f
+                .fits
+                .iter()
+                .map(|(c, v)| format!("{c} {v:.1} %"))
+                .collect();
+            say!("  fit on {} ({title}): {}", f.experiment, list.join(", "));
+        }
+    }
+    say!(
+        "wrote {}/identification.json, fitted.toml, report.md",
+        a.out.display()
+    );
+    Ok(())
+}
+
+pub fn synth(a: SynthArgs) -> Result<(), String> {
+    let mut params = load_params(&a.params)?;
+    for s in &a.set {
+        let (name, value) = s
+            .split_once('=')
+            .ok_or_else(|| format!("--set {s}: expected NAME=VALUE"))?;
+        let v: f64 = value
+            .trim()
+            .parse()
+            .map_err(|_| format!("--set {s}: '{value}' is not a number"))?;
+        params
+            .set(name.trim(), v)
+            .map_err(|e| format!("--set {s}: {e}"))?;
+    }
+    params.validate().map_err(|e| e.to_string())?;
+    let input = if let Some(path) = &a.input {
+        input_file::read(path, Interpolation::Spline).map_err(|e| e.to_string())?
+    } else if let Some(s) = &a.offset_sine {
+        let (u0, w) = pair("offset-sine", s)?;
+        Input::offset_sine(u0, w)
+    } else {
+        let (u0, w) = match &a.sine {
+            Some(s) => pair("sine", s)?,
+            None => (60.0, 3.0 * std::f64::consts::PI),
+        };
+        Input::sine(u0, w)
+    };
+    if !(a.noise.is_finite() && a.noise >= 0.0) {
+        return Err(format!("--noise {}: must be >= 0", a.noise));
+    }
+    let columns = if a.columns == "tip" {
+        Columns::TipXy
+    } else {
+        Columns::Heights
+    };
+    let spec = Spec {
+        input,
+        params,
+        t_end: a.t_end,
+        dt: a.dt,
+        noise: a.noise,
+        columns,
+        seed: a.seed,
+        rtol: DEFAULT_RTOL * 1e-3,
+    };
+    let (header, rows) = synth::synthesize(&spec).map_err(|e| e.to_string())?;
+    let n = rows.len();
+    write_atomic(&a.out, &header, rows.into_iter()).map_err(|e| e.to_string())?;
+    say!(
+        "wrote {} ({n} samples, {})",
+        a.out.display(),
+        header.join(",")
+    );
+    Ok(())
+}

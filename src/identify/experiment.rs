@@ -1,0 +1,243 @@
+//! Measured experiments (effects.md, "Measured data files"): CSV with `t`, `U1..U3` (the
+//! voltages as commanded) and any of `h1..h3`, `tip_x`, `tip_y`, `tip_z`. One file is one
+//! experiment; a bad file gets an error naming the file, the line and the column.
+
+use std::path::{Path, PathBuf};
+
+use crate::io::csv::{FileError, Table};
+use crate::simulation::{Input, Interpolation, Sample};
+
+/// A measured output channel.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub enum Channel {
+    H(usize),
+    Tip(usize),
+}
+
+impl Channel {
+    pub const ALL: [Channel; 6] = [
+        Channel::H(0),
+        Channel::H(1),
+        Channel::H(2),
+        Channel::Tip(0),
+        Channel::Tip(1),
+        Channel::Tip(2),
+    ];
+
+    /// The column name, as in the FMU's outputs.
+    pub fn name(self) -> &'static str {
+        match self {
+            Channel::H(i) => ["h1", "h2", "h3"][i],
+            Channel::Tip(i) => ["tip_x", "tip_y", "tip_z"][i],
+        }
+    }
+
+    /// This channel's value in a simulated sample.
+    pub fn of(self, s: &Sample) -> f64 {
+        match self {
+            Channel::H(i) => s.h[i],
+            Channel::Tip(i) => s.tip[i],
+        }
+    }
+}
+
+/// Fewest samples and shortest duration an experiment may have: the slowest actuator settles
+/// with a 0.42 s time constant, so a shorter record determines nothing.
+pub const MIN_SAMPLES: usize = 50;
+pub const MIN_DURATION: f64 = 1.0;
+
+/// One experiment: its input and its measured channels at the sample times.
+#[derive(Clone, Debug)]
+pub struct Experiment {
+    /// File name, the experiment's name in reports.
+    pub name: String,
+    pub path: PathBuf,
+    pub t: Vec<f64>,
+    /// The commanded voltages, replayed through a natural cubic spline (smooth, so the
+    /// integrator need not stop at every sample).
+    pub input: Input,
+    pub channels: Vec<(Channel, Vec<f64>)>,
+}
+
+impl Experiment {
+    pub fn read(path: &Path) -> Result<Experiment, FileError> {
+        Experiment::from_table(&Table::read(path)?)
+    }
+
+    pub fn from_table(table: &Table) -> Result<Experiment, FileError> {
+        let path = &table.path;
+        let known = [
+            "t", "U1", "U2", "U3", "h1", "h2", "h3", "tip_x", "tip_y", "tip_z",
+        ];
+        if let Some(c) = table.header.iter().find(|c| !known.contains(&c.as_str())) {
+            return Err(FileError::at(
+                path,
+                1,
+                Some(c.clone()),
+                format!("unknown column (expected {})", known.join(",")),
+            ));
+        }
+        let t = table.column("t")?;
+        table.check_increasing("t")?;
+        let u: [Vec<f64>; 3] = [
+            table.column("U1")?,
+            table.column("U2")?,
+            table.column("U3")?,
+        ];
+        if t.len() < MIN_SAMPLES {
+            return Err(FileError::new(
+                path,
+                format!(
+                    "{} samples: an experiment needs at least {MIN_SAMPLES}",
+                    t.len()
+                ),
+            ));
+        }
+        let duration = t[t.len() - 1] - t[0];
+        if duration < MIN_DURATION {
+            return Err(FileError::new(
+                path,
+                format!(
+                    "{duration} s long: an experiment must last at least {MIN_DURATION} s to identify anything"
+                ),
+            ));
+        }
+        let has = |c: &str| table.find(c).is_some();
+        if has("tip_x") != has("tip_y") {
+            let missing = if has("tip_x") { "tip_y" } else { "tip_x" };
+            return Err(FileError::at(
+                path,
+                1,
+                Some(missing.into()),
+                "missing column: tip_x and tip_y come together",
+            ));
+        }
+        let mut channels = Vec::new();
+        for ch in Channel::ALL {
+            if has(ch.name()) {
+                let values = table.column(ch.name())?;
+                let range = values.iter().fold(f64::NEG_INFINITY, |a, &b| a.max(b))
+                    - values.iter().fold(f64::INFINITY, |a, &b| a.min(b));
+                if range <= 0.0 {
+                    return Err(FileError::at(
+                        path,
+                        2,
+                        Some(ch.name().into()),
+                        "the output is constant: nothing to identify from it",
+                    ));
+                }
+                channels.push((ch, values));
+            }
+        }
+        if channels.is_empty() {
+            return Err(FileError::at(
+                path,
+                1,
+                None,
+                "no output column: give h1..h3 and/or tip_x, tip_y",
+            ));
+        }
+        let samples = (0..t.len()).map(|k| [u[0][k], u[1][k], u[2][k]]).collect();
+        let input = Input::sampled(t.clone(), samples, Interpolation::Spline)
+            .map_err(|e| FileError::new(path, e))?;
+        let name = path.file_name().map_or_else(
+            || path.display().to_string(),
+            |n| n.to_string_lossy().into_owned(),
+        );
+        Ok(Experiment {
+            name,
+            path: path.clone(),
+            t,
+            input,
+            channels,
+        })
+    }
+
+    /// The measured values of `channel`, if the experiment has it.
+    pub fn measured(&self, channel: Channel) -> Option<&[f64]> {
+        self.channels
+            .iter()
+            .find(|(c, _)| *c == channel)
+            .map(|(_, v)| v.as_slice())
+    }
+
+    /// Whether the tip is measured in X and Y.
+    pub fn has_tip_xy(&self) -> bool {
+        self.measured(Channel::Tip(0)).is_some() && self.measured(Channel::Tip(1)).is_some()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn parse(text: &str) -> Result<Experiment, FileError> {
+        Experiment::from_table(&Table::parse(Path::new("e.csv"), text)?)
+    }
+
+    fn rows(n: usize, dt: f64, extra: &str) -> String {
+        (0..n)
+            .map(|k| {
+                format!(
+                    "{},1,2,3{}\n",
+                    k as f64 * dt,
+                    extra.replace('K', &k.to_string())
+                )
+            })
+            .collect()
+    }
+
+    #[test]
+    fn reads_heights_and_tip() {
+        let e = parse(&format!(
+            "t,U1,U2,U3,h1,tip_x,tip_y\n{}",
+            rows(100, 0.02, ",K,K,K")
+        ))
+        .unwrap();
+        assert_eq!(
+            e.channels.iter().map(|(c, _)| c.name()).collect::<Vec<_>>(),
+            ["h1", "tip_x", "tip_y"]
+        );
+        assert!(e.has_tip_xy() && e.measured(Channel::Tip(2)).is_none());
+    }
+
+    #[test]
+    fn bad_files_are_located() {
+        let e = parse(&format!("t,U1,U2,U3,h4\n{}", rows(100, 0.02, ",K"))).unwrap_err();
+        assert!(
+            e.to_string()
+                .starts_with("e.csv:1, column h4: unknown column"),
+            "{e}"
+        );
+        let e = parse(&format!("t,U1,U3,h1\n{}", "0,1,2,3\n")).unwrap_err();
+        assert!(e.to_string().contains("column U2: missing column"), "{e}");
+        let e = parse(&format!("t,U1,U2,U3,h1\n{}", rows(10, 0.2, ",K"))).unwrap_err();
+        assert!(e.to_string().contains("10 samples"), "{e}");
+        let e = parse(&format!("t,U1,U2,U3,h1\n{}", rows(100, 0.001, ",K"))).unwrap_err();
+        assert!(e.to_string().contains("must last at least 1 s"), "{e}");
+        let e = parse(&format!("t,U1,U2,U3,tip_x\n{}", rows(100, 0.02, ",K"))).unwrap_err();
+        assert!(
+            e.to_string().contains("column tip_y: missing column"),
+            "{e}"
+        );
+        let e = parse(&format!("t,U1,U2,U3,h2\n{}", rows(100, 0.02, ",5"))).unwrap_err();
+        assert!(
+            e.to_string().contains("column h2: the output is constant"),
+            "{e}"
+        );
+        let e = parse(&format!("t,U1,U2,U3\n{}", rows(100, 0.02, ""))).unwrap_err();
+        assert!(e.to_string().contains("no output column"), "{e}");
+        let e = parse("t,U1,U2,U3,h1\n0,1,2,3,4\n0,1,2,3,5\n").unwrap_err();
+        assert!(
+            e.to_string()
+                .contains("e.csv:3, column t: 0 does not increase"),
+            "{e}"
+        );
+        let e = parse("t,U1,U2,U3,h1\n0,1,2,3,4\n0.1,1,nan,3,5\n").unwrap_err();
+        assert!(
+            e.to_string()
+                .contains("e.csv:3, column U2: NaN is not a finite number"),
+            "{e}"
+        );
+    }
+}

@@ -1,0 +1,47 @@
+//! NRMSE fit in percent, as MATLAB's `compare` reports it (effects.md, "Fit metric").
+
+/// fit = 100 (1 − ‖y − ŷ‖ / ‖y − mean(y)‖).
+pub fn nrmse_fit(measured: &[f64], simulated: &[f64]) -> f64 {
+    let mean = measured.iter().sum::<f64>() / measured.len() as f64;
+    let err: f64 = measured
+        .iter()
+        .zip(simulated)
+        .map(|(y, s)| (y - s).powi(2))
+        .sum();
+    let spread: f64 = measured.iter().map(|y| (y - mean).powi(2)).sum();
+    100.0 * (1.0 - (err / spread).sqrt())
+}
+
+/// The paper's 2-D tip fit: the same over both coordinates, with the norms over X and Y
+/// together: 100 (1 − ‖(x, y) − (x̂, ŷ)‖ / ‖(x, y) − (x̄, ȳ)‖).
+pub fn nrmse_fit_2d(x: &[f64], y: &[f64], x_sim: &[f64], y_sim: &[f64]) -> f64 {
+    let mx = x.iter().sum::<f64>() / x.len() as f64;
+    let my = y.iter().sum::<f64>() / y.len() as f64;
+    let err: f64 = x
+        .iter()
+        .zip(x_sim)
+        .map(|(a, b)| (a - b).powi(2))
+        .sum::<f64>()
+        + y.iter()
+            .zip(y_sim)
+            .map(|(a, b)| (a - b).powi(2))
+            .sum::<f64>();
+    let spread: f64 = x.iter().map(|a| (a - mx).powi(2)).sum::<f64>()
+        + y.iter().map(|a| (a - my).powi(2)).sum::<f64>();
+    100.0 * (1.0 - (err / spread).sqrt())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn perfect_mean_and_worse() {
+        let y = [1.0, 2.0, 3.0, 4.0];
+        assert_eq!(nrmse_fit(&y, &y), 100.0);
+        assert_eq!(nrmse_fit(&y, &[2.5; 4]), 0.0);
+        assert!(nrmse_fit(&y, &[4.0, 3.0, 2.0, 1.0]) < 0.0);
+        assert_eq!(nrmse_fit_2d(&y, &y, &y, &y), 100.0);
+        assert_eq!(nrmse_fit_2d(&y, &[0.0; 4], &[2.5; 4], &[0.0; 4]), 0.0);
+    }
+}

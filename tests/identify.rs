@@ -1,0 +1,208 @@
+//! The identification protocol of the paper on synthetic data: start 20 % off on every free
+//! parameter, estimate at 3π rad/s, validate at 11 rad/s, 1 % measurement noise.
+
+use std::path::PathBuf;
+
+use hasel_fmu::identify::synth::{Columns, Spec, synthesize};
+use hasel_fmu::identify::{Experiment, Identification, Options, fits, identify, simulate};
+use hasel_fmu::io::csv::Table;
+use hasel_fmu::model::Params;
+use hasel_fmu::simulation::Input;
+
+fn experiment(name: &str, omega: f64, columns: Columns, seed: u64, truth: &Params) -> Experiment {
+    let spec = Spec {
+        input: Input::sine(60.0, omega),
+        params: truth.clone(),
+        t_end: 10.0,
+        dt: 1e-3,
+        noise: 0.01,
+        columns,
+        seed,
+        rtol: 1e-9,
+    };
+    let (header, rows) = synthesize(&spec).unwrap();
+    let lines = (2..rows.len() + 2).collect();
+    let table = Table {
+        path: PathBuf::from(name),
+        header: header.iter().map(|s| s.to_string()).collect(),
+        rows,
+        lines,
+    };
+    Experiment::from_table(&table).unwrap()
+}
+
+/// Every free parameter 20 % off, alternately up and down.
+fn offset_start(truth: &Params) -> Params {
+    let mut start = truth.clone();
+    for (k, name) in Options::default().free.iter().enumerate() {
+        let v = truth.get(name).unwrap();
+        start
+            .set(name, v * if k % 2 == 0 { 1.2 } else { 0.8 })
+            .unwrap();
+    }
+    start
+}
+
+/// The protocol on three independent noise realisations. A 95 % interval misses the truth one
+/// time in twenty, and Kb, b and gamma1 of an actuator correlate to 0.999, so they miss
+/// together: "every parameter inside its interval" fails for about half of all seeds by
+/// construction. The test asks for each miss of a single interval to be a near miss (within
+/// 1.5 half-widths), no interval to be absurdly wide, and every fit to sit at the noise floor;
+/// it prints the coverage (measured: 32/36 from heights, 29/36 from tip XY, below the nominal
+/// rate: the intervals are still somewhat too narrow, an open point of the identification
+/// issue).
+fn check_protocol(columns: Columns) -> Vec<Identification> {
+    let truth = Params::default();
+    let start = offset_start(&truth);
+    let (mut inside, mut total) = (0, 0);
+    let mut runs = Vec::new();
+    for seed in [11, 13, 15] {
+        let est = vec![experiment(
+            "w3pi.csv",
+            3.0 * std::f64::consts::PI,
+            columns,
+            seed,
+            &truth,
+        )];
+        let val = vec![experiment("w11.csv", 11.0, columns, seed + 1, &truth)];
+        let id = identify(&start, &est, &val, &Options::default()).unwrap();
+        println!(
+            "{columns:?}, seed {seed}: {} iterations, {} simulations, {:.2} s",
+            id.iterations, id.simulations, id.seconds
+        );
+        println!("  not identifiable: {:?}", id.not_identifiable);
+        // the truth, moved along each held combination to where the estimate is held (the
+        // start's value of that combination): what the data can recover
+        let mut reachable = truth.clone();
+        for dir in &id.held_combinations {
+            let shift: f64 = dir
+                .iter()
+                .map(|(n, w)| w * (start.get(n).unwrap() / truth.get(n).unwrap()).ln())
+                .sum();
+            for (n, w) in dir {
+                reachable
+                    .set(n, reachable.get(n).unwrap() * (w * shift).exp())
+                    .unwrap();
+            }
+        }
+        for e in id.estimates.iter().filter(|e| e.free) {
+            let want = reachable.get(&e.name).unwrap();
+            assert!(e.estimated, "{} was not estimated", e.name);
+            let (lo, hi) = e.ci95.unwrap();
+            let half = 0.5 * (hi - lo);
+            let covered = lo <= want && want <= hi;
+            println!(
+                "  {:<9} {:.5} in [{:.5}, {:.5}], true {want:.5}{}",
+                e.name,
+                e.value,
+                lo,
+                hi,
+                if covered { "" } else { "  MISSED" }
+            );
+            total += 1;
+            inside += covered as usize;
+            assert!(
+                (e.value - want).abs() <= 1.5 * half + (e.value - 0.5 * (lo + hi)).abs(),
+                "{}: {want} far outside [{lo}, {hi}]",
+                e.name
+            );
+            // not absurdly wide: within ±15 % of the estimate
+            assert!(
+                hi - lo < 0.3 * e.value,
+                "{}: interval [{lo}, {hi}] too wide",
+                e.name
+            );
+        }
+        // both fits at the noise floor: as good as the true parameters on the same noisy data
+        for (exps, got) in [(&est, &id.estimation), (&val, &id.validation)] {
+            for (exp, fit) in exps.iter().zip(got.iter()) {
+                let floor = fits(exp, &simulate(&truth, exp, 1e-9).unwrap());
+                for ((c, f), (_, f0)) in fit.fits.iter().zip(&floor.fits) {
+                    println!("  {} {c}: fit {f:.3} %, noise floor {f0:.3} %", exp.name);
+                    assert!(
+                        *f >= f0 - 0.1,
+                        "{} {c}: fit {f} below the noise floor {f0}",
+                        exp.name
+                    );
+                }
+            }
+        }
+        runs.push(id);
+    }
+    println!("{columns:?}: {inside} of {total} intervals cover the truth");
+    runs
+}
+
+#[test]
+fn heights_identify_every_free_parameter_at_the_noise_floor() {
+    for id in check_protocol(Columns::Heights) {
+        // the gravity sag of the rest state fixes the scale: nothing is held
+        assert!(id.not_identifiable.is_empty(), "{:?}", id.not_identifiable);
+    }
+}
+
+#[test]
+fn tip_xy_alone_identifies_all_but_the_unobservable_common_scale() {
+    for id in check_protocol(Columns::TipXy) {
+        // From X, Y alone a common scale of Kb, b and gamma1² of all three actuators only moves the
+        // heave: exactly that one combination is reported and held, no single parameter.
+        assert_eq!(id.held_combinations.len(), 1, "{:?}", id.not_identifiable);
+        assert_eq!(id.not_identifiable.len(), 1, "{:?}", id.not_identifiable);
+        let dir = &id.held_combinations[0];
+        let weight = |n: &str| dir.iter().find(|(m, _)| m == n).unwrap().1;
+        let sign = weight("Kb_1").signum();
+        for i in 1..=3 {
+            let (kb, b, g1, g2) = (
+                sign * weight(&format!("Kb_{i}")),
+                sign * weight(&format!("b_{i}")),
+                sign * weight(&format!("gamma1_{i}")),
+                weight(&format!("gamma2_{i}")),
+            );
+            assert!(
+                kb > 0.2 && b > 0.2 && g1 > 0.08 && g1 < kb && g2.abs() < 0.05,
+                "{dir:?}"
+            );
+        }
+    }
+}
+
+#[test]
+fn parameters_the_data_cannot_determine_are_reported_not_fitted() {
+    let truth = Params::default();
+    let est = vec![experiment(
+        "w3pi.csv",
+        3.0 * std::f64::consts::PI,
+        Columns::Heights,
+        21,
+        &truth,
+    )];
+    let mut opts = Options::default();
+    opts.free.extend(["K_1".to_string(), "C1_1".to_string()]);
+    let start = offset_start(&truth);
+    let id = identify(&start, &est, &[], &opts).unwrap();
+    let flagged: Vec<&str> = id
+        .not_identifiable
+        .iter()
+        .map(|(n, _)| n.as_str())
+        .collect();
+    println!("not identifiable: {:?}", id.not_identifiable);
+    assert!(
+        flagged.contains(&"K_1") && flagged.contains(&"C1_1"),
+        "{flagged:?}"
+    );
+    for name in ["K_1", "C1_1"] {
+        let e = id.estimates.iter().find(|e| e.name == name).unwrap();
+        assert!(e.free && !e.estimated && e.ci95.is_none());
+        assert_eq!(
+            e.value,
+            start.get(name).unwrap(),
+            "{name} must stay at its start value"
+        );
+    }
+    // the identifiable ones are still estimated
+    let kb = id.estimates.iter().find(|e| e.name == "Kb_1").unwrap();
+    assert!(
+        kb.estimated && (kb.value - 0.305).abs() < 0.05 * 0.305,
+        "{kb:?}"
+    );
+}
