@@ -60,8 +60,32 @@ pub fn evaluate(p: &impl Residuals, x: &[f64]) -> Result<DVector<f64>, String> {
     Ok(r)
 }
 
+/// The Jacobian from its columns, computed in parallel over `threads` threads.
+fn assemble(
+    rows: usize,
+    n: usize,
+    threads: usize,
+    column: impl Fn(usize) -> Result<Vec<f64>, String> + Sync,
+) -> Result<DMatrix<f64>, String> {
+    let threads = threads.clamp(1, n.max(1));
+    let columns: Vec<(usize, Result<Vec<f64>, String>)> = std::thread::scope(|s| {
+        let handles: Vec<_> = (0..threads)
+            .map(|t| {
+                let column = &column;
+                s.spawn(move || (t..n).step_by(threads).map(|j| (j, column(j))).collect::<Vec<_>>())
+            })
+            .collect();
+        handles.into_iter().flat_map(|h| h.join().expect("a Jacobian thread panicked")).collect()
+    });
+    let mut jac = DMatrix::zeros(rows, n);
+    for (j, c) in columns {
+        jac.set_column(j, &DVector::from_vec(c?));
+    }
+    Ok(jac)
+}
+
 /// ∂r/∂x by forward differences (backward where the forward point is out of bounds or cannot
-/// be evaluated), the columns shared out over threads.
+/// be evaluated).
 pub fn jacobian(
     p: &impl Residuals,
     x: &[f64],
@@ -70,8 +94,7 @@ pub fn jacobian(
     hi: &[f64],
     opts: &Options,
 ) -> Result<DMatrix<f64>, String> {
-    let n = x.len();
-    let column = |j: usize| -> Result<Vec<f64>, String> {
+    assemble(r.len(), x.len(), opts.threads, |j| {
         let h = opts.fd_step * x[j].abs().max(1.0);
         let mut xp = x.to_vec();
         let forward = x[j] + h <= hi[j];
@@ -85,82 +108,20 @@ pub fn jacobian(
             Err(e) => return Err(e),
         };
         let step = xp[j] - x[j];
-        Ok(rp
-            .iter()
-            .zip(r.iter())
-            .map(|(a, b)| (a - b) / step)
-            .collect())
-    };
-    let threads = opts.threads.clamp(1, n.max(1));
-    let columns: Vec<Result<Vec<f64>, String>> = std::thread::scope(|s| {
-        let handles: Vec<_> = (0..threads)
-            .map(|t| {
-                let column = &column;
-                s.spawn(move || {
-                    (t..n)
-                        .step_by(threads)
-                        .map(|j| (j, column(j)))
-                        .collect::<Vec<_>>()
-                })
-            })
-            .collect();
-        let mut all: Vec<(usize, Result<Vec<f64>, String>)> = handles
-            .into_iter()
-            .flat_map(|h| h.join().expect("a Jacobian thread panicked"))
-            .collect();
-        all.sort_by_key(|(j, _)| *j);
-        all.into_iter().map(|(_, c)| c).collect()
-    });
-    let mut jac = DMatrix::zeros(r.len(), n);
-    for (j, c) in columns.into_iter().enumerate() {
-        jac.set_column(j, &DVector::from_vec(c?));
-    }
-    Ok(jac)
+        Ok(rp.iter().zip(r.iter()).map(|(a, b)| (a - b) / step).collect())
+    })
 }
 
 /// ∂r/∂x by central differences with step `h` (for the covariance: second-order accurate,
 /// so the weakly determined directions of a correlated problem are not distorted).
-pub fn jacobian_central(
-    p: &impl Residuals,
-    x: &[f64],
-    h: f64,
-    threads: usize,
-) -> Result<DMatrix<f64>, String> {
-    let n = x.len();
-    let column = |j: usize| -> Result<Vec<f64>, String> {
+pub fn jacobian_central(p: &impl Residuals, x: &[f64], h: f64, threads: usize) -> Result<DMatrix<f64>, String> {
+    assemble(p.count(), x.len(), threads, |j| {
         let (mut xp, mut xm) = (x.to_vec(), x.to_vec());
         xp[j] += h;
         xm[j] -= h;
         let (rp, rm) = (evaluate(p, &xp)?, evaluate(p, &xm)?);
-        Ok(rp
-            .iter()
-            .zip(rm.iter())
-            .map(|(a, b)| (a - b) / (2.0 * h))
-            .collect())
-    };
-    let threads = threads.clamp(1, n.max(1));
-    let columns: Vec<(usize, Result<Vec<f64>, String>)> = std::thread::scope(|s| {
-        let handles: Vec<_> = (0..threads)
-            .map(|t| {
-                let column = &column;
-                s.spawn(move || {
-                    (t..n)
-                        .step_by(threads)
-                        .map(|j| (j, column(j)))
-                        .collect::<Vec<_>>()
-                })
-            })
-            .collect();
-        handles
-            .into_iter()
-            .flat_map(|h| h.join().expect("a Jacobian thread panicked"))
-            .collect()
-    });
-    let mut jac = DMatrix::zeros(p.count(), n);
-    for (j, c) in columns {
-        jac.set_column(j, &DVector::from_vec(c?));
-    }
-    Ok(jac)
+        Ok(rp.iter().zip(rm.iter()).map(|(a, b)| (a - b) / (2.0 * h)).collect())
+    })
 }
 
 /// Minimises ½‖r(x)‖² over lo ≤ x ≤ hi from `x0`.

@@ -238,6 +238,9 @@ const SINGLE: f64 = 0.7;
 /// Central-difference step (in log parameters) of the covariance Jacobian.
 const COVARIANCE_FD_STEP: f64 = 1e-3;
 
+/// Gauss–Newton iterations at most in the polish.
+const GN_POLISH: usize = 10;
+
 /// Half-width in log space of the widest 95 % interval an estimate may have and still count as
 /// determined by the data: ×/÷ 1.5.
 const MAX_LOG_HALF_WIDTH: f64 = 0.405;
@@ -455,7 +458,7 @@ fn fit_group(
         let mut z = sol.x.clone();
         let mut r = lm::evaluate(&sharp, &z)?;
         let mut j = lm::jacobian_central(&sharp, &z, COVARIANCE_FD_STEP, opts.lm.threads)?;
-        for _ in 0..3 {
+        for _ in 0..GN_POLISH {
             let Some(step) = (j.transpose() * &j)
                 .cholesky()
                 .map(|c| c.solve(&(-(j.transpose() * &r))))
@@ -467,7 +470,7 @@ fn fit_group(
                 Ok(r_new) if r_new.norm_squared() < r.norm_squared() => {
                     (z, r) = (z_new, r_new);
                     j = lm::jacobian_central(&sharp, &z, COVARIANCE_FD_STEP, opts.lm.threads)?;
-                    if step.amax() < 1e-7 {
+                    if step.amax() < 1e-8 {
                         break;
                     }
                 }

@@ -45,7 +45,9 @@ pub struct Shell {
     /// s = (Lv/l_p) cos(θ/2), the asin argument, and k = 1/√(1 − s²) = asin'(s)
     s: f64,
     k: f64,
-    sin_h: f64,
+    /// ∂s/∂θ, ∂s/∂l_p
+    s_t: f64,
+    s_l: f64,
     sin_d: f64,
     cos_d: f64,
     /// ∂δ1/∂θ, ∂δ1/∂l_p
@@ -89,7 +91,8 @@ impl Shell {
             lv,
             s,
             k,
-            sin_h,
+            s_t,
+            s_l,
             sin_d,
             cos_d,
             dl_t,
@@ -103,20 +106,7 @@ impl Shell {
     }
 
     pub fn curvature(&self) -> Curvature {
-        let Shell {
-            l_p,
-            lv,
-            s,
-            k,
-            sin_h,
-            sin_d,
-            cos_d,
-            dl_t,
-            dl_l,
-            ..
-        } = *self;
-        let s_t = -0.5 * lv / l_p * sin_h;
-        let s_l = -s / l_p;
+        let Shell { l_p, lv, s, k, s_t, s_l, sin_d, cos_d, dl_t, dl_l, .. } = *self;
         let s_tt = -0.25 * s;
         let s_tl = -s_t / l_p;
         let s_ll = 2.0 * s / (l_p * l_p);

@@ -5,10 +5,9 @@ use std::path::PathBuf;
 use hasel_fmu::identify::synth::{self, Columns, Spec};
 use hasel_fmu::identify::{self, Experiment, Options, report};
 use hasel_fmu::io::csv::write_atomic;
-use hasel_fmu::io::input_file;
-use hasel_fmu::simulation::{DEFAULT_RTOL, Input, Interpolation};
+use hasel_fmu::simulation::DEFAULT_RTOL;
 
-use crate::simulate::{load_params, pair};
+use crate::simulate::{InputArgs, load_params};
 
 #[derive(clap::Args)]
 pub struct Args {
@@ -34,15 +33,8 @@ pub struct Args {
 
 #[derive(clap::Args)]
 pub struct SynthArgs {
-    /// The paper's excitation U0·sin(ω t + φ_i) [V, rad/s] (default 60,3π)
-    #[arg(long, value_name = "U0,OMEGA", conflicts_with_all = ["offset_sine", "input"])]
-    sine: Option<String>,
-    /// The unipolar excitation U0·(1 + sin(ω t + φ_i))/2 [V, rad/s]
-    #[arg(long, value_name = "U0,OMEGA", conflicts_with = "input")]
-    offset_sine: Option<String>,
-    /// Sampled voltages t,U1,U2,U3 (read as a natural cubic spline)
-    #[arg(long, value_name = "FILE.csv")]
-    input: Option<PathBuf>,
+    #[command(flatten)]
+    input: InputArgs,
     /// The true parameters (a parameter file over the defaults)
     #[arg(long, value_name = "FILE.toml")]
     params: Option<PathBuf>,
@@ -154,18 +146,7 @@ pub fn synth(a: SynthArgs) -> Result<(), String> {
             .map_err(|e| format!("--set {s}: {e}"))?;
     }
     params.validate().map_err(|e| e.to_string())?;
-    let input = if let Some(path) = &a.input {
-        input_file::read(path, Interpolation::Spline).map_err(|e| e.to_string())?
-    } else if let Some(s) = &a.offset_sine {
-        let (u0, w) = pair("offset-sine", s)?;
-        Input::offset_sine(u0, w)
-    } else {
-        let (u0, w) = match &a.sine {
-            Some(s) => pair("sine", s)?,
-            None => (60.0, 3.0 * std::f64::consts::PI),
-        };
-        Input::sine(u0, w)
-    };
+    let (input, _) = a.input.input()?;
     if !(a.noise.is_finite() && a.noise >= 0.0) {
         return Err(format!("--noise {}: must be >= 0", a.noise));
     }

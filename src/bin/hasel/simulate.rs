@@ -9,8 +9,9 @@ use hasel_fmu::plot::{self, Panel, Series};
 use hasel_fmu::simulation::{DEFAULT_RTOL, Input, Interpolation, Sample, Simulator};
 use indicatif::{ProgressBar, ProgressStyle};
 
+/// The input voltages of a run, shared by `simulate` and `synth`.
 #[derive(clap::Args)]
-pub struct Args {
+pub struct InputArgs {
     /// The paper's excitation U0·sin(ω t + φ_i), φ = 0°, 120°, 240° [V, rad/s] (the default: 60,3π)
     #[arg(long, value_name = "U0,OMEGA", conflicts_with_all = ["offset_sine", "input"])]
     sine: Option<String>,
@@ -24,6 +25,38 @@ pub struct Args {
     /// linear, pchip (monotone cubic) or spline (natural cubic, C², fastest for dense smooth data)
     #[arg(long, default_value = "zoh", value_parser = ["zoh", "linear", "pchip", "spline"])]
     interp: String,
+}
+
+impl InputArgs {
+    /// The input and its natural end: the last sample of a file, else 10 s.
+    pub fn input(&self) -> Result<(Input, f64), String> {
+        if let Some(path) = &self.input {
+            let interpolation = match self.interp.as_str() {
+                "linear" => Interpolation::Linear,
+                "pchip" => Interpolation::Pchip,
+                "spline" => Interpolation::Spline,
+                _ => Interpolation::ZeroOrderHold,
+            };
+            let input = input_file::read(path, interpolation).map_err(|e| e.to_string())?;
+            let end = input.last_sample().unwrap_or(10.0);
+            return Ok((input, end));
+        }
+        if let Some(s) = &self.offset_sine {
+            let (u0, w) = pair("offset-sine", s)?;
+            return Ok((Input::offset_sine(u0, w), 10.0));
+        }
+        let (u0, w) = match &self.sine {
+            Some(s) => pair("sine", s)?,
+            None => (60.0, 3.0 * std::f64::consts::PI),
+        };
+        Ok((Input::sine(u0, w), 10.0))
+    }
+}
+
+#[derive(clap::Args)]
+pub struct Args {
+    #[command(flatten)]
+    input: InputArgs,
     /// Parameter file (TOML, any subset of `hasel params`)
     #[arg(long, value_name = "FILE.toml")]
     params: Option<PathBuf>,
@@ -86,26 +119,7 @@ pub fn params(a: ParamsArgs) -> Result<(), String> {
 
 pub fn run(a: Args) -> Result<(), String> {
     let params = load_params(&a.params)?;
-    let interpolation = match a.interp.as_str() {
-        "linear" => Interpolation::Linear,
-        "pchip" => Interpolation::Pchip,
-        "spline" => Interpolation::Spline,
-        _ => Interpolation::ZeroOrderHold,
-    };
-    let (input, default_end) = if let Some(path) = &a.input {
-        let input = input_file::read(path, interpolation).map_err(|e| e.to_string())?;
-        let end = input.last_sample().unwrap_or(10.0);
-        (input, end)
-    } else if let Some(s) = &a.offset_sine {
-        let (u0, w) = pair("offset-sine", s)?;
-        (Input::offset_sine(u0, w), 10.0)
-    } else {
-        let (u0, w) = match &a.sine {
-            Some(s) => pair("sine", s)?,
-            None => (60.0, 3.0 * std::f64::consts::PI),
-        };
-        (Input::sine(u0, w), 10.0)
-    };
+    let (input, default_end) = a.input.input()?;
     let t_end = a.t_end.unwrap_or(default_end);
     if !(t_end.is_finite() && t_end > 0.0) {
         return Err(format!("--t-end {t_end}: must be > 0"));
