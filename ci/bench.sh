@@ -6,6 +6,8 @@ ensure_apt
 build_fmu
 step "solver: hasel bench"
 ./target/release/hasel bench
+step "identification: hasel bench --identify"
+./target/release/hasel bench --identify
 step "FMU through the Rust fmi crate"
 cargo run -q --release --example bench_fmu -- fmu/HaselPlatform.fmu
 step "FMU through fmpy (Python's per-call overhead dominates)"

@@ -1,34 +1,14 @@
 //! The identification protocol of the paper on synthetic data: start 20 % off on every free
 //! parameter, estimate at 3π rad/s, validate at 11 rad/s, 1 % measurement noise.
 
-use std::path::PathBuf;
-
-use hasel_fmu::identify::synth::{Columns, Spec, synthesize};
+use hasel_fmu::identify::synth::{self, Columns, Spec};
 use hasel_fmu::identify::{Experiment, Identification, Options, fits, identify, simulate};
-use hasel_fmu::io::csv::Table;
 use hasel_fmu::model::Params;
 use hasel_fmu::simulation::Input;
 
 fn experiment(name: &str, omega: f64, columns: Columns, seed: u64, truth: &Params) -> Experiment {
-    let spec = Spec {
-        input: Input::sine(60.0, omega),
-        params: truth.clone(),
-        t_end: 10.0,
-        dt: 1e-3,
-        noise: 0.01,
-        columns,
-        seed,
-        rtol: 1e-9,
-    };
-    let (header, rows) = synthesize(&spec).unwrap();
-    let lines = (2..rows.len() + 2).collect();
-    let table = Table {
-        path: PathBuf::from(name),
-        header: header.iter().map(|s| s.to_string()).collect(),
-        rows,
-        lines,
-    };
-    Experiment::from_table(&table).unwrap()
+    let spec = Spec { input: Input::sine(60.0, omega), params: truth.clone(), t_end: 10.0, dt: 1e-3, noise: 0.01, columns, seed, rtol: 1e-9 };
+    synth::experiment(&spec, name).unwrap()
 }
 
 /// Every free parameter 20 % off, alternately up and down.

@@ -5,7 +5,8 @@
 use crate::model::{Params, Platform};
 use crate::simulation::{Input, SimError, Simulator};
 
-use super::experiment::Channel;
+use super::experiment::{Channel, Experiment};
+use crate::io::csv::Table;
 
 /// Which outputs a synthetic experiment records.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -108,6 +109,18 @@ pub fn synthesize(spec: &Spec) -> Result<(Vec<&'static str>, Vec<Vec<f64>>), Sim
     let mut header = vec!["t", "U1", "U2", "U3"];
     header.extend(channels.iter().map(|c| c.name()));
     Ok((header, rows))
+}
+
+/// A synthetic experiment in memory, named `name`, as if read from a file.
+pub fn experiment(spec: &Spec, name: &str) -> Result<Experiment, String> {
+    let (header, rows) = synthesize(spec).map_err(|e| e.to_string())?;
+    let table = Table {
+        path: name.into(),
+        header: header.iter().map(|h| h.to_string()).collect(),
+        lines: (2..rows.len() + 2).collect(),
+        rows,
+    };
+    Experiment::from_table(&table).map_err(|e| e.to_string())
 }
 
 #[cfg(test)]

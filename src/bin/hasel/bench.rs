@@ -17,6 +17,9 @@ pub struct Args {
     /// Repetitions; the best wall time is reported
     #[arg(long, default_value_t = 5)]
     repeat: usize,
+    /// Benchmark the identification instead of the solver
+    #[arg(long)]
+    identify: bool,
 }
 
 /// Largest |Δh| and |Δtip| [µm] against a reference file, over the rows both have.
@@ -73,6 +76,9 @@ fn report(name: &str, wall: Duration, stats: Stats, error: Option<(f64, f64)>, t
 }
 
 pub fn run(a: Args) -> Result<(), String> {
+    if a.identify {
+        return crate::bench_identify::run();
+    }
     let model = Platform::new(Params::default()).map_err(|e| e.to_string())?;
     let omega = 3.0 * std::f64::consts::PI;
     let input = Input::sine(60.0, omega);

@@ -18,6 +18,7 @@ macro_rules! say_raw {
 }
 
 mod bench;
+mod bench_identify;
 #[cfg(feature = "compare")]
 mod compare;
 mod fmu;
