@@ -182,6 +182,13 @@ fn identify_refuses_bad_data_and_writes_nothing() {
     let out = dir.join("out");
     let o = hasel(&["identify", s(&exp), "--validate", s(&bad), "--out", s(&out)]);
     assert!(!o.status.success());
-    assert!(stderr(&o).contains(&format!("{}:1, column height2: unknown column", bad.display())), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains(&format!(
+            "{}:1, column height2: unknown column",
+            bad.display()
+        )),
+        "{}",
+        stderr(&o)
+    );
     assert!(!out.exists());
 }

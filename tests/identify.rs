@@ -5,11 +5,26 @@ use hasel_fmu::identify::synth::{self, Columns, Spec};
 use hasel_fmu::identify::{Experiment, Identification, Options, fits, identify, simulate};
 use hasel_fmu::model::Params;
 use hasel_fmu::simulation::Input;
+use nalgebra::{DMatrix, DVector};
 
 fn experiment(name: &str, omega: f64, columns: Columns, seed: u64, truth: &Params) -> Experiment {
-    let spec = Spec { input: Input::sine(60.0, omega), params: truth.clone(), t_end: 10.0, dt: 1e-3, noise: 0.01, columns, seed, rtol: 1e-9 };
+    let spec = Spec {
+        input: Input::sine(60.0, omega),
+        params: truth.clone(),
+        t_end: 10.0,
+        dt: 1e-3,
+        noise: 0.01,
+        columns,
+        seed,
+        rtol: 1e-9,
+    };
     synth::experiment(&spec, name).unwrap()
 }
+
+/// 99.9 % quantiles of χ² with k degrees of freedom, k = 0..12.
+const CHI2_999: [f64; 13] = [
+    0.0, 10.83, 13.82, 16.27, 18.47, 20.52, 22.46, 24.32, 26.12, 27.88, 29.59, 31.26, 32.91,
+];
 
 /// Every free parameter 20 % off, alternately up and down.
 fn offset_start(truth: &Params) -> Params {
@@ -26,11 +41,13 @@ fn offset_start(truth: &Params) -> Params {
 /// The protocol on three independent noise realisations. A 95 % interval misses the truth one
 /// time in twenty, and Kb, b and gamma1 of an actuator correlate to 0.999, so they miss
 /// together: "every parameter inside its interval" fails for about half of all seeds by
-/// construction. The test asks for each miss of a single interval to be a near miss (within
-/// 1.5 half-widths), no interval to be absurdly wide, and every fit to sit at the noise floor;
-/// it prints the coverage (measured: 32/36 from heights, 29/36 from tip XY, below the nominal
-/// rate: the intervals are still somewhat too narrow, an open point of the identification
-/// issue).
+/// construction. The test asks what an honest covariance must give: the estimation error of
+/// all parameters jointly inside the 99.9 % confidence ellipsoid of the reported covariance
+/// (Mahalanobis distance in log-parameters against χ², where nothing is held), each miss of a
+/// single interval a near miss (within 1.5 half-widths), no interval absurdly wide, and every
+/// fit at the noise floor.
+/// (A Monte Carlo run of 16 seeds on actuator 2 gave empirical standard deviations 0.95–0.99
+/// times the reported standard errors.)
 fn check_protocol(columns: Columns) -> Vec<Identification> {
     let truth = Params::default();
     let start = offset_start(&truth);
@@ -91,6 +108,41 @@ fn check_protocol(columns: Columns) -> Vec<Identification> {
                 hi - lo < 0.3 * e.value,
                 "{}: interval [{lo}, {hi}] too wide",
                 e.name
+            );
+        }
+        // jointly, in log-parameters: (θ̂ − θ)ᵀ C⁺ (θ̂ − θ) within the 99.9 % quantile of χ² with
+        // rank(C) degrees of freedom (the held combination removes one)
+        let (names, corr) = &id.correlation;
+        let se_log: Vec<f64> = names
+            .iter()
+            .map(|n| {
+                let e = id.estimates.iter().find(|e| &e.name == n).unwrap();
+                e.std_error.unwrap() / e.value
+            })
+            .collect();
+        let cov = DMatrix::from_fn(names.len(), names.len(), |a, b| {
+            corr[(a, b)] * se_log[a] * se_log[b]
+        });
+        let err = DVector::from_iterator(
+            names.len(),
+            names
+                .iter()
+                .map(|n| (id.params.get(n).unwrap() / reachable.get(n).unwrap()).ln()),
+        );
+        let rank = names.len() - id.held_combinations.len();
+        let tol = 1e-12 * cov.amax();
+        let d2 = (err.transpose() * cov.pseudo_inverse(tol).unwrap() * &err)[(0, 0)];
+        println!(
+            "  Mahalanobis distance² {d2:.2} with {rank} degrees of freedom (99.9 % quantile {})",
+            CHI2_999[rank]
+        );
+        // With a held combination the recoverable point is the truth moved along the model's own
+        // near-null direction, which the estimated direction only approximates; the thinnest
+        // directions magnify that difference, so the joint check applies where nothing is held.
+        if id.held_combinations.is_empty() {
+            assert!(
+                d2 <= CHI2_999[rank],
+                "estimation error outside the 99.9 % confidence ellipsoid: {d2}"
             );
         }
         // both fits at the noise floor: as good as the true parameters on the same noisy data

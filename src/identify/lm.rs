@@ -72,10 +72,18 @@ fn assemble(
         let handles: Vec<_> = (0..threads)
             .map(|t| {
                 let column = &column;
-                s.spawn(move || (t..n).step_by(threads).map(|j| (j, column(j))).collect::<Vec<_>>())
+                s.spawn(move || {
+                    (t..n)
+                        .step_by(threads)
+                        .map(|j| (j, column(j)))
+                        .collect::<Vec<_>>()
+                })
             })
             .collect();
-        handles.into_iter().flat_map(|h| h.join().expect("a Jacobian thread panicked")).collect()
+        handles
+            .into_iter()
+            .flat_map(|h| h.join().expect("a Jacobian thread panicked"))
+            .collect()
     });
     let mut jac = DMatrix::zeros(rows, n);
     for (j, c) in columns {
@@ -108,19 +116,32 @@ pub fn jacobian(
             Err(e) => return Err(e),
         };
         let step = xp[j] - x[j];
-        Ok(rp.iter().zip(r.iter()).map(|(a, b)| (a - b) / step).collect())
+        Ok(rp
+            .iter()
+            .zip(r.iter())
+            .map(|(a, b)| (a - b) / step)
+            .collect())
     })
 }
 
 /// ∂r/∂x by central differences with step `h` (for the covariance: second-order accurate,
 /// so the weakly determined directions of a correlated problem are not distorted).
-pub fn jacobian_central(p: &impl Residuals, x: &[f64], h: f64, threads: usize) -> Result<DMatrix<f64>, String> {
+pub fn jacobian_central(
+    p: &impl Residuals,
+    x: &[f64],
+    h: f64,
+    threads: usize,
+) -> Result<DMatrix<f64>, String> {
     assemble(p.count(), x.len(), threads, |j| {
         let (mut xp, mut xm) = (x.to_vec(), x.to_vec());
         xp[j] += h;
         xm[j] -= h;
         let (rp, rm) = (evaluate(p, &xp)?, evaluate(p, &xm)?);
-        Ok(rp.iter().zip(rm.iter()).map(|(a, b)| (a - b) / (2.0 * h)).collect())
+        Ok(rp
+            .iter()
+            .zip(rm.iter())
+            .map(|(a, b)| (a - b) / (2.0 * h))
+            .collect())
     })
 }
 

@@ -565,7 +565,9 @@ fn fit_group(
         // held parameters keep their start value exactly (not exp(ln(value)))
         let mut fitted = base.clone();
         for &c in &active {
-            fitted.set(coords[c].def.name, coords[c].to_p(x[c])).map_err(|e| e.to_string())?;
+            fitted
+                .set(coords[c].def.name, coords[c].to_p(x[c]))
+                .map_err(|e| e.to_string())?;
         }
         let estimates = active
             .iter()

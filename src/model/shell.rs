@@ -106,7 +106,19 @@ impl Shell {
     }
 
     pub fn curvature(&self) -> Curvature {
-        let Shell { l_p, lv, s, k, s_t, s_l, sin_d, cos_d, dl_t, dl_l, .. } = *self;
+        let Shell {
+            l_p,
+            lv,
+            s,
+            k,
+            s_t,
+            s_l,
+            sin_d,
+            cos_d,
+            dl_t,
+            dl_l,
+            ..
+        } = *self;
         let s_tt = -0.25 * s;
         let s_tl = -s_t / l_p;
         let s_ll = 2.0 * s / (l_p * l_p);
