@@ -60,6 +60,7 @@ pub fn to_json(id: &Identification) -> Value {
         "parameters": parameters,
         "not_identifiable": id.not_identifiable.iter().map(|(n, _)| n.clone()).collect::<Vec<_>>(),
         "not_identifiable_reasons": id.not_identifiable.iter().map(|(n, r)| (n.clone(), json!(r))).collect::<serde_json::Map<_, _>>(),
+        "held_combinations": id.held_combinations.iter().map(|dir| dir.iter().map(|(n, w)| (n.clone(), json!(round(*w, 4)))).collect::<serde_json::Map<_, _>>()).collect::<Vec<_>>(),
         "fit": { "estimation": fits_json(&id.estimation), "validation": fits_json(&id.validation) },
         "fit_before": { "estimation": fits_json(&id.estimation_before) },
         "correlation": {
