@@ -1,0 +1,494 @@
+//! Fitting one group of parameters against some channels: the residuals of the simulation
+//! error, the optimisation in reduced coordinates, the covariance, and the directions of
+//! parameter space the data do not determine.
+
+use nalgebra::{DMatrix, DVector};
+
+use super::experiment::{Channel, Experiment};
+use super::{Options, lm, simulate};
+use crate::model::Params;
+use crate::model::params::{ParamDef, Rule};
+
+/// How a parameter is moved by the optimiser: in log space when it must be positive.
+#[derive(Clone, Copy)]
+struct Coordinate {
+    def: &'static ParamDef,
+    log: bool,
+    scale: f64,
+}
+
+impl Coordinate {
+    fn new(def: &'static ParamDef, prior: f64) -> Coordinate {
+        Coordinate {
+            def,
+            log: def.rule != Rule::Finite && prior > 0.0,
+            scale: prior.abs().max(1e-300),
+        }
+    }
+    fn to_x(self, p: f64) -> f64 {
+        if self.log { p.ln() } else { p / self.scale }
+    }
+    fn to_p(self, x: f64) -> f64 {
+        if self.log { x.exp() } else { x * self.scale }
+    }
+}
+
+/// The residuals of one group: some parameters, some channels, all estimation experiments.
+struct Problem<'a> {
+    base: &'a Params,
+    coords: Vec<Coordinate>,
+    channels: Vec<Channel>,
+    experiments: &'a [Experiment],
+    rtol: f64,
+    len: usize,
+    counter: std::sync::atomic::AtomicUsize,
+}
+
+impl Problem<'_> {
+    fn params_at(&self, x: &[f64]) -> Result<Params, String> {
+        let mut p = self.base.clone();
+        for (c, &xi) in self.coords.iter().zip(x) {
+            p.set(c.def.name, c.to_p(xi)).map_err(|e| e.to_string())?;
+        }
+        Ok(p)
+    }
+}
+
+impl lm::Residuals for Problem<'_> {
+    fn count(&self) -> usize {
+        self.len
+    }
+    fn eval(&self, x: &[f64], r: &mut [f64]) -> Result<(), String> {
+        let p = self.params_at(x)?;
+        let mut k = 0;
+        for exp in self.experiments {
+            let sim = simulate(&p, exp, self.rtol)?;
+            self.counter
+                .fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+            for &c in &self.channels {
+                if let Some(y) = exp.measured(c) {
+                    for (s, m) in sim.iter().zip(y) {
+                        r[k] = c.of(s) - m;
+                        k += 1;
+                    }
+                }
+            }
+        }
+        Ok(())
+    }
+}
+
+/// A group of parameters fitted together against some channels.
+pub(super) struct Group {
+    pub(super) params: Vec<&'static ParamDef>,
+    pub(super) channels: Vec<Channel>,
+}
+
+/// Actuators are fitted separately when only heights are measured and every free parameter
+/// belongs to one actuator (the model is decoupled); otherwise all at once.
+pub(super) fn groups(free: &[&'static ParamDef], experiments: &[Experiment]) -> Vec<Group> {
+    let measured: Vec<Channel> = Channel::ALL
+        .into_iter()
+        .filter(|&c| experiments.iter().any(|e| e.measured(c).is_some()))
+        .collect();
+    let heights_only = measured.iter().all(|c| matches!(c, Channel::H(_)));
+    if heights_only && free.iter().all(|d| d.actuator.is_some()) {
+        (0..3)
+            .map(|i| Group {
+                params: free
+                    .iter()
+                    .copied()
+                    .filter(|d| d.actuator == Some(i))
+                    .collect(),
+                channels: vec![Channel::H(i)],
+            })
+            .filter(|g| !g.params.is_empty())
+            .collect()
+    } else {
+        vec![Group {
+            params: free.to_vec(),
+            channels: measured,
+        }]
+    }
+}
+
+/// A held direction whose largest component exceeds this is that one parameter.
+const SINGLE: f64 = 0.7;
+
+/// Central-difference step (in log parameters) of the covariance Jacobian.
+const COVARIANCE_FD_STEP: f64 = 1e-3;
+
+/// Gauss–Newton iterations at most in the polish.
+const GN_POLISH: usize = 10;
+
+/// Half-width in log space of the widest 95 % interval an estimate may have and still count as
+/// determined by the data: ×/÷ 1.5.
+const MAX_LOG_HALF_WIDTH: f64 = 0.405;
+
+/// What fitting one group gives.
+pub(super) struct GroupResult {
+    pub(super) estimates: Vec<(String, f64, f64, (f64, f64))>, // name, value, std error, ci95
+    pub(super) not_identifiable: Vec<(String, String)>,
+    pub(super) held_combinations: Vec<Vec<(String, f64)>>,
+    pub(super) names: Vec<String>,
+    pub(super) covariance: DMatrix<f64>,
+    pub(super) iterations: usize,
+    pub(super) simulations: usize,
+}
+
+/// The group's problem seen in reduced coordinates z: x = x0 + B z, clamped to the bounds.
+/// The columns of B span the directions the data determine; the others stay at the start.
+struct Reduced<'a, 'b> {
+    inner: &'a Problem<'b>,
+    x0: &'a [f64],
+    basis: &'a DMatrix<f64>,
+    lo: &'a [f64],
+    hi: &'a [f64],
+}
+
+impl Reduced<'_, '_> {
+    fn x_of(&self, z: &[f64]) -> Vec<f64> {
+        (0..self.x0.len())
+            .map(|i| {
+                (self.x0[i] + (0..z.len()).map(|k| self.basis[(i, k)] * z[k]).sum::<f64>())
+                    .clamp(self.lo[i], self.hi[i])
+            })
+            .collect()
+    }
+}
+
+impl lm::Residuals for Reduced<'_, '_> {
+    fn count(&self) -> usize {
+        self.inner.len
+    }
+    fn eval(&self, z: &[f64], r: &mut [f64]) -> Result<(), String> {
+        self.inner.eval(&self.x_of(z), r)
+    }
+}
+
+/// An orthonormal basis of the complement of the directions `held` in Rⁿ.
+fn complement(n: usize, held: &[DVector<f64>]) -> DMatrix<f64> {
+    // Gram–Schmidt on the held directions, then the projector onto what is left
+    let mut ortho: Vec<DVector<f64>> = Vec::new();
+    for v in held {
+        let mut w = v.clone();
+        for q in &ortho {
+            w -= q * q.dot(v);
+        }
+        if w.norm() > 1e-9 {
+            ortho.push(w.normalize());
+        }
+    }
+    let mut p = DMatrix::<f64>::identity(n, n);
+    for v in &ortho {
+        p -= v * v.transpose();
+    }
+    let eig = p.symmetric_eigen();
+    let cols: Vec<DVector<f64>> = (0..n)
+        .filter(|&k| eig.eigenvalues[k] > 0.5)
+        .map(|k| eig.eigenvectors.column(k).into_owned())
+        .collect();
+    if cols.is_empty() {
+        DMatrix::zeros(n, 0)
+    } else {
+        DMatrix::from_columns(&cols)
+    }
+}
+
+/// Describes a direction the data do not determine: one parameter, or a combination of the
+/// logarithms of several.
+fn describe(v: &DVector<f64>, coords: &[Coordinate]) -> (Option<String>, String) {
+    let j = v.iamax();
+    if v[j].abs() > SINGLE {
+        return (
+            Some(coords[j].def.name.to_string()),
+            coords[j].def.name.to_string(),
+        );
+    }
+    let sign = if v.iter().sum::<f64>() < 0.0 {
+        -1.0
+    } else {
+        1.0
+    };
+    let terms: Vec<String> = (0..v.len())
+        .filter(|&i| v[i].abs() > 0.15)
+        .map(|i| format!("{:+.2} ln {}", sign * v[i], coords[i].def.name))
+        .collect();
+    (None, terms.join(" "))
+}
+
+/// Fits one group. Directions of parameter space the data do not determine (a parameter
+/// without influence, or a combination such as a common scale of Kb, b and gamma1² that only
+/// moves the unobserved heave) are found from the covariance, held at the start value, and the
+/// rest is fitted again.
+pub(super) fn fit_group(
+    base: &Params,
+    group: &Group,
+    experiments: &[Experiment],
+    opts: &Options,
+) -> Result<(Params, GroupResult), String> {
+    let defs = &group.params;
+    let n = defs.len();
+    let len: usize = experiments
+        .iter()
+        .map(|e| {
+            group
+                .channels
+                .iter()
+                .filter(|&&c| e.measured(c).is_some())
+                .count()
+                * e.t.len()
+        })
+        .sum();
+    let coords: Vec<Coordinate> = defs
+        .iter()
+        .map(|d| Coordinate::new(d, (d.get)(base)))
+        .collect();
+    let problem = Problem {
+        base,
+        coords: coords.clone(),
+        channels: group.channels.clone(),
+        experiments,
+        rtol: opts.rtol,
+        len,
+        counter: Default::default(),
+    };
+    // for the covariance: tighter simulations (see below)
+    let precise = Problem {
+        base,
+        coords: coords.clone(),
+        channels: group.channels.clone(),
+        experiments,
+        rtol: opts.rtol * 1e-2,
+        len,
+        counter: Default::default(),
+    };
+    let x0: Vec<f64> = coords.iter().map(|c| c.to_x((c.def.get)(base))).collect();
+    let (lo, hi): (Vec<f64>, Vec<f64>) = coords
+        .iter()
+        .map(|c| {
+            let prior = (c.def.get)(base);
+            let default = match c.def.rule {
+                Rule::Positive => (prior / 20.0, prior * 20.0),
+                Rule::NonNegative => (
+                    0.0,
+                    if prior > 0.0 {
+                        prior * 20.0
+                    } else {
+                        f64::INFINITY
+                    },
+                ),
+                Rule::Finite => (f64::NEG_INFINITY, f64::INFINITY),
+            };
+            let (l, h) = opts.bounds.get(c.def.name).copied().unwrap_or(default);
+            (
+                if l.is_finite() { c.to_x(l) } else { l },
+                if h.is_finite() { c.to_x(h) } else { h },
+            )
+        })
+        .unzip();
+    let mut held: Vec<DVector<f64>> = Vec::new();
+    let mut reasons: Vec<String> = Vec::new();
+    let mut iterations = 0;
+    loop {
+        let basis = complement(n, &held);
+        let reduced = Reduced {
+            inner: &problem,
+            x0: &x0,
+            basis: &basis,
+            lo: &lo,
+            hi: &hi,
+        };
+        let m = basis.ncols();
+        if m == 0 {
+            let simulations = problem.counter.load(std::sync::atomic::Ordering::Relaxed)
+                + precise.counter.load(std::sync::atomic::Ordering::Relaxed);
+            let not_identifiable = held
+                .iter()
+                .zip(&reasons)
+                .map(|(v, r)| (describe(v, &coords).1, r.clone()))
+                .collect();
+            return Ok((
+                base.clone(),
+                GroupResult {
+                    estimates: vec![],
+                    not_identifiable,
+                    held_combinations: vec![],
+                    names: vec![],
+                    covariance: DMatrix::zeros(0, 0),
+                    iterations,
+                    simulations,
+                },
+            ));
+        }
+        let sol = lm::minimize(
+            &reduced,
+            &vec![0.0; m],
+            &vec![f64::NEG_INFINITY; m],
+            &vec![f64::INFINITY; m],
+            &opts.lm,
+        )?;
+        iterations += sol.iterations;
+        // polish with Gauss–Newton on a central-difference Jacobian of tighter simulations, which
+        // also gives the covariance: Kb and gamma1 correlate to 0.999, and forward differences
+        // at the optimiser's tolerance misjudge the gradient and the information along that valley
+        let sharp = Reduced {
+            inner: &precise,
+            ..reduced
+        };
+        let mut z = sol.x.clone();
+        let mut r = lm::evaluate(&sharp, &z)?;
+        let mut j = lm::jacobian_central(&sharp, &z, COVARIANCE_FD_STEP, opts.lm.threads)?;
+        for _ in 0..GN_POLISH {
+            let Some(step) = (j.transpose() * &j)
+                .cholesky()
+                .map(|c| c.solve(&(-(j.transpose() * &r))))
+            else {
+                break;
+            };
+            let z_new: Vec<f64> = z.iter().zip(step.iter()).map(|(a, b)| a + b).collect();
+            match lm::evaluate(&sharp, &z_new) {
+                Ok(r_new) if r_new.norm_squared() < r.norm_squared() => {
+                    (z, r) = (z_new, r_new);
+                    j = lm::jacobian_central(&sharp, &z, COVARIANCE_FD_STEP, opts.lm.threads)?;
+                    if step.amax() < 1e-8 {
+                        break;
+                    }
+                }
+                _ => break,
+            }
+        }
+        let x = sharp.x_of(&z);
+        let residuals = r;
+        // covariance of the unweighted least-squares estimate with per-channel noise levels
+        // σ_c from the residuals: the sandwich (JᵀJ)⁻¹ JᵀΣJ (JᵀJ)⁻¹ in the reduced coordinates
+        let mut sigma2 = Vec::with_capacity(j.nrows());
+        let mut k = 0;
+        for e in experiments {
+            for &c in &group.channels {
+                if e.measured(c).is_some() {
+                    let rows = e.t.len();
+                    let var = residuals.rows(k, rows).norm_squared() / rows as f64;
+                    sigma2.extend(std::iter::repeat_n(var, rows));
+                    k += rows;
+                }
+            }
+        }
+        let jtj = j.transpose() * &j;
+        let cov_z = jtj.clone().try_inverse().map(|inv| {
+            let mut meat = DMatrix::zeros(m, m);
+            for (row, s2) in j.row_iter().zip(&sigma2) {
+                meat += row.transpose() * row * *s2;
+            }
+            &inv * meat * &inv
+        });
+        // the worst-determined direction, if its 95 % interval is wider than ×/÷ 1.5
+        let worst = match &cov_z {
+            None => {
+                let eig = jtj.symmetric_eigen();
+                let (kmin, _) = eig.eigenvalues.argmin();
+                Some((
+                    eig.eigenvectors.column(kmin).into_owned(),
+                    "the measured outputs do not depend on it".to_string(),
+                ))
+            }
+            Some(cov) => {
+                let eig = cov.clone().symmetric_eigen();
+                let (kmax, var) = eig.eigenvalues.argmax();
+                let half = 1.96 * var.max(0.0).sqrt();
+                (half > MAX_LOG_HALF_WIDTH).then(|| {
+                    (
+                        eig.eigenvectors.column(kmax).into_owned(),
+                        format!(
+                            "its 95 % interval would span a factor of {:.3e}",
+                            (2.0 * half).exp()
+                        ),
+                    )
+                })
+            }
+        };
+        if let Some((u, reason)) = worst {
+            let mut v = &basis * u;
+            // a direction mostly along one parameter holds exactly that parameter (when several
+            // parameters do nothing at all, their null space is entered one at a time)
+            let j = v.iamax();
+            if v[j].abs() > SINGLE {
+                v = DVector::from_fn(n, |i, _| if i == j { 1.0 } else { 0.0 });
+            }
+            held.push(v.normalize());
+            reasons.push(reason);
+            continue;
+        }
+        let cov = cov_z.expect("checked above");
+        let cov_x = &basis * cov * basis.transpose();
+        let mut not_identifiable = Vec::new();
+        let mut held_combinations = Vec::new();
+        let mut fixed = Vec::new();
+        for (v, r) in held.iter().zip(&reasons) {
+            let (single, text) = describe(v, &coords);
+            if let Some(name) = single {
+                fixed.push(name.clone());
+                not_identifiable.push((name, r.clone()));
+            } else {
+                held_combinations.push(
+                    coords
+                        .iter()
+                        .zip(v.iter())
+                        .map(|(c, w)| (c.def.name.to_string(), *w))
+                        .collect(),
+                );
+                not_identifiable.push((format!("combination {text}"), format!("{r}; held at its start value, so the parameters in it are estimated relative to that")));
+            }
+        }
+        let active: Vec<usize> = (0..n)
+            .filter(|&c| !fixed.iter().any(|f| f == coords[c].def.name))
+            .collect();
+        // held parameters keep their start value exactly (not exp(ln(value)))
+        let mut fitted = base.clone();
+        for &c in &active {
+            fitted
+                .set(coords[c].def.name, coords[c].to_p(x[c]))
+                .map_err(|e| e.to_string())?;
+        }
+        let estimates = active
+            .iter()
+            .map(|&c| {
+                let coord = coords[c];
+                let value = coord.to_p(x[c]);
+                let se_x = cov_x[(c, c)].max(0.0).sqrt();
+                let (se, ci) = if coord.log {
+                    (
+                        value * se_x,
+                        (value * (-1.96 * se_x).exp(), value * (1.96 * se_x).exp()),
+                    )
+                } else {
+                    let se = se_x * coord.scale;
+                    (se, (value - 1.96 * se, value + 1.96 * se))
+                };
+                (coord.def.name.to_string(), value, se, ci)
+            })
+            .collect();
+        let names = active
+            .iter()
+            .map(|&c| coords[c].def.name.to_string())
+            .collect();
+        let covariance = DMatrix::from_fn(active.len(), active.len(), |a, b| {
+            cov_x[(active[a], active[b])]
+        });
+        let simulations = problem.counter.load(std::sync::atomic::Ordering::Relaxed)
+            + precise.counter.load(std::sync::atomic::Ordering::Relaxed);
+        return Ok((
+            fitted,
+            GroupResult {
+                estimates,
+                not_identifiable,
+                held_combinations,
+                names,
+                covariance,
+                iterations,
+                simulations,
+            },
+        ));
+    }
+}
+
