@@ -4,21 +4,10 @@
 use hasel_fmu::identify::synth::{self, Columns, Spec};
 use hasel_fmu::identify::{Experiment, Identification, Options, fits, identify, simulate};
 use hasel_fmu::model::Params;
-use hasel_fmu::simulation::Input;
 use nalgebra::{DMatrix, DVector};
 
 fn experiment(name: &str, omega: f64, columns: Columns, seed: u64, truth: &Params) -> Experiment {
-    let spec = Spec {
-        input: Input::sine(60.0, omega),
-        params: truth.clone(),
-        t_end: 10.0,
-        dt: 1e-3,
-        noise: 0.01,
-        columns,
-        seed,
-        rtol: 1e-9,
-    };
-    synth::experiment(&spec, name).unwrap()
+    synth::experiment(&Spec::paper(truth, omega, columns, 0.01, seed), name).unwrap()
 }
 
 /// 99.9 % quantiles of χ² with k degrees of freedom, k = 0..12.
@@ -28,14 +17,7 @@ const CHI2_999: [f64; 13] = [
 
 /// Every free parameter 20 % off, alternately up and down.
 fn offset_start(truth: &Params) -> Params {
-    let mut start = truth.clone();
-    for (k, name) in Options::default().free.iter().enumerate() {
-        let v = truth.get(name).unwrap();
-        start
-            .set(name, v * if k % 2 == 0 { 1.2 } else { 0.8 })
-            .unwrap();
-    }
-    start
+    synth::offset(truth, &Options::default().free, 0.2).unwrap()
 }
 
 /// The protocol on three independent noise realisations. A 95 % interval misses the truth one

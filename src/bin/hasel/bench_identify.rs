@@ -5,35 +5,17 @@
 use hasel_fmu::identify::synth::{self, Columns, Spec};
 use hasel_fmu::identify::{Experiment, Options, default_free, identify};
 use hasel_fmu::model::Params;
-use hasel_fmu::simulation::Input;
 
 fn experiments(columns: Columns) -> Result<[Experiment; 2], String> {
     let truth = Params::default();
-    let spec = |omega: f64, seed: u64| Spec {
-        input: Input::sine(60.0, omega),
-        params: truth.clone(),
-        t_end: 10.0,
-        dt: 1e-3,
-        noise: 0.01,
-        columns,
-        seed,
-        rtol: 1e-9,
-    };
     Ok([
-        synth::experiment(&spec(3.0 * std::f64::consts::PI, 1), "w3pi.csv")?,
-        synth::experiment(&spec(11.0, 2), "w11.csv")?,
+        synth::experiment(&Spec::paper(&truth, 3.0 * std::f64::consts::PI, columns, 0.01, 1), "w3pi.csv")?,
+        synth::experiment(&Spec::paper(&truth, 11.0, columns, 0.01, 2), "w11.csv")?,
     ])
 }
 
 pub fn run() -> Result<(), String> {
-    let truth = Params::default();
-    let mut start = truth.clone();
-    for (k, name) in default_free().iter().enumerate() {
-        let v = truth.get(name).map_err(|e| e.to_string())?;
-        start
-            .set(name, v * if k % 2 == 0 { 1.2 } else { 0.8 })
-            .map_err(|e| e.to_string())?;
-    }
+    let start = synth::offset(&Params::default(), &default_free(), 0.2)?;
     say!(
         "identification from a 20 % offset on Kb, b, gamma1, gamma2 of each actuator; synthetic 10 s experiments at 1 ms with 1 % noise (target <= 10 s)"
     );
