@@ -6,18 +6,23 @@ use std::time::Instant;
 use hasel_fmu::io::{input_file, params_file, trajectory};
 use hasel_fmu::model::{Params, Platform};
 use hasel_fmu::plot::{self, Panel, Series};
-use hasel_fmu::simulation::{DEFAULT_RTOL, Input, Interpolation, Sample, Simulator};
+use hasel_fmu::simulation::input::PAPER_PHASES;
+use hasel_fmu::simulation::{DEFAULT_RTOL, Input, Interpolation, Sample, Simulator, Tone};
 use indicatif::{ProgressBar, ProgressStyle};
 
 /// The input voltages of a run, shared by `simulate` and `synth`.
 #[derive(clap::Args)]
 pub struct InputArgs {
     /// The paper's excitation U0·sin(ω t + φ_i), φ = 0°, 120°, 240° [V, rad/s] (the default: 60,3π)
-    #[arg(long, value_name = "U0,OMEGA", conflicts_with_all = ["offset_sine", "input"])]
+    #[arg(long, value_name = "U0,OMEGA", conflicts_with_all = ["offset_sine", "multisine", "input"])]
     sine: Option<String>,
     /// The unipolar excitation U0·(1 + sin(ω t + φ_i))/2 [V, rad/s]
-    #[arg(long, value_name = "U0,OMEGA", conflicts_with = "input")]
+    #[arg(long, value_name = "U0,OMEGA", conflicts_with_all = ["multisine", "input"])]
     offset_sine: Option<String>,
+    /// A multisine: tones A:OMEGA[:PHASE] [V, rad/s, rad] separated by commas, each applied to
+    /// the three actuators with the paper's phase offsets 0°, 120°, 240° added
+    #[arg(long, value_name = "A:OMEGA[:PHASE],...", conflicts_with = "input")]
+    multisine: Option<String>,
     /// Sampled voltages: CSV with columns t,U1,U2,U3 [s, V]
     #[arg(long, value_name = "FILE.csv")]
     input: Option<PathBuf>,
@@ -44,6 +49,10 @@ impl InputArgs {
         if let Some(s) = &self.offset_sine {
             let (u0, w) = pair("offset-sine", s)?;
             return Ok((Input::offset_sine(u0, w), 10.0));
+        }
+        if let Some(s) = &self.multisine {
+            let [t1, t2, t3] = PAPER_PHASES.map(|phi| multisine(s, phi));
+            return Ok((Input::Tones { offset: [0.0; 3], tones: [t1?, t2?, t3?] }, 10.0));
         }
         let (u0, w) = match &self.sine {
             Some(s) => pair("sine", s)?,
@@ -85,6 +94,24 @@ pub struct ParamsArgs {
     /// Write here instead of standard output
     #[arg(long, value_name = "FILE.toml")]
     out: Option<PathBuf>,
+}
+
+/// The tones of `--multisine`, shifted by the actuator's phase `phi`.
+fn multisine(text: &str, phi: f64) -> Result<Vec<Tone>, String> {
+    text.split(',')
+        .map(|tone| {
+            let parts: Vec<f64> = tone
+                .split(':')
+                .map(|p| p.trim().parse::<f64>().ok().filter(|v| v.is_finite()))
+                .collect::<Option<_>>()
+                .ok_or_else(|| format!("--multisine {text}: '{tone}' is not A:OMEGA[:PHASE] in numbers"))?;
+            match parts.as_slice() {
+                [a, w] => Ok(Tone { amplitude: *a, omega: *w, phase: phi }),
+                [a, w, p] => Ok(Tone { amplitude: *a, omega: *w, phase: p + phi }),
+                _ => Err(format!("--multisine {text}: '{tone}' is not A:OMEGA[:PHASE]")),
+            }
+        })
+        .collect()
 }
 
 pub fn pair(flag: &str, text: &str) -> Result<(f64, f64), String> {
