@@ -71,7 +71,14 @@ const THET: f64 = 1e-3;
 const QUOT1: f64 = 1.0;
 const QUOT2: f64 = 1.2;
 
-/// Eigenvalues of A⁻¹: γ (real) and α ± iβ.
+/// Eigenvalues of A⁻¹: γ (real) and α ± iβ (the closed forms of [`eigenvalues`], as constants
+/// so that no step recomputes them).
+const GAMMA: f64 = 3.637_834_252_744_496;
+const ALPHA: f64 = 2.681_082_873_627_752;
+const BETA: f64 = 3.050_430_199_247_410_5;
+
+/// The closed forms of GAMMA, ALPHA, BETA (checked against them in the tests).
+#[cfg(test)]
 fn eigenvalues() -> (f64, f64, f64) {
     let (c81, c9) = (81f64.cbrt(), 9f64.cbrt());
     let gamma = 30.0 / (6.0 + c81 - c9);
@@ -292,7 +299,6 @@ impl Radau5 {
 
     /// Takes one accepted step, never past `t_end`.
     pub fn step<S: OdeSystem>(&mut self, sys: &S, t_end: f64) -> Result<(), SolverError> {
-        let (gamma, alpha, beta) = eigenvalues();
         let h_entry = self.h.min(self.h_max);
         let mut h = h_entry;
         let mut last = false;
@@ -322,7 +328,7 @@ impl Radau5 {
             // (a step cut to land on t_end differs from the factored h by rounding only;
             // lu_h is NaN when there are no factors)
             let factored = (h - self.lu_h).abs() <= 1e-12 * h;
-            if !factored && let Err(lu::Singular(col)) = self.decompose(h, gamma, alpha, beta) {
+            if !factored && let Err(lu::Singular(col)) = self.decompose(h) {
                 h *= 0.5;
                 self.reject = true;
                 last = false;
@@ -336,7 +342,7 @@ impl Radau5 {
                 continue;
             }
             self.starting_values(h);
-            let newt = match self.newton(sys, h, gamma, alpha, beta) {
+            let newt = match self.newton(sys, h) {
                 Newton::Converged(k) => k,
                 Newton::Failed(factor, reason) => {
                     h *= factor;
@@ -422,9 +428,9 @@ impl Radau5 {
     }
 
     /// E1 = (γ/h) I − J and E2 = ((α + iβ)/h) I − J, factored.
-    fn decompose(&mut self, h: f64, gamma: f64, alpha: f64, beta: f64) -> Result<(), lu::Singular> {
+    fn decompose(&mut self, h: f64) -> Result<(), lu::Singular> {
         let n = self.n;
-        let (fac1, alphn, betan) = (gamma / h, alpha / h, beta / h);
+        let (fac1, alphn, betan) = (GAMMA / h, ALPHA / h, BETA / h);
         for k in 0..n * n {
             self.e1[k] = -self.jac[k];
             self.e2[k] = Complex::new(-self.jac[k], 0.0);
@@ -465,16 +471,9 @@ impl Radau5 {
         }
     }
 
-    fn newton<S: OdeSystem>(
-        &mut self,
-        sys: &S,
-        h: f64,
-        gamma: f64,
-        alpha: f64,
-        beta: f64,
-    ) -> Newton {
+    fn newton<S: OdeSystem>(&mut self, sys: &S, h: f64) -> Newton {
         let n = self.n;
-        let (fac1, alphn, betan) = (gamma / h, alpha / h, beta / h);
+        let (fac1, alphn, betan) = (GAMMA / h, ALPHA / h, BETA / h);
         self.faccon = self.faccon.max(UROUND).powf(0.8);
         self.theta = THET;
         let (mut dynold, mut thqold) = (0.0, 0.0);
@@ -578,7 +577,7 @@ impl Radau5 {
             // (I − γ0 h J)⁻¹ = (γ/h) E1⁻¹ sends its stiff limit to zero and leaves smooth
             // components unchanged to first order
             lu::solve_blocks(&self.e1, n, &self.blocks, &self.piv1, &mut self.err_vec);
-            let fac1 = eigenvalues().0 / h;
+            let fac1 = GAMMA / h;
             for v in self.err_vec.iter_mut() {
                 *v *= fac1;
             }
@@ -655,6 +654,9 @@ mod tests {
         let t = Matrix3::from_fn(|r, c| T[r][c]);
         let ti = Matrix3::from_fn(|r, c| TI[r][c]);
         let (g, al, be) = eigenvalues();
+        for (closed, constant) in [(g, GAMMA), (al, ALPHA), (be, BETA)] {
+            assert!((closed - constant).abs() <= 1e-15 * constant, "{closed} vs {constant}");
+        }
         let want = Matrix3::new(g, 0.0, 0.0, 0.0, al, -be, 0.0, be, al);
         let got = ti * a.try_inverse().unwrap() * t;
         assert!((got - want).amax() < 1e-12, "{got}");
