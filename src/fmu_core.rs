@@ -32,7 +32,8 @@ pub enum Slot {
     Tip(usize),
     Param(&'static ParamDef),
     Rtol,
-    State(usize),
+    /// A state, looked up by the row's name (effect states read 0 while their effect is off).
+    State,
     Energy,
     SuppliedPower,
     DissipatedPower,
@@ -46,7 +47,7 @@ pub struct Row {
     pub description: String,
 }
 
-const STATE_UNITS: [(&str, &str, &str); 5] = [
+const STATE_UNITS: [(&str, &str, &str); 9] = [
     ("theta", "rad", "Film rotation angle theta"),
     ("l_p", "m", "Top film length l_p"),
     (
@@ -56,6 +57,22 @@ const STATE_UNITS: [(&str, &str, &str); 5] = [
     ),
     ("Q1", "C", "Charge Q1 of the retention capacitor C1"),
     ("Q2", "C", "Charge Q2 of the electrode capacitor C2"),
+    (
+        "Q3",
+        "C",
+        "charge_drift: charge Q3 of the drift stage's capacitor C3 (0 while off)",
+    ),
+    (
+        "z_v",
+        "rad",
+        "creep: internal angle z of the standard linear solid (0 while off)",
+    ),
+    ("z_h", "rad", "hysteresis: Bouc-Wen state z_h (0 while off)"),
+    (
+        "U_amp",
+        "V",
+        "amplifier_lag: amplifier output voltage (0 while off)",
+    ),
 ];
 
 /// The variable table, in value-reference order.
@@ -78,8 +95,8 @@ pub fn rows() -> &'static [Row] {
         }
         add("rtol".into(), Slot::Rtol, "1", "Relative tolerance of the internal Radau IIA solver (a tolerance given to fmi2SetupExperiment takes precedence)".into());
         for a in 0..3 {
-            for (k, (name, unit, desc)) in STATE_UNITS.iter().enumerate() {
-                add(format!("{name}_{}", a + 1), Slot::State(5 * a + k), unit, format!("{desc} of actuator {}", a + 1));
+            for (name, unit, desc) in STATE_UNITS {
+                add(format!("{name}_{}", a + 1), Slot::State, unit, format!("{desc} of actuator {}", a + 1));
             }
         }
         add("H".into(), Slot::Energy, "J", "Stored energy (Hamiltonian) of the three actuators".into());
@@ -115,7 +132,7 @@ pub fn variables(params: &Params, rtol: f64) -> Vec<Variable> {
                     Some(Initial::Exact),
                     Some(rtol),
                 ),
-                Slot::State(_) | Slot::Energy | Slot::SuppliedPower | Slot::DissipatedPower => (
+                Slot::State | Slot::Energy | Slot::SuppliedPower | Slot::DissipatedPower => (
                     Causality::Local,
                     Variability::Continuous,
                     Some(Initial::Calculated),
@@ -195,7 +212,8 @@ impl HaselCore {
         self.tolerance.unwrap_or(self.rtol)
     }
 
-    fn value(&self, slot: Slot, sim: &Simulator) -> Result<f64, String> {
+    fn value(&self, row: &Row, sim: &Simulator) -> Result<f64, String> {
+        let slot = row.slot;
         let x = sim.state();
         let model = sim.model();
         let ok = |r: Result<f64, crate::model::ModelError>| r.map_err(|e| e.to_string());
@@ -205,7 +223,7 @@ impl HaselCore {
             Slot::Tip(i) => model.tip(x)[i],
             Slot::Param(d) => (d.get)(&self.params),
             Slot::Rtol => self.rtol,
-            Slot::State(k) => x[k],
+            Slot::State => model.state_index(&row.name).map_or(0.0, |k| x[k]),
             Slot::Energy => ok(model.energy(x))?,
             Slot::SuppliedPower => ok(model.supplied_power(x, self.u))?,
             Slot::DissipatedPower => ok(model.dissipated_power(x))?,
@@ -234,18 +252,18 @@ impl FmuCore for HaselCore {
     }
 
     fn get_real(&mut self, vr: u32) -> Result<f64, String> {
-        let slot = rows()[vr as usize].slot;
-        match slot {
+        let row = &rows()[vr as usize];
+        match row.slot {
             Slot::Input(i) => return Ok(self.u[i]),
             Slot::Param(d) => return Ok((d.get)(&self.params)),
             Slot::Rtol => return Ok(self.rtol),
             _ => {}
         }
         match &self.sim {
-            Some(sim) => self.value(slot, sim),
+            Some(sim) => self.value(row, sim),
             None => {
                 let sim = self.preview()?;
-                self.value(slot, &sim)
+                self.value(row, &sim)
             }
         }
     }

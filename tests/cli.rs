@@ -130,15 +130,36 @@ fn a_bad_parameter_file_is_located() {
 fn a_multisine_drives_the_run() {
     let dir = scratch("multisine");
     let csv = dir.join("run.csv");
-    let o = hasel(&["simulate", "--multisine", "40:3,30:17:0.5", "--t-end", "0.2", "--out", s(&csv)]);
+    let o = hasel(&[
+        "simulate",
+        "--multisine",
+        "40:3,30:17:0.5",
+        "--t-end",
+        "0.2",
+        "--out",
+        s(&csv),
+    ]);
     assert!(o.status.success(), "{}", stderr(&o));
     let text = std::fs::read_to_string(&csv).unwrap();
     // U1 at t = 0.1 s: 40 sin(0.3) + 30 sin(1.7 + 0.5)
-    let row: Vec<f64> = text.lines().nth(101).unwrap().split(',').map(|v| v.parse().unwrap()).collect();
+    let row: Vec<f64> = text
+        .lines()
+        .nth(101)
+        .unwrap()
+        .split(',')
+        .map(|v| v.parse().unwrap())
+        .collect();
     assert!((row[0] - 0.1).abs() < 1e-12);
-    assert!((row[1] - (40.0 * 0.3f64.sin() + 30.0 * 2.2f64.sin())).abs() < 1e-9, "{row:?}");
+    assert!(
+        (row[1] - (40.0 * 0.3f64.sin() + 30.0 * 2.2f64.sin())).abs() < 1e-9,
+        "{row:?}"
+    );
     let o = hasel(&["simulate", "--multisine", "40:x"]);
-    assert!(stderr(&o).contains("'40:x' is not A:OMEGA[:PHASE]"), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("'40:x' is not A:OMEGA[:PHASE]"),
+        "{}",
+        stderr(&o)
+    );
 }
 
 #[test]

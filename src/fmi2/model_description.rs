@@ -38,8 +38,13 @@ pub fn guid_for(info: &ModelInfo, vars: &[Variable]) -> Result<String, String> {
 }
 
 /// A double in its shortest exactly round-tripping form (valid `xs:double`).
+/// An xs:double: Rust's shortest round-trip form, infinities as `INF` / `-INF`.
 fn real(x: f64) -> String {
-    format!("{x:?}")
+    match x {
+        f64::INFINITY => "INF".into(),
+        f64::NEG_INFINITY => "-INF".into(),
+        _ => format!("{x:?}"),
+    }
 }
 
 fn check_info(info: &ModelInfo) -> Result<(), String> {

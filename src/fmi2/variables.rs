@@ -202,10 +202,9 @@ fn check_variable(v: &Variable) -> Result<(), String> {
                 "variable {name} must not have a start value (has {s:?})"
             ));
         }
-        (_, Some(s)) if !s.is_finite() => {
-            return Err(format!(
-                "variable {name} has a non-finite start value {s:?}"
-            ));
+        (_, Some(s)) if s.is_nan() => {
+            // ±∞ is a valid xs:double (INF) and switches a limit off; NaN is not a value
+            return Err(format!("variable {name} has a NaN start value"));
         }
         _ => {}
     }

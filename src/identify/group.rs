@@ -269,7 +269,7 @@ pub(super) fn fit_group(
         .map(|c| {
             let prior = (c.def.get)(base);
             let default = match c.def.rule {
-                Rule::Positive => (prior / 20.0, prior * 20.0),
+                Rule::Positive | Rule::PositiveOrInfinite => (prior / 20.0, prior * 20.0),
                 Rule::NonNegative => (
                     0.0,
                     if prior > 0.0 {
@@ -491,4 +491,3 @@ pub(super) fn fit_group(
         ));
     }
 }
-

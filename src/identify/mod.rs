@@ -16,10 +16,10 @@ use std::time::Instant;
 use nalgebra::DMatrix;
 
 use crate::model::params::{ParamDef, parameter};
-use group::{fit_group, groups};
 use crate::model::{Params, Platform};
 use crate::simulation::{Sample, Simulator};
 pub use experiment::{Channel, Experiment};
+use group::{fit_group, groups};
 
 /// The parameters the spec shows to be practically identifiable from h or tip data.
 pub fn default_free() -> Vec<String> {

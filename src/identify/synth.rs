@@ -44,7 +44,16 @@ impl Spec {
     /// An experiment of the paper's protocol: the 60 V sine at `omega`, 10 s sampled every
     /// 1 ms, from rest, simulated at a tight tolerance.
     pub fn paper(params: &Params, omega: f64, columns: Columns, noise: f64, seed: u64) -> Spec {
-        Spec { input: Input::sine(60.0, omega), params: params.clone(), t_end: 10.0, dt: 1e-3, noise, columns, seed, rtol: 1e-9 }
+        Spec {
+            input: Input::sine(60.0, omega),
+            params: params.clone(),
+            t_end: 10.0,
+            dt: 1e-3,
+            noise,
+            columns,
+            seed,
+            rtol: 1e-9,
+        }
     }
 }
 
@@ -54,7 +63,11 @@ pub fn offset(params: &Params, names: &[String], fraction: f64) -> Result<Params
     let mut out = params.clone();
     for (k, name) in names.iter().enumerate() {
         let v = params.get(name).map_err(|e| e.to_string())?;
-        let factor = if k % 2 == 0 { 1.0 + fraction } else { 1.0 - fraction };
+        let factor = if k % 2 == 0 {
+            1.0 + fraction
+        } else {
+            1.0 - fraction
+        };
         out.set(name, v * factor).map_err(|e| e.to_string())?;
     }
     Ok(out)

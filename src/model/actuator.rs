@@ -44,6 +44,16 @@ pub struct Actuator {
     c2_unzipped: f64,
 }
 
+/// Capacitor voltages at one state [V] and C2 [F], with ∂V2/∂θ [V/rad] and ∂V2/∂l_p [V/m].
+#[derive(Clone, Copy, Debug)]
+pub struct Voltages {
+    pub v1: f64,
+    pub v2: f64,
+    pub c2: f64,
+    pub v2_t: f64,
+    pub v2_l: f64,
+}
+
 /// Quantities shared by H, ∇H, f and ∂f/∂x at one state.
 struct Eval {
     shell: Shell,
@@ -110,6 +120,30 @@ impl Actuator {
         self.par.gamma1 * (self.par.gamma2 * theta).cos()
     }
 
+    /// dga/dθ = −γ1 γ2 sin(γ2 θ).
+    pub fn ga_prime(&self, theta: f64) -> f64 {
+        -self.par.gamma1 * self.par.gamma2 * (self.par.gamma2 * theta).sin()
+    }
+
+    /// The capacitor voltages and how V2 = Q2/C2 moves with the geometry, for terms that
+    /// extend the circuit (the effect library).
+    pub fn voltages(&self, x: &[f64]) -> Result<Voltages, DomainError> {
+        let e = self.eval(x)?;
+        Ok(Voltages {
+            v1: e.v1,
+            v2: e.v2,
+            c2: e.c2,
+            // ∂V2/∂x = −V2 C2_x / C2 = ∂²H/∂x∂Q2
+            v2_t: -e.v2 * self.c2_a * e.shell.a_s_t / e.c2,
+            v2_l: -e.v2 * self.c2_a * e.shell.a_s_l / e.c2,
+        })
+    }
+
+    /// dh/dθ = ½ Lv cos θ [m/rad].
+    pub fn height_slope(&self, theta: f64) -> f64 {
+        0.5 * self.lv * theta.cos()
+    }
+
     /// Stored energy H [J].
     pub fn energy(&self, x: &[f64]) -> Result<f64, DomainError> {
         let e = self.eval(x)?;
@@ -162,8 +196,7 @@ impl Actuator {
         let h_ll = 0.5 * self.par.k + w * c2_l * c2_l - half_v2sq * s.a_s_ll;
         let h_tq2 = -e.v2 * c2_t / e.c2;
         let h_lq2 = -e.v2 * c2_l / e.c2;
-        let dga = -self.par.gamma1 * self.par.gamma2 * (self.par.gamma2 * x[THETA]).sin();
-        let source_t = self.g0 * dga * u;
+        let source_t = self.g0 * self.ga_prime(x[THETA]) * u;
 
         set(THETA, P, inv_i);
         set(L_P, THETA, s.d_t * e.omega);
@@ -258,10 +291,16 @@ impl Actuator {
     /// (model.md, "open choices": initial state): ṗ = 0 ⇔ ∂H/∂θ + d ∂H/∂l_p = 0, solved by the
     /// secant method on θ.
     pub fn rest_state(&self) -> Result<[f64; N], DomainError> {
+        self.rest_state_with(|_| 0.0)
+    }
+
+    /// The same equilibrium with an extra static torque `load(θ)` [N m] acting against θ
+    /// (the ∂H/∂θ of terms added to the model).
+    pub fn rest_state_with(&self, load: impl Fn(f64) -> f64) -> Result<[f64; N], DomainError> {
         let residual = |theta: f64| -> Result<f64, DomainError> {
             let x = [theta, self.l_p_on_curve(theta)?, 0.0, 0.0, 0.0];
             let e = self.eval(&x)?;
-            Ok(e.h_t + e.shell.d * e.h_l)
+            Ok(e.h_t + e.shell.d * e.h_l + load(theta))
         };
         // start from the gravity sag of the bending spring alone
         let mut t0 = 0.0;

@@ -3,11 +3,13 @@
 //! It knows no solver and no FMI.
 
 pub mod actuator;
+pub mod effects;
 pub mod kinematics;
 pub mod params;
 pub mod platform;
 pub mod shell;
 
+pub use effects::{Effect, EffectParams};
 pub use kinematics::Kinematics;
 pub use params::{ParamError, Params};
 pub use platform::{ModelError, Platform};

@@ -6,6 +6,8 @@
 
 use std::fmt;
 
+use super::effects::EffectParams;
+
 /// Parameters of one HASEL actuator (the paper's identified table, model.md).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ActuatorParams {
@@ -62,6 +64,8 @@ pub struct Params {
     pub anchor_angle: [f64; 3],
     /// Antenna length L [m].
     pub antenna_length: f64,
+    /// The effect library's parameters (neutral by default).
+    pub effects: EffectParams,
 }
 
 impl Default for Params {
@@ -98,6 +102,7 @@ impl Default for Params {
             anchor_radius: 0.020,
             anchor_angle: [90f64.to_radians(), 210f64.to_radians(), 330f64.to_radians()],
             antenna_length: 0.050,
+            effects: EffectParams::default(),
         };
         p.a_t = p.unzipped_liquid_area();
         p
@@ -108,6 +113,8 @@ impl Default for Params {
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Rule {
     Positive,
+    /// Positive, or +∞ where infinity switches a limit off.
+    PositiveOrInfinite,
     NonNegative,
     Finite,
 }
@@ -116,6 +123,7 @@ impl Rule {
     fn holds(self, v: f64) -> bool {
         match self {
             Rule::Positive => v.is_finite() && v > 0.0,
+            Rule::PositiveOrInfinite => v > 0.0,
             Rule::NonNegative => v.is_finite() && v >= 0.0,
             Rule::Finite => v.is_finite(),
         }
@@ -123,6 +131,7 @@ impl Rule {
     fn text(self) -> &'static str {
         match self {
             Rule::Positive => "must be finite and > 0",
+            Rule::PositiveOrInfinite => "must be > 0 (inf allowed)",
             Rule::NonNegative => "must be finite and >= 0",
             Rule::Finite => "must be finite",
         }
@@ -191,7 +200,7 @@ macro_rules! actuator_rows {
 }
 
 macro_rules! common_rows {
-    ($($name:literal, $unit:literal, $rule:ident, $desc:literal, $field:ident $([$idx:literal])?;)*) => {
+    ($($name:literal, $unit:literal, $rule:ident, $desc:literal, $($field:ident).+ $([$idx:literal])?;)*) => {
         [$(
             ParamDef {
                 name: $name,
@@ -199,8 +208,8 @@ macro_rules! common_rows {
                 description: $desc,
                 rule: Rule::$rule,
                 actuator: None,
-                get: |p| p.$field $([$idx])?,
-                set: |p, v| p.$field $([$idx])? = v,
+                get: |p| p.$($field).+ $([$idx])?,
+                set: |p, v| p.$($field).+ $([$idx])? = v,
             },
         )*]
     };
@@ -237,9 +246,31 @@ const COMMON_ROWS: [ParamDef; 16] = common_rows! {
     "L", "m", Positive, "Antenna length from the platform centre to the tip", antenna_length;
 };
 
-/// Every parameter, per-actuator ones first (`K_1, K_2, K_3, Kb_1, …`), then the common ones.
+/// The effect library's parameters (model/effects), each neutral by default.
+const EFFECT_ROWS: [ParamDef; 14] = common_rows! {
+    "k_c", "N/m", NonNegative, "coupling: stiffness k_c of H += 1/2 k_c sum_{i<j} (h_i - h_j)^2 (0: off)", effects.coupling.k_c;
+    "R3", "Ohm", NonNegative, "charge_drift: resistance R3 of a (C3 || R3) stage in series (0: off)", effects.charge_drift.r3;
+    "tau3", "s", Positive, "charge_drift: time constant tau3 = R3 C3 of the drift stage", effects.charge_drift.tau3;
+    "k_v", "N.m/rad", NonNegative, "creep: stiffness k_v of the standard linear solid on theta (0: off)", effects.creep.k_v;
+    "tau_v", "s", Positive, "creep: relaxation time tau_v = eta / k_v", effects.creep.tau_v;
+    "k_h", "N.m/rad", NonNegative, "hysteresis: stiffness k_h of the Bouc-Wen torque -k_h z (0: off)", effects.hysteresis.k_h;
+    "theta_h", "rad", Positive, "hysteresis: angle theta_h at which the Bouc-Wen state saturates", effects.hysteresis.theta_h;
+    "tau_a", "s", NonNegative, "amplifier_lag: time constant tau_a of the amplifier (0: off)", effects.amplifier_lag.tau_a;
+    "tau_d", "s", NonNegative, "delay: transport delay tau_d between command and actuator (0: off)", effects.delay.tau_d;
+    "U_max", "V", PositiveOrInfinite, "saturation: the amplifier clips its output to +-U_max (inf: off)", effects.saturation.u_max;
+    "k3", "N.m", NonNegative, "stiffening: coefficient k3 [N.m/rad^3] of H += 1/4 k3 theta^4 (0: off)", effects.stiffening.k3;
+    "tau0_1", "N.m", Finite, "preload: constant torque against theta on actuator 1 (0: off)", effects.preload.tau0[0];
+    "tau0_2", "N.m", Finite, "preload: constant torque against theta on actuator 2 (0: off)", effects.preload.tau0[1];
+    "tau0_3", "N.m", Finite, "preload: constant torque against theta on actuator 3 (0: off)", effects.preload.tau0[2];
+};
+
+/// Every parameter, per-actuator ones first (`K_1, K_2, K_3, Kb_1, …`), then the common ones,
+/// then the effects'.
 pub fn parameters() -> impl Iterator<Item = &'static ParamDef> {
-    ACTUATOR_ROWS.iter().chain(COMMON_ROWS.iter())
+    ACTUATOR_ROWS
+        .iter()
+        .chain(COMMON_ROWS.iter())
+        .chain(EFFECT_ROWS.iter())
 }
 
 /// Looks a parameter up by its flat name.

@@ -5,6 +5,7 @@
 use std::fmt;
 
 use super::actuator::{self, Actuator};
+use super::effects::terms::Terms;
 use super::kinematics::Kinematics;
 use super::params::{ParamError, Params};
 use super::shell::DomainError;
@@ -25,28 +26,31 @@ impl fmt::Display for ModelError {
 
 impl std::error::Error for ModelError {}
 
-/// The HASEL platform model, built from validated parameters.
+/// The HASEL platform model, built from validated parameters: the three actuators of the paper
+/// and the terms of the active effects (none by default).
 #[derive(Clone, Debug)]
 pub struct Platform {
     params: Params,
     pub actuators: [Actuator; 3],
     pub kinematics: Kinematics,
+    terms: Terms,
+    /// States per actuator block: its five, then its effect states.
+    nb: usize,
 }
 
 /// Number of states of the paper's model.
 pub const N_STATES: usize = 3 * actuator::N;
 
-fn block(x: &[f64], i: usize) -> &[f64] {
-    &x[actuator::N * i..actuator::N * (i + 1)]
-}
-
 impl Platform {
     /// Validates the parameters and derives the constants.
     pub fn new(params: Params) -> Result<Platform, ParamError> {
         params.validate()?;
+        let terms = Terms::new(&params.effects);
         Ok(Platform {
             actuators: [0, 1, 2].map(|i| Actuator::new(&params, i)),
             kinematics: Kinematics::new(&params),
+            nb: terms.block_size(),
+            terms,
             params,
         })
     }
@@ -56,14 +60,38 @@ impl Platform {
     }
 
     pub fn n_states(&self) -> usize {
-        N_STATES
+        3 * self.nb
     }
 
-    /// Names of the states, `theta_1, l_p_1, p_1, Q1_1, Q2_1, theta_2, …`.
+    /// Actuator i's block of states.
+    fn block<'x>(&self, x: &'x [f64], i: usize) -> &'x [f64] {
+        &x[self.nb * i..self.nb * (i + 1)]
+    }
+
+    fn blocks<'x>(&self, x: &'x [f64]) -> [&'x [f64]; 3] {
+        [0, 1, 2].map(|i| self.block(x, i))
+    }
+
+    fn refs(&self) -> [&Actuator; 3] {
+        [0, 1, 2].map(|i| &self.actuators[i])
+    }
+
+    /// Names of the states, `theta_1, l_p_1, p_1, Q1_1, Q2_1, <effect states>_1, theta_2, …`.
     pub fn state_names(&self) -> Vec<String> {
         (1..=3)
-            .flat_map(|i| ["theta", "l_p", "p", "Q1", "Q2"].map(|s| format!("{s}_{i}")))
+            .flat_map(|i| {
+                ["theta", "l_p", "p", "Q1", "Q2"]
+                    .map(String::from)
+                    .into_iter()
+                    .chain(self.terms.extras.iter().map(|e| e.name()))
+                    .map(move |s| format!("{s}_{i}"))
+            })
             .collect()
+    }
+
+    /// Index of the state called `name` (see [`Platform::state_names`]).
+    pub fn state_index(&self, name: &str) -> Option<usize> {
+        self.state_names().iter().position(|n| n == name)
     }
 
     fn each<T>(
@@ -83,38 +111,100 @@ impl Platform {
         ])
     }
 
-    /// ẋ = f(x, U) for the three actuators.
+    /// The voltage actuator block `xi` receives for the command `u` [V].
+    fn port_voltage(&self, xi: &[f64], u: f64) -> f64 {
+        if self.terms.neutral {
+            u
+        } else {
+            self.terms.port(xi, u).u_eff
+        }
+    }
+
+    /// ẋ = f(x, U): each actuator at the voltage its port receives, then the effects' terms.
     pub fn rhs(&self, x: &[f64], u: [f64; 3], dx: &mut [f64]) -> Result<(), ModelError> {
-        let n = actuator::N;
-        self.each(|i, a| a.rhs(block(x, i), u[i], &mut dx[n * i..n * (i + 1)]))?;
+        let (n, nb) = (actuator::N, self.nb);
+
+        let xs = self.blocks(x);
+        let refs = self.refs();
+        self.each(|i, a| {
+            let dxi = &mut dx[nb * i..nb * (i + 1)];
+            a.rhs(&xs[i][..n], self.port_voltage(xs[i], u[i]), &mut dxi[..n])?;
+            if self.terms.neutral {
+                return Ok(());
+            }
+            self.terms.add_rhs(&refs, xs, u[i], i, dxi)
+        })?;
         Ok(())
     }
 
     /// ∂f/∂x into `jac`, column-major `n_states × n_states`.
     pub fn jacobian(&self, x: &[f64], u: [f64; 3], jac: &mut [f64]) -> Result<(), ModelError> {
-        let (n, dim) = (actuator::N, self.n_states());
+        let (nb, dim) = (self.nb, self.n_states());
+        let xs = self.blocks(x);
+        let refs = self.refs();
+        let offset = [0, nb, 2 * nb];
         jac.fill(0.0);
+
         self.each(|i, a| {
-            a.jacobian(block(x, i), u[i], |r, c, v| {
-                jac[(n * i + c) * dim + n * i + r] = v
-            })
+            let o = offset[i];
+            a.jacobian(
+                &xs[i][..actuator::N],
+                self.port_voltage(xs[i], u[i]),
+                |r, c, v| jac[(o + c) * dim + o + r] = v,
+            )?;
+            if self.terms.neutral {
+                return Ok(());
+            }
+            self.terms
+                .add_jacobian(&refs, xs, u[i], i, offset, |r, c, v| jac[c * dim + r] += v)
         })?;
         Ok(())
     }
 
-    /// Sizes of the diagonal blocks of ∂f/∂x: the actuators are independent.
+    /// Sizes of the diagonal blocks of ∂f/∂x: the actuators are independent unless coupled.
     pub fn jacobian_blocks(&self) -> Vec<usize> {
-        vec![actuator::N; 3]
+        if self.params.effects.coupling.k_c != 0.0 {
+            vec![3 * self.nb]
+        } else {
+            vec![self.nb; 3]
+        }
     }
 
-    /// The spec's initial state: each actuator at its U = 0 equilibrium under gravity.
+    /// The spec's initial state: each actuator at its U = 0 equilibrium under gravity (and the
+    /// static loads of the effects), solved actuator by actuator until the coupling settles.
     pub fn rest_state(&self) -> Result<Vec<f64>, ModelError> {
-        Ok(self.each(|_, a| a.rest_state())?.concat())
+        let refs = self.refs();
+        let mut rest = self.each(|_, a| a.rest_state())?;
+        for _ in 0..50 {
+            let before = rest.map(|r| r[actuator::THETA]);
+            for i in 0..3 {
+                let theta = rest.map(|r| r[actuator::THETA]);
+                let load = |t: f64| {
+                    let mut th = theta;
+                    th[i] = t;
+                    self.terms.rest_load(&refs, th, i)
+                };
+                rest[i] = self.actuators[i]
+                    .rest_state_with(load)
+                    .map_err(|cause| ModelError {
+                        actuator: i + 1,
+                        cause,
+                    })?;
+            }
+            let moved = (0..3).map(|i| (rest[i][actuator::THETA] - before[i]).abs());
+            if moved.fold(0.0, f64::max) <= 1e-15 {
+                break;
+            }
+        }
+        Ok(rest
+            .iter()
+            .flat_map(|r| r.iter().copied().chain(self.terms.rest(r[actuator::THETA])))
+            .collect())
     }
 
     /// Actuator heights h_i = ½ Lv sin θ_i [m].
     pub fn heights(&self, x: &[f64]) -> [f64; 3] {
-        [0, 1, 2].map(|i| self.actuators[i].height(block(x, i)[actuator::THETA]))
+        [0, 1, 2].map(|i| self.actuators[i].height(self.block(x, i)[actuator::THETA]))
     }
 
     /// Antenna tip from the FKM [m].
@@ -122,28 +212,52 @@ impl Platform {
         self.kinematics.tip(self.heights(x))
     }
 
-    /// Stored energy H [J].
+    /// Stored energy H [J], the effects' terms included.
     pub fn energy(&self, x: &[f64]) -> Result<f64, ModelError> {
-        Ok(self.each(|i, a| a.energy(block(x, i)))?.iter().sum())
+        let xs = self.blocks(x);
+        let own: f64 = self
+            .each(|i, a| a.energy(&xs[i][..actuator::N]))?
+            .iter()
+            .sum();
+        Ok(own + self.terms.energy(&self.refs(), xs))
     }
 
-    /// Supplied power Σ y_i U_i [W].
+    /// Power supplied through the electrical ports at the voltages they receive [W].
     pub fn supplied_power(&self, x: &[f64], u: [f64; 3]) -> Result<f64, ModelError> {
+        let xs = self.blocks(x);
         Ok(self
-            .each(|i, a| Ok(a.port_output(block(x, i))? * u[i]))?
+            .each(|i, a| {
+                Ok(
+                    a.port_output(&xs[i][..actuator::N])? * self.port_voltage(xs[i], u[i])
+                        + self.terms.port_power(a, xs[i], u[i]),
+                )
+            })?
             .iter()
             .sum())
     }
 
-    /// Dissipated power [W].
+    /// Dissipated power, the effects' dashpots, resistors and hysteretic work included [W].
     pub fn dissipated_power(&self, x: &[f64]) -> Result<f64, ModelError> {
-        Ok(self.each(|i, a| a.dissipation(block(x, i)))?.iter().sum())
+        let xs = self.blocks(x);
+        Ok(self
+            .each(|i, a| {
+                Ok(a.dissipation(&xs[i][..actuator::N])? + self.terms.dissipation(a, xs[i])?)
+            })?
+            .iter()
+            .sum())
     }
 
     /// dH/dt along the flow with the large electrical terms cancelled analytically [W].
     pub fn stored_power(&self, x: &[f64], u: [f64; 3]) -> Result<f64, ModelError> {
+        let xs = self.blocks(x);
         Ok(self
-            .each(|i, a| a.stored_power(block(x, i), u[i]))?
+            .each(|i, a| {
+                Ok(
+                    a.stored_power(&xs[i][..actuator::N], self.port_voltage(xs[i], u[i]))?
+                        + self.terms.port_power(a, xs[i], u[i])
+                        - self.terms.dissipation(a, xs[i])?,
+                )
+            })?
             .iter()
             .sum())
     }
@@ -152,7 +266,13 @@ impl Platform {
     pub fn state_scales(&self) -> Vec<f64> {
         self.actuators
             .iter()
-            .flat_map(|a| a.state_scales())
+            .flat_map(|a| {
+                let own = a.state_scales();
+                own.into_iter().chain(
+                    self.terms
+                        .scales(a, own[actuator::THETA], own[actuator::Q2]),
+                )
+            })
             .collect()
     }
 }

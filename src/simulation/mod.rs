@@ -50,10 +50,30 @@ impl From<SolverError> for SimError {
     }
 }
 
+/// One smooth piece of the voltage the model sees: a piece of the command, late by `delay`
+/// (the `delay` effect; 0 without it).
+#[derive(Clone, Copy)]
+struct Drive<'a> {
+    piece: Piece<'a>,
+    delay: f64,
+}
+
+impl Drive<'_> {
+    fn held(u: [f64; 3]) -> Drive<'static> {
+        Drive {
+            piece: Piece::Constant(u),
+            delay: 0.0,
+        }
+    }
+    fn value(&self, t: f64) -> [f64; 3] {
+        self.piece.value(t - self.delay)
+    }
+}
+
 /// The platform driven by one smooth piece of input: the solver's view of the model.
 struct Driven<'a> {
     model: &'a Platform,
-    piece: Piece<'a>,
+    piece: Drive<'a>,
 }
 
 impl OdeSystem for Driven<'_> {
@@ -89,8 +109,12 @@ pub struct Sample {
 pub struct Simulator {
     model: Platform,
     solver: Radau5,
-    /// Input value at the current point, to detect jumps between calls.
+    /// Voltage the model sees at the current point (the command, late by the delay), to detect
+    /// jumps between calls.
     u_now: [f64; 3],
+    /// Commands held by [`Simulator::step_held`] (start time, value), oldest first, kept as far
+    /// back as the delay reaches; before the first the command was 0 (the rest state's).
+    history: Vec<(f64, [f64; 3])>,
     /// Scratch copy of the state at the start of a held step, for a rollback on failure.
     x_start: Vec<f64>,
 }
@@ -100,6 +124,7 @@ pub struct Simulator {
 pub struct Snapshot {
     solver: Radau5,
     u_now: [f64; 3],
+    history: Vec<(f64, [f64; 3])>,
 }
 
 impl Simulator {
@@ -130,7 +155,7 @@ impl Simulator {
         let mut solver = Radau5::new(model.n_states(), tol);
         let sys = Driven {
             model: &model,
-            piece: Piece::Constant([0.0; 3]),
+            piece: Drive::held([0.0; 3]),
         };
         solver.init(&sys, t0, x0, FIRST_STEP)?;
         Ok(Simulator {
@@ -138,6 +163,7 @@ impl Simulator {
             model,
             solver,
             u_now: [0.0; 3],
+            history: Vec::new(),
         })
     }
 
@@ -146,6 +172,7 @@ impl Simulator {
         Snapshot {
             solver: self.solver.clone(),
             u_now: self.u_now,
+            history: self.history.clone(),
         }
     }
 
@@ -163,6 +190,7 @@ impl Simulator {
             model,
             solver: snapshot.solver,
             u_now: snapshot.u_now,
+            history: snapshot.history,
         })
     }
 
@@ -182,6 +210,29 @@ impl Simulator {
         self.solver.stats()
     }
 
+    /// The voltage the model sees now (the command, late by the `delay` effect if it is on).
+    pub fn drive(&self) -> [f64; 3] {
+        self.u_now
+    }
+
+    fn delay(&self) -> f64 {
+        self.model.params().effects.delay.tau_d
+    }
+
+    /// The held command in effect at time `s` and the time it is replaced (or +∞).
+    fn held_at(&self, s: f64) -> ([f64; 3], f64) {
+        let k = self.history.partition_point(|&(tk, _)| tk <= s);
+        let next = self.history.get(k).map_or(f64::INFINITY, |&(tk, _)| tk);
+        (
+            if k == 0 {
+                [0.0; 3]
+            } else {
+                self.history[k - 1].1
+            },
+            next,
+        )
+    }
+
     /// The outputs at the current point.
     pub fn sample(&self) -> Sample {
         let x = self.solver.y();
@@ -194,7 +245,7 @@ impl Simulator {
     }
 
     /// Makes `piece` the input from now on; restarts the integrator where the input jumps.
-    fn apply(&mut self, piece: Piece<'_>) -> Result<(), SimError> {
+    fn apply(&mut self, piece: Drive<'_>) -> Result<(), SimError> {
         let u = piece.value(self.t());
         if u != self.u_now {
             for (i, v) in u.iter().enumerate() {
@@ -218,28 +269,81 @@ impl Simulator {
     /// Integrates to `t_end` with the input held at `u` (one co-simulation step). On failure
     /// the simulator is back at the start of the step (integrator history restarted).
     pub fn step_held(&mut self, u: [f64; 3], t_end: f64) -> Result<(), SimError> {
-        let (t_start, u_start) = (self.t(), self.u_now);
+        let (t_start, u_start, kept) = (self.t(), self.u_now, self.history.clone());
         self.x_start.copy_from_slice(self.solver.y());
-        let piece = Piece::Constant(u);
-        let result = self.apply(piece).and_then(|()| {
-            Ok(self.solver.advance(
-                &Driven {
-                    model: &self.model,
-                    piece,
-                },
-                t_end,
-            )?)
-        });
+        let result = self.held_segments(u, t_end);
         if result.is_err() {
             let sys = Driven {
                 model: &self.model,
-                piece: Piece::Constant(u_start),
+                piece: Drive::held(u_start),
             };
             // the state at t_start was evaluable before, so this cannot fail
             self.solver.init(&sys, t_start, &self.x_start, FIRST_STEP)?;
             self.u_now = u_start;
+            self.history = kept;
         }
         result
+    }
+
+    /// Records `u` as the command from now on and integrates to `t_end` through the pieces in
+    /// which the delayed command is constant.
+    fn held_segments(&mut self, u: [f64; 3], t_end: f64) -> Result<(), SimError> {
+        let delay = self.delay();
+        if delay == 0.0 {
+            return self.advance_held(u, t_end);
+        }
+        let t = self.t();
+        self.history.retain(|&(tk, _)| tk < t);
+        self.history.push((t, u));
+        while self.t() < t_end {
+            let (mut c, mut next) = self.held_at(self.t() - delay);
+            if next + delay <= self.t() {
+                // rounding put us at the end of that command: take the next one
+                (c, next) = self.held_at(next);
+            }
+            self.advance_held(c, (next + delay).min(t_end))?;
+        }
+        // forget what the delay can no longer reach (keep the command in effect there)
+        let reach = self.history.partition_point(|&(tk, _)| tk <= t_end - delay);
+        self.history.drain(..reach.saturating_sub(1));
+        Ok(())
+    }
+
+    fn advance_held(&mut self, u: [f64; 3], t_end: f64) -> Result<(), SimError> {
+        let piece = Drive::held(u);
+        self.apply(piece)?;
+        self.solver.advance(
+            &Driven {
+                model: &self.model,
+                piece,
+            },
+            t_end,
+        )?;
+        Ok(())
+    }
+
+    /// The piece of the delayed drive that starts at `t` of a run of `input` begun at
+    /// `t_run`, and where it ends: before the run, the held history (0 at rest).
+    fn drive_at<'i>(&self, input: &'i Input, t_run: f64, t: f64) -> (Drive<'i>, f64) {
+        let delay = self.delay();
+        // a piece whose delayed end rounds to t is over: move on to the next one
+        let mut s = t - delay;
+        loop {
+            if delay > 0.0 && s < t_run {
+                let (c, next) = self.held_at(s);
+                let end = next.min(t_run);
+                if end + delay > t {
+                    return (Drive::held(c), end + delay);
+                }
+                s = end;
+            } else {
+                let (piece, end) = input.piece_at(s);
+                if end + delay > t {
+                    return (Drive { piece, delay }, end + delay);
+                }
+                s = end;
+            }
+        }
     }
 
     /// Integrates `input` to `t_end`, calling `on_sample` at t0 and at every multiple of `dt`
@@ -288,8 +392,9 @@ impl Simulator {
         }
         let mut x = vec![0.0; self.model.n_states()];
         let mut k = 0;
+        let t_run = self.t();
         loop {
-            let (piece, piece_end) = input.piece_at(self.t());
+            let (piece, piece_end) = self.drive_at(input, t_run, self.t());
             self.apply(piece)?;
             let seg_end = piece_end.min(t_end);
             let sys = Driven {

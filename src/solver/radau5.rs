@@ -655,7 +655,10 @@ mod tests {
         let ti = Matrix3::from_fn(|r, c| TI[r][c]);
         let (g, al, be) = eigenvalues();
         for (closed, constant) in [(g, GAMMA), (al, ALPHA), (be, BETA)] {
-            assert!((closed - constant).abs() <= 1e-15 * constant, "{closed} vs {constant}");
+            assert!(
+                (closed - constant).abs() <= 1e-15 * constant,
+                "{closed} vs {constant}"
+            );
         }
         let want = Matrix3::new(g, 0.0, 0.0, 0.0, al, -be, 0.0, be, al);
         let got = ti * a.try_inverse().unwrap() * t;

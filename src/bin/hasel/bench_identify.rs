@@ -9,7 +9,10 @@ use hasel_fmu::model::Params;
 fn experiments(columns: Columns) -> Result<[Experiment; 2], String> {
     let truth = Params::default();
     Ok([
-        synth::experiment(&Spec::paper(&truth, 3.0 * std::f64::consts::PI, columns, 0.01, 1), "w3pi.csv")?,
+        synth::experiment(
+            &Spec::paper(&truth, 3.0 * std::f64::consts::PI, columns, 0.01, 1),
+            "w3pi.csv",
+        )?,
         synth::experiment(&Spec::paper(&truth, 11.0, columns, 0.01, 2), "w11.csv")?,
     ])
 }

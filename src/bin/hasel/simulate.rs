@@ -52,7 +52,13 @@ impl InputArgs {
         }
         if let Some(s) = &self.multisine {
             let [t1, t2, t3] = PAPER_PHASES.map(|phi| multisine(s, phi));
-            return Ok((Input::Tones { offset: [0.0; 3], tones: [t1?, t2?, t3?] }, 10.0));
+            return Ok((
+                Input::Tones {
+                    offset: [0.0; 3],
+                    tones: [t1?, t2?, t3?],
+                },
+                10.0,
+            ));
         }
         let (u0, w) = match &self.sine {
             Some(s) => pair("sine", s)?,
@@ -104,11 +110,23 @@ fn multisine(text: &str, phi: f64) -> Result<Vec<Tone>, String> {
                 .split(':')
                 .map(|p| p.trim().parse::<f64>().ok().filter(|v| v.is_finite()))
                 .collect::<Option<_>>()
-                .ok_or_else(|| format!("--multisine {text}: '{tone}' is not A:OMEGA[:PHASE] in numbers"))?;
+                .ok_or_else(|| {
+                    format!("--multisine {text}: '{tone}' is not A:OMEGA[:PHASE] in numbers")
+                })?;
             match parts.as_slice() {
-                [a, w] => Ok(Tone { amplitude: *a, omega: *w, phase: phi }),
-                [a, w, p] => Ok(Tone { amplitude: *a, omega: *w, phase: p + phi }),
-                _ => Err(format!("--multisine {text}: '{tone}' is not A:OMEGA[:PHASE]")),
+                [a, w] => Ok(Tone {
+                    amplitude: *a,
+                    omega: *w,
+                    phase: phi,
+                }),
+                [a, w, p] => Ok(Tone {
+                    amplitude: *a,
+                    omega: *w,
+                    phase: p + phi,
+                }),
+                _ => Err(format!(
+                    "--multisine {text}: '{tone}' is not A:OMEGA[:PHASE]"
+                )),
             }
         })
         .collect()

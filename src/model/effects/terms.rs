@@ -1,0 +1,453 @@
+//! The effects' terms around the actuator equations: the extra states of each actuator, the
+//! voltage the actuator's port receives, the torques on θ, the extra circuit branch, and their
+//! energy, dissipation and Jacobian entries.
+//!
+//! Each actuator's block of states is its five (θ, l_p, p, Q1, Q2) followed by the extra
+//! states of the active effects, in the order of [`Extra`]. Only `coupling` links the blocks.
+
+use super::{DriftPlacement, EffectParams, HysteresisLaw, PreloadLaw};
+use crate::model::actuator::{self, Actuator, P, Q1, Q2, THETA};
+use crate::model::shell::DomainError;
+
+/// An extra state of one actuator.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Extra {
+    /// Charge of the drift stage's capacitor C3 [C].
+    Q3,
+    /// Creep state z of branch k [rad].
+    Creep(usize),
+    /// Hysteretic state z_h [rad].
+    Hysteresis,
+    /// Output of amplifier stage k [V]; the last one drives the actuator.
+    Amplifier(usize),
+}
+
+impl Extra {
+    /// Name without the actuator suffix, as the FMU's variables use it.
+    pub fn name(self) -> String {
+        match self {
+            Extra::Q3 => "Q3".into(),
+            Extra::Creep(0) => "z_v".into(),
+            Extra::Creep(k) => format!("z_v{}", k + 1),
+            Extra::Hysteresis => "z_h".into(),
+            Extra::Amplifier(0) => "U_amp".into(),
+            Extra::Amplifier(k) => format!("U_amp{}", k + 1),
+        }
+    }
+}
+
+/// The terms of the active effects, derived once from the parameters.
+#[derive(Clone, Debug)]
+pub struct Terms {
+    pub fx: EffectParams,
+    /// No effect is on: the platform skips the terms (the paper's model, at its own speed).
+    pub neutral: bool,
+    /// The extra states of every actuator, in block order.
+    pub extras: Vec<Extra>,
+    q3: Option<usize>,
+    creep: Vec<(usize, f64, f64)>, // (index, k, τ) per branch
+    hyst: Option<usize>,
+    amp: Vec<usize>,
+}
+
+/// The voltage at an actuator's port.
+pub struct Port {
+    /// Voltage at the actuator's port after amplifier and clipping [V].
+    pub u_eff: f64,
+    /// ∂u_eff / ∂(the last amplifier state), or ∂u_eff/∂U without an amplifier state.
+    pub slope: f64,
+}
+
+impl Terms {
+    pub fn new(fx: &EffectParams) -> Terms {
+        let mut extras = Vec::new();
+        let mut push = |e: Extra| {
+            extras.push(e);
+            Some(actuator::N + extras.len() - 1)
+        };
+        let q3 = if fx.charge_drift.r3 > 0.0 {
+            push(Extra::Q3)
+        } else {
+            None
+        };
+        let mut creep = Vec::new();
+        if fx.creep.k_v > 0.0 {
+            let (k, t) = (fx.creep.k_v, fx.creep.tau_v);
+            let branches = if fx.creep.two_branches {
+                vec![(0.5 * k, t / 3.0), (0.5 * k, 3.0 * t)]
+            } else {
+                vec![(k, t)]
+            };
+            for (b, (kb, tb)) in branches.into_iter().enumerate() {
+                creep.push((push(Extra::Creep(b)).unwrap(), kb, tb));
+            }
+        }
+        let hyst = if fx.hysteresis.k_h > 0.0 {
+            push(Extra::Hysteresis)
+        } else {
+            None
+        };
+        let mut amp = Vec::new();
+        if fx.amplifier_lag.tau_a > 0.0 {
+            for k in 0..fx.amplifier_lag.order.max(1) {
+                amp.push(push(Extra::Amplifier(k)).unwrap());
+            }
+        }
+        Terms {
+            fx: *fx,
+            neutral: fx.active().is_empty(),
+            extras,
+            q3,
+            creep,
+            hyst,
+            amp,
+        }
+    }
+
+    /// States per actuator block.
+    pub fn block_size(&self) -> usize {
+        actuator::N + self.extras.len()
+    }
+
+    /// The extra states at rest (U = 0, θ at its rest value).
+    pub fn rest(&self, theta: f64) -> Vec<f64> {
+        self.extras
+            .iter()
+            .map(|e| match e {
+                Extra::Creep(_) => theta,
+                _ => 0.0,
+            })
+            .collect()
+    }
+
+    /// Scale of each extra state for absolute tolerances.
+    pub fn scales(&self, a: &Actuator, theta_star: f64, charge_q2: f64) -> Vec<f64> {
+        let i_dc = a.par.gamma1 * 100.0 / (a.par.r0 + a.par.r1 + a.par.r2);
+        self.extras
+            .iter()
+            .map(|e| match e {
+                Extra::Q3 => match self.fx.charge_drift.placement {
+                    DriftPlacement::Series => i_dc * self.fx.charge_drift.tau3,
+                    DriftPlacement::Absorption => charge_q2,
+                },
+                Extra::Creep(_) | Extra::Hysteresis => theta_star,
+                Extra::Amplifier(_) => 100.0,
+            })
+            .collect()
+    }
+
+    fn clip(&self, v: f64) -> (f64, f64) {
+        let s = self.fx.saturation;
+        if !s.u_max.is_finite() {
+            (v, 1.0)
+        } else if s.soft {
+            let t = (v / s.u_max).tanh();
+            (s.u_max * t, 1.0 - t * t)
+        } else if v.abs() > s.u_max {
+            (s.u_max.copysign(v), 0.0)
+        } else {
+            (v, 1.0)
+        }
+    }
+
+    /// The voltage at the actuator's port: U through the amplifier's lag and its clipping.
+    pub fn port(&self, x: &[f64], u: f64) -> Port {
+        let v = self.amp.last().map_or(u, |&k| x[k]);
+        let (u_eff, slope) = self.clip(v);
+        Port { u_eff, slope }
+    }
+
+    /// ∂H_effects/∂θ_i of the static terms (coupling, stiffening, preload) at angles θ, and
+    /// its derivative in θ_i, given the heights and slopes of all actuators.
+    fn static_torque(&self, a: &[&Actuator; 3], theta: [f64; 3], i: usize) -> (f64, f64) {
+        let mut h_t = 0.0;
+        let mut h_tt = 0.0;
+        let th = theta[i];
+        let c = self.fx.coupling;
+        if c.k_c != 0.0 {
+            // H_c = ½ k_c Σ w_ij (h_i − h_j)²; h' = ½ Lv cos θ, h'' = −h
+            let h = [0, 1, 2].map(|j| a[j].height(theta[j]));
+            let s = a[i].height_slope(th);
+            for j in (0..3).filter(|&j| j != i) {
+                let w = c.k_c * c.weights[pair(i, j)];
+                h_t += w * (h[i] - h[j]) * s;
+                h_tt += w * (s * s - (h[i] - h[j]) * h[i]);
+            }
+        }
+        let st = self.fx.stiffening;
+        if st.k3 != 0.0 {
+            let n = st.exponent;
+            h_t += st.k3 * th.powi(n - 1);
+            h_tt += st.k3 * f64::from(n - 1) * th.powi(n - 2);
+        }
+        let tau0 = self.fx.preload.tau0[i];
+        if tau0 != 0.0 {
+            match self.fx.preload.law {
+                PreloadLaw::Constant => h_t += tau0,
+                PreloadLaw::Weight => {
+                    h_t += tau0 * th.cos();
+                    h_tt -= tau0 * th.sin();
+                }
+            }
+        }
+        (h_t, h_tt)
+    }
+
+    /// The static load on actuator i at angles θ, for the rest state.
+    pub fn rest_load(&self, a: &[&Actuator; 3], theta: [f64; 3], i: usize) -> f64 {
+        self.static_torque(a, theta, i).0
+    }
+
+    /// Adds the terms to actuator i's block of ẋ (`dx`, whose first five entries hold the
+    /// actuator's own equations evaluated at the port voltage).
+    pub fn add_rhs(
+        &self,
+        a: &[&Actuator; 3],
+        x: [&[f64]; 3],
+        u: f64,
+        i: usize,
+        dx: &mut [f64],
+    ) -> Result<(), DomainError> {
+        let xi = x[i];
+        let act = a[i];
+        let theta = [x[0][THETA], x[1][THETA], x[2][THETA]];
+        let (h_t, _) = self.static_torque(a, theta, i);
+        dx[P] -= h_t;
+        for &(k, kb, tb) in &self.creep {
+            dx[P] -= kb * (xi[THETA] - xi[k]);
+            dx[k] = (xi[THETA] - xi[k]) / tb;
+        }
+        let omega = xi[P] / act.inertia;
+        if let Some(k) = self.hyst {
+            let hy = self.fx.hysteresis;
+            dx[P] -= hy.k_h * xi[k];
+            dx[k] = self.hysteresis_rate(omega, xi[k]).0;
+            debug_assert!(hy.theta_h > 0.0);
+        }
+        let port = self.port(xi, u);
+        if let Some(k) = self.q3 {
+            let d = self.fx.charge_drift;
+            let v = act.voltages(xi)?;
+            match d.placement {
+                DriftPlacement::Series => {
+                    let v3 = d.r3 * xi[k] / d.tau3;
+                    dx[Q1] -= act.g0 * v3;
+                    dx[Q2] -= act.g0 * v3;
+                    let i0 = act.g0 * (act.ga(xi[THETA]) * port.u_eff - v.v1 - v.v2 - v3);
+                    dx[k] = i0 - xi[k] / d.tau3;
+                }
+                DriftPlacement::Absorption => {
+                    let i3 = v.v2 / d.r3 - xi[k] / d.tau3;
+                    dx[Q2] -= i3;
+                    dx[k] = i3;
+                }
+            }
+        }
+        if let Some((&first, rest)) = self.amp.split_first() {
+            let rate = self.amp.len() as f64 / self.fx.amplifier_lag.tau_a;
+            dx[first] = rate * (u - xi[first]);
+            let mut prev = first;
+            for &k in rest {
+                dx[k] = rate * (xi[prev] - xi[k]);
+                prev = k;
+            }
+        }
+        Ok(())
+    }
+
+    /// ż_h and its partial derivatives (∂/∂ω, ∂/∂z).
+    fn hysteresis_rate(&self, omega: f64, z: f64) -> (f64, f64, f64) {
+        let hy = self.fx.hysteresis;
+        match hy.law {
+            HysteresisLaw::BoucWen => {
+                let c = 0.5 / hy.theta_h; // β = γ
+                (
+                    omega - c * omega.abs() * z - c * omega * z.abs(),
+                    1.0 - c * omega.signum() * z - c * z.abs(),
+                    -c * omega.abs() - c * omega * z.signum(),
+                )
+            }
+            HysteresisLaw::Dahl => (
+                omega - omega.abs() * z / hy.theta_h,
+                1.0 - omega.signum() * z / hy.theta_h,
+                -omega.abs() / hy.theta_h,
+            ),
+        }
+    }
+
+    /// Adds the terms' entries of ∂ẋ/∂x through `add(row, col, value)`, rows and columns
+    /// counted in the whole state vector; `offset[j]` is where block j starts. The actuator's
+    /// own entries are already there (evaluated at the port voltage).
+    pub fn add_jacobian(
+        &self,
+        a: &[&Actuator; 3],
+        x: [&[f64]; 3],
+        u: f64,
+        i: usize,
+        offset: [usize; 3],
+        mut add: impl FnMut(usize, usize, f64),
+    ) -> Result<(), DomainError> {
+        let xi = x[i];
+        let act = a[i];
+        let o = offset[i];
+        let theta = [x[0][THETA], x[1][THETA], x[2][THETA]];
+        let (_, h_tt) = self.static_torque(a, theta, i);
+        add(o + P, o + THETA, -h_tt);
+        let c = self.fx.coupling;
+        if c.k_c != 0.0 {
+            let s_i = act.height_slope(theta[i]);
+            for j in (0..3).filter(|&j| j != i) {
+                let w = c.k_c * c.weights[pair(i, j)];
+                add(
+                    o + P,
+                    offset[j] + THETA,
+                    w * s_i * a[j].height_slope(theta[j]),
+                );
+            }
+        }
+        for &(k, kb, tb) in &self.creep {
+            add(o + P, o + THETA, -kb);
+            add(o + P, o + k, kb);
+            add(o + k, o + THETA, 1.0 / tb);
+            add(o + k, o + k, -1.0 / tb);
+        }
+        if let Some(k) = self.hyst {
+            let (_, d_omega, d_z) = self.hysteresis_rate(xi[P] / act.inertia, xi[k]);
+            add(o + P, o + k, -self.fx.hysteresis.k_h);
+            add(o + k, o + P, d_omega / act.inertia);
+            add(o + k, o + k, d_z);
+        }
+        let port = self.port(xi, u);
+        // the port voltage's dependence on the last amplifier state
+        let source = act.g0 * act.ga(xi[THETA]) * port.slope;
+        if let Some(&last) = self.amp.last() {
+            add(o + Q1, o + last, source);
+            add(o + Q2, o + last, source);
+        }
+        if let Some(k) = self.q3 {
+            let d = self.fx.charge_drift;
+            let v = act.voltages(xi)?;
+            match d.placement {
+                DriftPlacement::Series => {
+                    let dv3 = d.r3 / d.tau3;
+                    add(o + Q1, o + k, -act.g0 * dv3);
+                    add(o + Q2, o + k, -act.g0 * dv3);
+                    let g0 = act.g0;
+                    add(
+                        o + k,
+                        o + THETA,
+                        g0 * (act.ga_prime(xi[THETA]) * port.u_eff - v.v2_t),
+                    );
+                    add(o + k, o + actuator::L_P, -g0 * v.v2_l);
+                    add(o + k, o + Q1, -g0 / act.par.c1);
+                    add(o + k, o + Q2, -g0 / v.c2);
+                    add(o + k, o + k, -g0 * dv3 - 1.0 / d.tau3);
+                    if let Some(&last) = self.amp.last() {
+                        add(o + k, o + last, source);
+                    }
+                }
+                DriftPlacement::Absorption => {
+                    let g3 = 1.0 / d.r3;
+                    for (col, dv) in [(THETA, v.v2_t), (actuator::L_P, v.v2_l), (Q2, 1.0 / v.c2)] {
+                        add(o + Q2, o + col, -g3 * dv);
+                        add(o + k, o + col, g3 * dv);
+                    }
+                    add(o + Q2, o + k, 1.0 / d.tau3);
+                    add(o + k, o + k, -1.0 / d.tau3);
+                }
+            }
+        }
+        if let Some((&first, rest)) = self.amp.split_first() {
+            let rate = self.amp.len() as f64 / self.fx.amplifier_lag.tau_a;
+            add(o + first, o + first, -rate);
+            let mut prev = first;
+            for &k in rest {
+                add(o + k, o + prev, rate);
+                add(o + k, o + k, -rate);
+                prev = k;
+            }
+        }
+        Ok(())
+    }
+
+    /// Energy stored in the terms [J] (hysteresis, a rate-independent dissipative law with no
+    /// storage function here, adds none).
+    pub fn energy(&self, a: &[&Actuator; 3], x: [&[f64]; 3]) -> f64 {
+        let mut e = 0.0;
+        let c = self.fx.coupling;
+        if c.k_c != 0.0 {
+            let h = [0, 1, 2].map(|j| a[j].height(x[j][THETA]));
+            for (i, j) in [(0, 1), (0, 2), (1, 2)] {
+                e += 0.5 * c.k_c * c.weights[pair(i, j)] * (h[i] - h[j]).powi(2);
+            }
+        }
+        for i in 0..3 {
+            let th = x[i][THETA];
+            let st = self.fx.stiffening;
+            if st.k3 != 0.0 {
+                e += st.k3 * th.powi(st.exponent) / f64::from(st.exponent);
+            }
+            let tau0 = self.fx.preload.tau0[i];
+            e += match self.fx.preload.law {
+                PreloadLaw::Constant => tau0 * th,
+                PreloadLaw::Weight => tau0 * th.sin(),
+            };
+            for &(k, kb, _) in &self.creep {
+                e += 0.5 * kb * (th - x[i][k]).powi(2);
+            }
+            if let Some(k) = self.q3 {
+                let d = self.fx.charge_drift;
+                e += 0.5 * d.r3 * x[i][k] * x[i][k] / d.tau3;
+            }
+        }
+        e
+    }
+
+    /// Extra power at actuator i's port beyond the actuator's own y·u_eff [W]: the drift
+    /// stage in series adds V3 to the port output.
+    pub fn port_power(&self, act: &Actuator, xi: &[f64], u: f64) -> f64 {
+        match self.q3 {
+            Some(k) if self.fx.charge_drift.placement == DriftPlacement::Series => {
+                let d = self.fx.charge_drift;
+                let port = self.port(xi, u);
+                act.g0 * act.ga(xi[THETA]) * port.u_eff * d.r3 * xi[k] / d.tau3
+            }
+            _ => 0.0,
+        }
+    }
+
+    /// Extra dissipation of actuator i beyond the actuator's own [W]: the hysteretic work, the
+    /// creep dashpots and the drift stage's resistor, with the source resistor's share of V3.
+    pub fn dissipation(&self, act: &Actuator, xi: &[f64]) -> Result<f64, DomainError> {
+        let mut p = 0.0;
+        if let Some(k) = self.hyst {
+            // the hysteretic torque's work: no storage function, so all of it counts here
+            p += self.fx.hysteresis.k_h * xi[k] * xi[P] / act.inertia;
+        }
+        for &(k, kb, tb) in &self.creep {
+            p += kb * (xi[THETA] - xi[k]).powi(2) / tb;
+        }
+        if let Some(k) = self.q3 {
+            let d = self.fx.charge_drift;
+            let v = act.voltages(xi)?;
+            let v3 = d.r3 * xi[k] / d.tau3;
+            p += match d.placement {
+                DriftPlacement::Series => {
+                    let vs = v.v1 + v.v2;
+                    act.g0 * ((vs + v3).powi(2) - vs * vs) + v3 * v3 / d.r3
+                }
+                DriftPlacement::Absorption => (v.v2 - v3).powi(2) / d.r3,
+            };
+        }
+        Ok(p)
+    }
+}
+
+/// Index of the pair (i, j) in (w_12, w_13, w_23).
+fn pair(i: usize, j: usize) -> usize {
+    match (i.min(j), i.max(j)) {
+        (0, 1) => 0,
+        (0, 2) => 1,
+        _ => 2,
+    }
+}

@@ -1,0 +1,176 @@
+use super::*;
+use crate::model::{Params, Platform};
+
+/// Every effect on, in library form or in the other forms.
+fn all_on(other_forms: bool) -> Params {
+    let mut p = Params::default();
+    let f = &mut p.effects;
+    f.coupling.k_c = 40.0;
+    f.charge_drift.r3 = 2e4;
+    f.charge_drift.tau3 = 0.5;
+    f.creep.k_v = 0.05;
+    f.creep.tau_v = 0.3;
+    f.hysteresis.k_h = 0.04;
+    f.hysteresis.theta_h = 2e-3;
+    f.amplifier_lag.tau_a = 0.02;
+    f.saturation.u_max = 50.0;
+    f.stiffening.k3 = 30.0;
+    f.preload.tau0 = [1e-4, -2e-4, 3e-4];
+    if other_forms {
+        f.coupling.weights = [1.0, 0.5, 1.5];
+        f.charge_drift.placement = DriftPlacement::Absorption;
+        f.creep.two_branches = true;
+        f.hysteresis.law = HysteresisLaw::Dahl;
+        f.amplifier_lag.order = 2;
+        f.saturation.soft = true;
+        f.stiffening.exponent = 6;
+        f.preload.law = PreloadLaw::Weight;
+    }
+    p
+}
+
+/// A state away from rest: charges, momentum, a zipped electrode, effect states off rest.
+fn busy_state(m: &Platform) -> Vec<f64> {
+    let mut x = m.rest_state().unwrap();
+    let names = m.state_names();
+    for (k, name) in names.iter().enumerate() {
+        let i: f64 = name[name.len() - 1..].parse().unwrap();
+        let base = name.rsplit_once('_').unwrap().0;
+        let a = &m.actuators[i as usize - 1];
+        let theta = 0.004 * i;
+        x[k] = match base {
+            "theta" => theta,
+            "l_p" => a.l_p_on_curve(theta).unwrap(),
+            "p" => 3e-8 * (i - 2.0) + 1e-9,
+            "Q1" => 2e-9,
+            "Q2" => 3e-8,
+            "Q3" => 1e-7 * i,
+            "z_v" | "z_v2" => theta * 0.7,
+            "z_h" => 4e-4 * (i - 1.5),
+            _ => 20.0 * i, // amplifier stages
+        };
+    }
+    x
+}
+
+fn check_jacobian(p: Params, u: [f64; 3]) {
+    let m = Platform::new(p).unwrap();
+    let x = busy_state(&m);
+    let n = m.n_states();
+    let mut jac = vec![0.0; n * n];
+    m.jacobian(&x, u, &mut jac).unwrap();
+    let scales = m.state_scales();
+    let names = m.state_names();
+    let (mut fp, mut fm) = (vec![0.0; n], vec![0.0; n]);
+    for c in 0..n {
+        let hc = 1e-6 * scales[c];
+        let (mut xp, mut xm) = (x.clone(), x.clone());
+        xp[c] += hc;
+        xm[c] -= hc;
+        m.rhs(&xp, u, &mut fp).unwrap();
+        m.rhs(&xm, u, &mut fm).unwrap();
+        for r in 0..n {
+            let fd = (fp[r] - fm[r]) / (2.0 * hc);
+            let an = jac[c * n + r];
+            let row_scale = (0..n)
+                .map(|k| (jac[k * n + r] * scales[k]).abs())
+                .fold(0.0, f64::max);
+            assert!(
+                (an - fd).abs() * scales[c] <= 1e-6 * row_scale + 1e-300,
+                "d{}/d{}: analytic {an:e} vs fd {fd:e}",
+                names[r],
+                names[c]
+            );
+        }
+    }
+}
+
+#[test]
+fn neutral_by_default() {
+    let m = Platform::new(Params::default()).unwrap();
+    assert_eq!(m.n_states(), crate::model::platform::N_STATES);
+    assert!(Params::default().effects.active().is_empty());
+    assert_eq!(m.jacobian_blocks(), vec![5, 5, 5]);
+}
+
+#[test]
+fn jacobian_matches_finite_differences_with_every_effect() {
+    // U inside the clipping range (the hard clamp has no derivative at its corners)
+    check_jacobian(all_on(false), [40.0, 25.0, -30.0]);
+    check_jacobian(all_on(true), [40.0, 25.0, -30.0]);
+    check_jacobian(all_on(false), [70.0, 25.0, -80.0]);
+}
+
+#[test]
+fn power_balance_holds_with_every_effect() {
+    // dH/dt along f (central difference in time) = supplied − dissipated
+    for other in [false, true] {
+        let m = Platform::new(all_on(other)).unwrap();
+        let x = busy_state(&m);
+        let u = [40.0, 25.0, -30.0];
+        let n = m.n_states();
+        let mut f = vec![0.0; n];
+        m.rhs(&x, u, &mut f).unwrap();
+        let eps = 1e-13;
+        let at = |s: f64| {
+            let y: Vec<f64> = x.iter().zip(&f).map(|(a, b)| a + s * b).collect();
+            m.energy(&y).unwrap()
+        };
+        let dh = (at(eps) - at(-eps)) / (2.0 * eps);
+        let supplied = m.supplied_power(&x, u).unwrap();
+        let dissipated = m.dissipated_power(&x).unwrap();
+        let scale = supplied.abs() + dissipated;
+        assert!(
+            (dh - (supplied - dissipated)).abs() < 1e-7 * scale,
+            "other forms {other}: dH/dt {dh:e}, supplied − dissipated {:e}",
+            supplied - dissipated
+        );
+        let stored = m.stored_power(&x, u).unwrap();
+        assert!((stored - (supplied - dissipated)).abs() < 1e-9 * scale);
+    }
+}
+
+#[test]
+fn rest_state_is_an_equilibrium_with_static_loads() {
+    for other in [false, true] {
+        let m = Platform::new(all_on(other)).unwrap();
+        let x = m.rest_state().unwrap();
+        let mut dx = vec![0.0; m.n_states()];
+        m.rhs(&x, [0.0; 3], &mut dx).unwrap();
+        let names = m.state_names();
+        for (k, v) in dx.iter().enumerate() {
+            assert!(v.abs() < 1e-13, "{} rate {v:e} at rest", names[k]);
+        }
+        // the preload moves the rest heights: τ0/Kb ≈ 3e-4 rad ≈ 2 µm
+        let h = m.heights(&x);
+        let h0 = Platform::new(Params::default()).unwrap().heights(
+            &Platform::new(Params::default())
+                .unwrap()
+                .rest_state()
+                .unwrap(),
+        );
+        assert!((h[2] - h0[2]).abs() > 1e-6, "{h:?} vs {h0:?}");
+    }
+}
+
+#[test]
+fn coupling_joins_the_blocks_and_effect_states_are_named() {
+    let m = Platform::new(all_on(false)).unwrap();
+    assert_eq!(m.jacobian_blocks(), vec![m.n_states()]);
+    let names = m.state_names();
+    for want in ["Q3_1", "z_v_2", "z_h_3", "U_amp_1"] {
+        assert!(m.state_index(want).is_some(), "{want} in {names:?}");
+    }
+    assert_eq!(m.n_states(), 3 * 9);
+}
+
+#[test]
+fn effects_have_parameters_in_the_table() {
+    for e in Effect::ALL {
+        for name in e.parameters() {
+            assert!(Params::default().get(name).is_ok(), "{e}: {name}");
+        }
+        assert_eq!(Effect::from_name(e.name()), Some(e));
+        assert!(!e.is_active(&EffectParams::default()));
+    }
+}
