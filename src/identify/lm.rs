@@ -167,6 +167,9 @@ pub fn minimize(
         iterations += 1;
         let a = jac.transpose() * &jac;
         let g = jac.transpose() * &r;
+        if a.iter().any(|v| !v.is_finite()) {
+            return Err("the Jacobian of the residuals is not finite".into());
+        }
         let diag: Vec<f64> = (0..n)
             .map(|j| a[(j, j)].max(1e-12 * a.diagonal().max()))
             .collect();
@@ -181,6 +184,10 @@ pub fn minimize(
             let Some(step) = m.cholesky().map(|c| c.solve(&(-&g))) else {
                 lambda *= nu;
                 nu *= 2.0;
+                if lambda > 1e16 {
+                    converged = true;
+                    break;
+                }
                 continue;
             };
             let x_new: Vec<f64> = (0..n)

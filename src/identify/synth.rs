@@ -29,7 +29,13 @@ impl Columns {
 /// What to simulate and how to measure it.
 #[derive(Clone, Debug)]
 pub struct Spec {
+    /// The command, as written in the file.
     pub input: Input,
+    /// What the actuators receive when it is not the command (a hidden mechanism upstream).
+    pub drive: Option<Input>,
+    /// A disturbance added to every recorded output, unexplained by the model: amplitude as a
+    /// fraction of the output's range, frequency [Hz], phase [rad].
+    pub vibration: Option<(f64, f64, f64)>,
     pub params: Params,
     pub t_end: f64,
     pub dt: f64,
@@ -46,6 +52,8 @@ impl Spec {
     pub fn paper(params: &Params, omega: f64, columns: Columns, noise: f64, seed: u64) -> Spec {
         Spec {
             input: Input::sine(60.0, omega),
+            drive: None,
+            vibration: None,
             params: params.clone(),
             t_end: 10.0,
             dt: 1e-3,
@@ -98,7 +106,7 @@ impl Normal {
     }
 
     /// Uniform in (0, 1].
-    fn uniform(&mut self) -> f64 {
+    pub fn uniform(&mut self) -> f64 {
         ((self.next_u64() >> 11) + 1) as f64 / (1u64 << 53) as f64
     }
 
@@ -121,11 +129,17 @@ pub fn synthesize(spec: &Spec) -> Result<(Vec<&'static str>, Vec<Vec<f64>>), Sim
     let mut sim = Simulator::new(model, 0.0, spec.rtol)?;
     let mut rows = Vec::new();
     let channels = spec.columns.channels();
-    sim.run(&spec.input, spec.t_end, spec.dt, |s| {
-        let mut row = vec![s.t, s.u[0], s.u[1], s.u[2]];
-        row.extend(channels.iter().map(|c| c.of(s)));
-        rows.push(row);
-    })?;
+    sim.run(
+        spec.drive.as_ref().unwrap_or(&spec.input),
+        spec.t_end,
+        spec.dt,
+        |s| {
+            let u = spec.input.value(s.t);
+            let mut row = vec![s.t, u[0], u[1], u[2]];
+            row.extend(channels.iter().map(|c| c.of(s)));
+            rows.push(row);
+        },
+    )?;
     let mut rng = Normal::new(spec.seed);
     for (j, _) in channels.iter().enumerate() {
         let col = 4 + j;
@@ -135,8 +149,10 @@ pub fn synthesize(spec: &Spec) -> Result<(Vec<&'static str>, Vec<Vec<f64>>), Sim
                 (l.min(r[col]), h.max(r[col]))
             });
         let sigma = spec.noise * (hi - lo);
+        let (a, f, phase) = spec.vibration.unwrap_or((0.0, 0.0, 0.0));
         for r in rows.iter_mut() {
-            r[col] += sigma * rng.sample();
+            let disturbance = a * (hi - lo) * (2.0 * std::f64::consts::PI * f * r[0] + phase).sin();
+            r[col] += disturbance + sigma * rng.sample();
         }
     }
     let mut header = vec!["t", "U1", "U2", "U3"];

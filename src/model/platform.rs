@@ -268,10 +268,8 @@ impl Platform {
             .iter()
             .flat_map(|a| {
                 let own = a.state_scales();
-                own.into_iter().chain(
-                    self.terms
-                        .scales(a, own[actuator::THETA], own[actuator::Q2]),
-                )
+                own.into_iter()
+                    .chain(self.terms.scales(a, own[actuator::THETA]))
             })
             .collect()
     }

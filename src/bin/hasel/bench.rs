@@ -4,6 +4,7 @@
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
+use hasel_fmu::identify::synth::Columns;
 use hasel_fmu::io::csv::Table;
 use hasel_fmu::model::{Params, Platform};
 use hasel_fmu::simulation::{DEFAULT_RTOL, Input, Sample, Simulator};
@@ -20,6 +21,18 @@ pub struct Args {
     /// Benchmark the identification instead of the solver
     #[arg(long)]
     identify: bool,
+    /// Benchmark the missing-effect diagnosis on hidden mechanisms (the confusion matrix)
+    #[arg(long)]
+    diagnose: bool,
+    /// With --diagnose: seeds per hidden mechanism
+    #[arg(long, default_value_t = 2)]
+    seeds: u64,
+    /// With --diagnose: recorded outputs, h or tip
+    #[arg(long, default_value = "h", value_parser = ["h", "tip"])]
+    columns: String,
+    /// With --diagnose: only this hidden mechanism (an effect, `none` or `vibration`)
+    #[arg(long)]
+    only: Option<String>,
 }
 
 /// Largest |Δh| and |Δtip| [µm] against a reference file, over the rows both have.
@@ -76,6 +89,14 @@ fn report(name: &str, wall: Duration, stats: Stats, error: Option<(f64, f64)>, t
 }
 
 pub fn run(a: Args) -> Result<(), String> {
+    if a.diagnose {
+        let columns = if a.columns == "tip" {
+            Columns::TipXy
+        } else {
+            Columns::Heights
+        };
+        return crate::bench_diagnose::run(a.seeds, columns, a.only);
+    }
     if a.identify {
         return crate::bench_identify::run();
     }

@@ -7,7 +7,29 @@ use hasel_fmu::identify::{self, Experiment, Options, report};
 use hasel_fmu::io::csv::write_atomic;
 use hasel_fmu::simulation::DEFAULT_RTOL;
 
+use hasel_fmu::diagnose::hidden::{self, Truth};
+use hasel_fmu::model::Params;
+
 use crate::simulate::{InputArgs, load_params};
+
+/// A parameter file over the defaults with `--set NAME=VALUE` overrides, validated.
+fn given_params(file: &Option<PathBuf>, set: &[String]) -> Result<Params, String> {
+    let mut params = load_params(file)?;
+    for s in set {
+        let (name, value) = s
+            .split_once('=')
+            .ok_or_else(|| format!("--set {s}: expected NAME=VALUE"))?;
+        let v: f64 = value
+            .trim()
+            .parse()
+            .map_err(|_| format!("--set {s}: '{value}' is not a number"))?;
+        params
+            .set(name.trim(), v)
+            .map_err(|e| format!("--set {s}: {e}"))?;
+    }
+    params.validate().map_err(|e| e.to_string())?;
+    Ok(params)
+}
 
 #[derive(clap::Args)]
 pub struct Args {
@@ -41,9 +63,16 @@ pub struct SynthArgs {
     /// Override one true parameter, NAME=VALUE (repeatable)
     #[arg(long = "set", value_name = "NAME=VALUE")]
     set: Vec<String>,
-    /// Measurement noise: standard deviation as a fraction of each output's range
-    #[arg(long, default_value_t = 0.0)]
-    noise: f64,
+    /// Measurement noise: standard deviation as a fraction of each output's range (default 0,
+    /// or the hidden case's 0.5-2 % with --effect)
+    #[arg(long)]
+    noise: Option<f64>,
+    /// Hide a mechanism in the data, in a form that differs from the library's term: an effect
+    /// of the library (coupling, charge_drift, creep, hysteresis, amplifier_lag, delay,
+    /// saturation, stiffening, preload), `vibration` (outside the library) or `none`; with the
+    /// base parameters Kb, b, gamma1, gamma2 off by up to 20 %, all drawn from --seed
+    #[arg(long, value_name = "NAME", conflicts_with_all = ["params", "set"])]
+    effect: Option<String>,
     /// Recorded outputs: h (h1..h3) or tip (tip_x, tip_y, as the paper's laser)
     #[arg(long, default_value = "h", value_parser = ["h", "tip"])]
     columns: String,
@@ -59,7 +88,7 @@ pub struct SynthArgs {
     out: PathBuf,
 }
 
-fn read_all(paths: &[PathBuf]) -> Result<Vec<Experiment>, String> {
+pub fn read_all(paths: &[PathBuf]) -> Result<Vec<Experiment>, String> {
     paths
         .iter()
         .map(|p| Experiment::read(p).map_err(|e| e.to_string()))
@@ -132,38 +161,39 @@ pub fn run(a: Args) -> Result<(), String> {
 }
 
 pub fn synth(a: SynthArgs) -> Result<(), String> {
-    let mut params = load_params(&a.params)?;
-    for s in &a.set {
-        let (name, value) = s
-            .split_once('=')
-            .ok_or_else(|| format!("--set {s}: expected NAME=VALUE"))?;
-        let v: f64 = value
-            .trim()
-            .parse()
-            .map_err(|_| format!("--set {s}: '{value}' is not a number"))?;
-        params
-            .set(name.trim(), v)
-            .map_err(|e| format!("--set {s}: {e}"))?;
-    }
-    params.validate().map_err(|e| e.to_string())?;
     let (input, _) = a.input.input()?;
-    if !(a.noise.is_finite() && a.noise >= 0.0) {
-        return Err(format!("--noise {}: must be >= 0", a.noise));
+    if let Some(noise) = a.noise.filter(|n| !(n.is_finite() && *n >= 0.0)) {
+        return Err(format!("--noise {noise}: must be >= 0"));
     }
     let columns = if a.columns == "tip" {
         Columns::TipXy
     } else {
         Columns::Heights
     };
-    let spec = Spec {
-        input,
-        params,
-        t_end: a.t_end,
-        dt: a.dt,
-        noise: a.noise,
-        columns,
-        seed: a.seed,
-        rtol: DEFAULT_RTOL * 1e-3,
+    let spec = match &a.effect {
+        Some(name) => {
+            let truth = Truth::from_name(name).ok_or_else(|| {
+                format!("--effect {name}: not an effect of the library, `vibration` or `none`")
+            })?;
+            let mut hidden = hidden::hide(truth, a.seed)?;
+            if let Some(noise) = a.noise {
+                hidden.noise = noise;
+            }
+            say!("hidden: {}", hidden.description);
+            hidden.spec(input, a.t_end, a.dt, columns, a.seed)?
+        }
+        None => Spec {
+            input,
+            drive: None,
+            vibration: None,
+            params: given_params(&a.params, &a.set)?,
+            t_end: a.t_end,
+            dt: a.dt,
+            noise: a.noise.unwrap_or(0.0),
+            columns,
+            seed: a.seed,
+            rtol: DEFAULT_RTOL * 1e-3,
+        },
     };
     let (header, rows) = synth::synthesize(&spec).map_err(|e| e.to_string())?;
     let n = rows.len();

@@ -18,9 +18,11 @@ macro_rules! say_raw {
 }
 
 mod bench;
+mod bench_diagnose;
 mod bench_identify;
 #[cfg(feature = "compare")]
 mod compare;
+mod diagnose;
 mod fmu;
 mod identify;
 mod simulate;
@@ -52,8 +54,11 @@ enum Command {
     Describe(fmu::DescribeArgs),
     /// Estimate parameters from measured experiments (Levenberg-Marquardt on the simulation error)
     Identify(identify::Args),
-    /// Write a synthetic experiment from the model, with measurement noise
+    /// Write a synthetic experiment from the model, with measurement noise (and a hidden effect)
     Synth(identify::SynthArgs),
+    /// Find where the model and measured data disagree, name the missing effect, add it and
+    /// re-identify
+    Diagnose(diagnose::Args),
     /// Measure the solver: wall time, work counters and error against the reference data
     Bench(bench::Args),
 }
@@ -67,6 +72,7 @@ fn main() -> ExitCode {
         Command::Fmu(a) => fmu::run(a),
         Command::Identify(a) => identify::run(a),
         Command::Synth(a) => identify::synth(a),
+        Command::Diagnose(a) => diagnose::run(a),
         Command::Describe(a) => fmu::describe(a),
     };
     match result {

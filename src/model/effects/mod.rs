@@ -143,23 +143,17 @@ pub struct Coupling {
     pub weights: [f64; 3],
 }
 
-/// Where the drift stage sits in the circuit.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum DriftPlacement {
-    /// Library form: (C3 ∥ R3) in series with the source, R0 and the two stages.
-    Series,
-    /// Dielectric absorption: R3 in series with C3, the pair in parallel with C2.
-    Absorption,
-}
-
-/// A slow charge-retention stage, parameterized by R3 and τ3 = R3 C3 so that R3 = 0 is off.
+/// A slow charge-retention stage in series with the circuit, parameterized by R3 and
+/// τ3 = R3 C3 so that R3 = 0 is off.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ChargeDrift {
     /// R3 [Ω]; 0 switches the stage off.
     pub r3: f64,
     /// τ3 = R3 C3 [s].
     pub tau3: f64,
-    pub placement: DriftPlacement,
+    /// Library form: false. True splits the stage into two traps in series, (R3/2, τ3/3) and
+    /// (R3/2, 3 τ3): a spread of trapping times.
+    pub two_stages: bool,
 }
 
 /// Viscoelastic creep: standard linear solid branches (k, τ) on θ. The library has one branch.
@@ -213,7 +207,8 @@ pub struct Delay {
 pub struct Saturation {
     /// U_max [V]; +∞ is no clipping.
     pub u_max: f64,
-    /// Library form: false (a hard clamp). True: the soft limit U_max tanh(U / U_max).
+    /// Library form: false (a hard clamp). True: linear up to 0.85 U_max, then a tanh knee
+    /// into U_max (an output stage that compresses before it clips).
     pub soft: bool,
 }
 
@@ -266,7 +261,7 @@ impl Default for EffectParams {
             charge_drift: ChargeDrift {
                 r3: 0.0,
                 tau3: 1.0,
-                placement: DriftPlacement::Series,
+                two_stages: false,
             },
             creep: Creep {
                 k_v: 0.0,
@@ -312,7 +307,7 @@ impl EffectParams {
     pub fn library_forms(&self) -> bool {
         let d = EffectParams::default();
         self.coupling.weights == d.coupling.weights
-            && self.charge_drift.placement == d.charge_drift.placement
+            && self.charge_drift.two_stages == d.charge_drift.two_stages
             && self.creep.two_branches == d.creep.two_branches
             && self.hysteresis.law == d.hysteresis.law
             && self.amplifier_lag.order == d.amplifier_lag.order

@@ -5,15 +5,18 @@
 //! Each actuator's block of states is its five (θ, l_p, p, Q1, Q2) followed by the extra
 //! states of the active effects, in the order of [`Extra`]. Only `coupling` links the blocks.
 
-use super::{DriftPlacement, EffectParams, HysteresisLaw, PreloadLaw};
+use super::{EffectParams, HysteresisLaw, PreloadLaw};
 use crate::model::actuator::{self, Actuator, P, Q1, Q2, THETA};
 use crate::model::shell::DomainError;
+
+/// Width of the soft saturation's knee, as a fraction of U_max.
+const SOFT_KNEE: f64 = 0.15;
 
 /// An extra state of one actuator.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Extra {
-    /// Charge of the drift stage's capacitor C3 [C].
-    Q3,
+    /// Charge of drift stage k's capacitor [C].
+    Q3(usize),
     /// Creep state z of branch k [rad].
     Creep(usize),
     /// Hysteretic state z_h [rad].
@@ -26,7 +29,8 @@ impl Extra {
     /// Name without the actuator suffix, as the FMU's variables use it.
     pub fn name(self) -> String {
         match self {
-            Extra::Q3 => "Q3".into(),
+            Extra::Q3(0) => "Q3".into(),
+            Extra::Q3(k) => format!("Q3{}", k + 1),
             Extra::Creep(0) => "z_v".into(),
             Extra::Creep(k) => format!("z_v{}", k + 1),
             Extra::Hysteresis => "z_h".into(),
@@ -44,7 +48,7 @@ pub struct Terms {
     pub neutral: bool,
     /// The extra states of every actuator, in block order.
     pub extras: Vec<Extra>,
-    q3: Option<usize>,
+    drift: Vec<(usize, f64, f64)>, // (index, R, τ) per stage
     creep: Vec<(usize, f64, f64)>, // (index, k, τ) per branch
     hyst: Option<usize>,
     amp: Vec<usize>,
@@ -65,11 +69,18 @@ impl Terms {
             extras.push(e);
             Some(actuator::N + extras.len() - 1)
         };
-        let q3 = if fx.charge_drift.r3 > 0.0 {
-            push(Extra::Q3)
-        } else {
-            None
-        };
+        let mut drift = Vec::new();
+        if fx.charge_drift.r3 > 0.0 {
+            let (r, t) = (fx.charge_drift.r3, fx.charge_drift.tau3);
+            let stages = if fx.charge_drift.two_stages {
+                vec![(0.5 * r, t / 3.0), (0.5 * r, 3.0 * t)]
+            } else {
+                vec![(r, t)]
+            };
+            for (k, (rk, tk)) in stages.into_iter().enumerate() {
+                drift.push((push(Extra::Q3(k)).unwrap(), rk, tk));
+            }
+        }
         let mut creep = Vec::new();
         if fx.creep.k_v > 0.0 {
             let (k, t) = (fx.creep.k_v, fx.creep.tau_v);
@@ -97,7 +108,7 @@ impl Terms {
             fx: *fx,
             neutral: fx.active().is_empty(),
             extras,
-            q3,
+            drift,
             creep,
             hyst,
             amp,
@@ -121,32 +132,35 @@ impl Terms {
     }
 
     /// Scale of each extra state for absolute tolerances.
-    pub fn scales(&self, a: &Actuator, theta_star: f64, charge_q2: f64) -> Vec<f64> {
+    pub fn scales(&self, a: &Actuator, theta_star: f64) -> Vec<f64> {
         let i_dc = a.par.gamma1 * 100.0 / (a.par.r0 + a.par.r1 + a.par.r2);
         self.extras
             .iter()
             .map(|e| match e {
-                Extra::Q3 => match self.fx.charge_drift.placement {
-                    DriftPlacement::Series => i_dc * self.fx.charge_drift.tau3,
-                    DriftPlacement::Absorption => charge_q2,
-                },
+                // the charge at the stage's voltage i R3, with C3 = τ3 / R3
+                Extra::Q3(_) => i_dc * self.fx.charge_drift.tau3,
                 Extra::Creep(_) | Extra::Hysteresis => theta_star,
                 Extra::Amplifier(_) => 100.0,
             })
             .collect()
     }
 
+    /// The clipping of the amplifier and its slope.
     fn clip(&self, v: f64) -> (f64, f64) {
         let s = self.fx.saturation;
         if !s.u_max.is_finite() {
+            return (v, 1.0);
+        }
+        // the soft form: linear up to U_max − w, then a tanh knee of width w into U_max
+        let knee = if s.soft { SOFT_KNEE * s.u_max } else { 0.0 };
+        let start = s.u_max - knee;
+        if v.abs() <= start {
             (v, 1.0)
-        } else if s.soft {
-            let t = (v / s.u_max).tanh();
-            (s.u_max * t, 1.0 - t * t)
-        } else if v.abs() > s.u_max {
+        } else if knee == 0.0 {
             (s.u_max.copysign(v), 0.0)
         } else {
-            (v, 1.0)
+            let t = ((v.abs() - start) / knee).tanh();
+            ((start + knee * t).copysign(v), 1.0 - t * t)
         }
     }
 
@@ -225,22 +239,14 @@ impl Terms {
             debug_assert!(hy.theta_h > 0.0);
         }
         let port = self.port(xi, u);
-        if let Some(k) = self.q3 {
-            let d = self.fx.charge_drift;
+        if !self.drift.is_empty() {
             let v = act.voltages(xi)?;
-            match d.placement {
-                DriftPlacement::Series => {
-                    let v3 = d.r3 * xi[k] / d.tau3;
-                    dx[Q1] -= act.g0 * v3;
-                    dx[Q2] -= act.g0 * v3;
-                    let i0 = act.g0 * (act.ga(xi[THETA]) * port.u_eff - v.v1 - v.v2 - v3);
-                    dx[k] = i0 - xi[k] / d.tau3;
-                }
-                DriftPlacement::Absorption => {
-                    let i3 = v.v2 / d.r3 - xi[k] / d.tau3;
-                    dx[Q2] -= i3;
-                    dx[k] = i3;
-                }
+            let v3 = self.drift_voltage(xi);
+            dx[Q1] -= act.g0 * v3;
+            dx[Q2] -= act.g0 * v3;
+            let i0 = act.g0 * (act.ga(xi[THETA]) * port.u_eff - v.v1 - v.v2 - v3);
+            for &(k, _, tk) in &self.drift {
+                dx[k] = i0 - xi[k] / tk;
             }
         }
         if let Some((&first, rest)) = self.amp.split_first() {
@@ -253,6 +259,11 @@ impl Terms {
             }
         }
         Ok(())
+    }
+
+    /// Voltage over the drift stages, Σ R_k Q_k / τ_k [V].
+    fn drift_voltage(&self, xi: &[f64]) -> f64 {
+        self.drift.iter().map(|&(k, r, t)| r * xi[k] / t).sum()
     }
 
     /// ż_h and its partial derivatives (∂/∂ω, ∂/∂z).
@@ -324,36 +335,29 @@ impl Terms {
             add(o + Q1, o + last, source);
             add(o + Q2, o + last, source);
         }
-        if let Some(k) = self.q3 {
-            let d = self.fx.charge_drift;
+        if !self.drift.is_empty() {
             let v = act.voltages(xi)?;
-            match d.placement {
-                DriftPlacement::Series => {
-                    let dv3 = d.r3 / d.tau3;
-                    add(o + Q1, o + k, -act.g0 * dv3);
-                    add(o + Q2, o + k, -act.g0 * dv3);
-                    let g0 = act.g0;
-                    add(
-                        o + k,
-                        o + THETA,
-                        g0 * (act.ga_prime(xi[THETA]) * port.u_eff - v.v2_t),
-                    );
-                    add(o + k, o + actuator::L_P, -g0 * v.v2_l);
-                    add(o + k, o + Q1, -g0 / act.par.c1);
-                    add(o + k, o + Q2, -g0 / v.c2);
-                    add(o + k, o + k, -g0 * dv3 - 1.0 / d.tau3);
-                    if let Some(&last) = self.amp.last() {
-                        add(o + k, o + last, source);
-                    }
+            let g0 = act.g0;
+            let u_eff = port.u_eff;
+            for &(j, rj, tj) in &self.drift {
+                add(o + Q1, o + j, -g0 * rj / tj);
+                add(o + Q2, o + j, -g0 * rj / tj);
+            }
+            for &(k, _, tk) in &self.drift {
+                add(
+                    o + k,
+                    o + THETA,
+                    g0 * (act.ga_prime(xi[THETA]) * u_eff - v.v2_t),
+                );
+                add(o + k, o + actuator::L_P, -g0 * v.v2_l);
+                add(o + k, o + Q1, -g0 / act.par.c1);
+                add(o + k, o + Q2, -g0 / v.c2);
+                for &(j, rj, tj) in &self.drift {
+                    add(o + k, o + j, -g0 * rj / tj);
                 }
-                DriftPlacement::Absorption => {
-                    let g3 = 1.0 / d.r3;
-                    for (col, dv) in [(THETA, v.v2_t), (actuator::L_P, v.v2_l), (Q2, 1.0 / v.c2)] {
-                        add(o + Q2, o + col, -g3 * dv);
-                        add(o + k, o + col, g3 * dv);
-                    }
-                    add(o + Q2, o + k, 1.0 / d.tau3);
-                    add(o + k, o + k, -1.0 / d.tau3);
+                add(o + k, o + k, -1.0 / tk);
+                if let Some(&last) = self.amp.last() {
+                    add(o + k, o + last, source);
                 }
             }
         }
@@ -395,9 +399,8 @@ impl Terms {
             for &(k, kb, _) in &self.creep {
                 e += 0.5 * kb * (th - x[i][k]).powi(2);
             }
-            if let Some(k) = self.q3 {
-                let d = self.fx.charge_drift;
-                e += 0.5 * d.r3 * x[i][k] * x[i][k] / d.tau3;
+            for &(k, r, t) in &self.drift {
+                e += 0.5 * r * x[i][k] * x[i][k] / t;
             }
         }
         e
@@ -406,14 +409,8 @@ impl Terms {
     /// Extra power at actuator i's port beyond the actuator's own y·u_eff [W]: the drift
     /// stage in series adds V3 to the port output.
     pub fn port_power(&self, act: &Actuator, xi: &[f64], u: f64) -> f64 {
-        match self.q3 {
-            Some(k) if self.fx.charge_drift.placement == DriftPlacement::Series => {
-                let d = self.fx.charge_drift;
-                let port = self.port(xi, u);
-                act.g0 * act.ga(xi[THETA]) * port.u_eff * d.r3 * xi[k] / d.tau3
-            }
-            _ => 0.0,
-        }
+        let port = self.port(xi, u);
+        act.g0 * act.ga(xi[THETA]) * port.u_eff * self.drift_voltage(xi)
     }
 
     /// Extra dissipation of actuator i beyond the actuator's own [W]: the hysteretic work, the
@@ -427,17 +424,14 @@ impl Terms {
         for &(k, kb, tb) in &self.creep {
             p += kb * (xi[THETA] - xi[k]).powi(2) / tb;
         }
-        if let Some(k) = self.q3 {
-            let d = self.fx.charge_drift;
+        if !self.drift.is_empty() {
             let v = act.voltages(xi)?;
-            let v3 = d.r3 * xi[k] / d.tau3;
-            p += match d.placement {
-                DriftPlacement::Series => {
-                    let vs = v.v1 + v.v2;
-                    act.g0 * ((vs + v3).powi(2) - vs * vs) + v3 * v3 / d.r3
-                }
-                DriftPlacement::Absorption => (v.v2 - v3).powi(2) / d.r3,
-            };
+            let (vs, v3) = (v.v1 + v.v2, self.drift_voltage(xi));
+            p += act.g0 * ((vs + v3).powi(2) - vs * vs);
+            for &(k, r, t) in &self.drift {
+                let vk = r * xi[k] / t;
+                p += vk * vk / r;
+            }
         }
         Ok(p)
     }

@@ -18,7 +18,7 @@ fn all_on(other_forms: bool) -> Params {
     f.preload.tau0 = [1e-4, -2e-4, 3e-4];
     if other_forms {
         f.coupling.weights = [1.0, 0.5, 1.5];
-        f.charge_drift.placement = DriftPlacement::Absorption;
+        f.charge_drift.two_stages = true;
         f.creep.two_branches = true;
         f.hysteresis.law = HysteresisLaw::Dahl;
         f.amplifier_lag.order = 2;
@@ -44,7 +44,7 @@ fn busy_state(m: &Platform) -> Vec<f64> {
             "p" => 3e-8 * (i - 2.0) + 1e-9,
             "Q1" => 2e-9,
             "Q2" => 3e-8,
-            "Q3" => 1e-7 * i,
+            "Q3" | "Q32" => 1e-7 * i,
             "z_v" | "z_v2" => theta * 0.7,
             "z_h" => 4e-4 * (i - 1.5),
             _ => 20.0 * i, // amplifier stages

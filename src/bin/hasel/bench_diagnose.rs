@@ -1,0 +1,144 @@
+//! `hasel bench --diagnose`: the missing-effect workflow on data with hidden mechanisms (each
+//! effect of the library in another form, no effect, a mechanism outside the library), two
+//! 6 s experiments at 1 ms each; prints every case, the confusion matrix and where the time goes.
+
+use std::collections::BTreeMap;
+
+use hasel_fmu::diagnose::hidden::{self, Truth};
+use hasel_fmu::diagnose::{self, Options, Verdict};
+use hasel_fmu::identify::synth::Columns;
+use hasel_fmu::model::Params;
+
+/// What a diagnosis answered, in the confusion matrix's terms.
+fn answer(d: &diagnose::Diagnosis) -> String {
+    match d.verdict {
+        Verdict::Effect => d
+            .effects
+            .iter()
+            .map(|e| e.name())
+            .collect::<Vec<_>>()
+            .join("+"),
+        Verdict::Ambiguous => format!(
+            "ambiguous({})",
+            d.ambiguous_between
+                .iter()
+                .map(|e| e.name())
+                .collect::<Vec<_>>()
+                .join(",")
+        ),
+        v => v.name().to_string(),
+    }
+}
+
+/// The answer a case expects.
+fn expected(t: Truth) -> &'static str {
+    match t {
+        Truth::Nothing => "none",
+        Truth::Outside => "unexplained",
+        Truth::Effect(e) => e.name(),
+    }
+}
+
+pub fn run(seeds: u64, columns: Columns, only: Option<String>) -> Result<(), String> {
+    say!(
+        "diagnosis of hidden mechanisms: {seeds} seed(s) per case, {columns:?} data, two 6 s experiments at 1 ms (3pi and 11 rad/s), target <= 60 s per diagnosis"
+    );
+    let mut matrix: BTreeMap<(&'static str, String), usize> = BTreeMap::new();
+    let (mut right, mut effect_cases, mut effect_right) = (0, 0, 0);
+    let mut total = 0;
+    let mut slowest: f64 = 0.0;
+    let mut stages: BTreeMap<String, f64> = BTreeMap::new();
+    for truth in Truth::all() {
+        if only.as_deref().is_some_and(|o| o != truth.name()) {
+            continue;
+        }
+        for seed in 1..=seeds {
+            let case = hidden::hide(truth, seed)?;
+            let exps = case.experiments(columns, 6.0, seed)?;
+            let d = diagnose::diagnose(&Params::default(), exps, &Options::default())?;
+            let got = answer(&d);
+            let ok = got == expected(truth);
+            let seconds = d.timing.last().map_or(0.0, |t| t.1);
+            slowest = slowest.max(seconds);
+            for (stage, s) in &d.timing {
+                let key = stage.split(" (round").next().unwrap_or(stage).to_string();
+                *stages.entry(key).or_default() += s;
+            }
+            total += 1;
+            right += ok as usize;
+            if let Truth::Effect(_) = truth {
+                effect_cases += 1;
+                effect_right += ok as usize;
+            }
+            let before = diagnose::held_out_fits(&d.base);
+            let after = diagnose::held_out_fits(&d.last);
+            let floor: Vec<String> = d
+                .after
+                .iter()
+                .filter(|x| x.experiment != d.estimation)
+                .map(|x| format!("{:.1}", 100.0 * x.excess))
+                .collect();
+            say!(
+                "  {:<13} seed {seed}: {:<28} {} {:5.1} s | held-out fit {} -> {} | excess after {} % | {}",
+                truth.name(),
+                got,
+                if ok { "ok  " } else { "MISS" },
+                seconds,
+                fmt_fits(&before),
+                fmt_fits(&after),
+                floor.join("/"),
+                case.description
+            );
+            for r in &d.rounds {
+                for c in &r.candidates {
+                    if let Some(f) = &c.refit {
+                        say!(
+                            "      {:<13} score {:.3} dBIC {:9.1} gain {:6.2} gap {:5.2} {}",
+                            c.effect.name(),
+                            c.score,
+                            f.delta_bic,
+                            f.fit_gain,
+                            f.gap_closed,
+                            if f.passes() {
+                                "passes".to_string()
+                            } else {
+                                f.failed.join("; ")
+                            }
+                        );
+                    } else {
+                        say!(
+                            "      {:<13} score {:.3}{}",
+                            c.effect.name(),
+                            c.score,
+                            c.refit_error
+                                .as_deref()
+                                .map(|e| format!(" refit failed: {e}"))
+                                .unwrap_or_default()
+                        );
+                    }
+                }
+            }
+            *matrix.entry((truth.name(), got)).or_default() += 1;
+        }
+    }
+    say!("confusion (hidden -> answer: count)");
+    for ((t, a), n) in &matrix {
+        say!("  {t:<13} -> {a:<28} {n}");
+    }
+    say!(
+        "right: {right}/{total}; effect named exactly: {effect_right}/{effect_cases} (target >= 90 %); slowest diagnosis {slowest:.1} s ({})",
+        if slowest <= 60.0 { "met" } else { "MISSED" }
+    );
+    say!("time by stage over all cases:");
+    for (stage, s) in &stages {
+        say!("  {stage:<40} {s:8.1} s");
+    }
+    Ok(())
+}
+
+fn fmt_fits(f: &BTreeMap<String, f64>) -> String {
+    f.iter()
+        .map(|(k, v)| format!("{k} {v:.1}"))
+        .collect::<Vec<_>>()
+        .join(", ")
+}

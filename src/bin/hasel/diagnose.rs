@@ -1,0 +1,78 @@
+//! `hasel diagnose`: find, name and add the missing effect.
+
+use std::path::PathBuf;
+
+use hasel_fmu::diagnose::{self, Options, Verdict, report};
+
+use crate::identify::read_all;
+use crate::simulate::load_params;
+
+#[derive(clap::Args)]
+pub struct Args {
+    /// Experiments: the first estimates, the others are held out for the decision (as in the
+    /// paper: 3pi rad/s, then 11 rad/s); CSV with t,U1,U2,U3 and any of h1..h3, tip_x, tip_y
+    #[arg(required = true, value_name = "EXPERIMENT.csv")]
+    experiments: Vec<PathBuf>,
+    /// Output folder: diagnosis.json, report.md with its figures, fitted.toml
+    #[arg(long, value_name = "DIR")]
+    out: PathBuf,
+    /// Also print diagnosis.json on standard output
+    #[arg(long)]
+    json: bool,
+    /// Starting parameters (a parameter file over the defaults); the base parameters stay
+    /// within a factor --base-range of them
+    #[arg(long, value_name = "FILE.toml")]
+    params: Option<PathBuf>,
+    /// How far the base parameters Kb, b, gamma1, gamma2 may move from the start (a factor)
+    #[arg(long, default_value_t = 2.0)]
+    base_range: f64,
+    /// Candidates refitted in each round (the best screening scores)
+    #[arg(long, default_value_t = 3)]
+    refits: usize,
+}
+
+pub fn run(a: Args) -> Result<(), String> {
+    let start = load_params(&a.params)?;
+    let experiments = read_all(&a.experiments)?;
+    if !(a.base_range.is_finite() && a.base_range > 1.0) {
+        return Err(format!("--base-range {}: must be > 1", a.base_range));
+    }
+    if a.refits == 0 {
+        return Err("--refits 0: at least one candidate must be refitted".into());
+    }
+    let opts = Options {
+        refits: a.refits,
+        base_range: a.base_range,
+        ..Options::default()
+    };
+    let d = diagnose::diagnose(&start, experiments, &opts)?;
+    report::write(&a.out, &d).map_err(|e| e.to_string())?;
+    if a.json {
+        let json =
+            serde_json::to_string_pretty(&report::to_json(&d)).expect("JSON of plain values");
+        say!("{json}");
+    } else {
+        let what = match d.verdict {
+            Verdict::Effect => d
+                .effects
+                .iter()
+                .map(|e| e.name())
+                .collect::<Vec<_>>()
+                .join(", "),
+            Verdict::Ambiguous => d
+                .ambiguous_between
+                .iter()
+                .map(|e| e.name())
+                .collect::<Vec<_>>()
+                .join(" or "),
+            _ => String::new(),
+        };
+        say!("verdict: {} {what}", d.verdict.name());
+        say!(
+            "wrote {}/diagnosis.json, report.md, fitted.toml ({:.1} s)",
+            a.out.display(),
+            d.timing.last().map_or(0.0, |t| t.1)
+        );
+    }
+    Ok(())
+}

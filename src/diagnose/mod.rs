@@ -1,0 +1,645 @@
+//! The missing-effect workflow (effects.md, "What `hasel diagnose` answers"): re-identify the
+//! paper's model, find where it disagrees with the data, rank the effects of the library that
+//! could explain it, add the best, re-identify and decide by evidence on held-out data.
+//!
+//! The first experiment estimates, the others are held out (with one experiment it does both
+//! and says so). An effect is added when, over the model without it:
+//! - the Bayesian information criterion on the estimation data drops by more than
+//!   [`BIC_MARGIN`], and by that margin more than with the runner-up;
+//! - on held-out data it closes at least [`GAP_CLOSED`] of the gap between the model's fit and
+//!   the fit the measurement noise allows, and gains at least [`MIN_GAIN`] points of fit;
+//! - the 95 % interval of its magnitude excludes the neutral value.
+//!
+//! Effects are added one after another while the next one passes. The verdict is `none` when
+//! the re-identified model is at the noise floor, `ambiguous` when two candidates pass and
+//! neither beats the other by the margin, `unexplained` when the residual is structured but no
+//! candidate passes.
+
+pub mod analysis;
+pub mod hidden;
+pub mod report;
+pub mod screen;
+
+use std::collections::BTreeMap;
+use std::time::Instant;
+
+use nalgebra::{DMatrix, DVector};
+
+use crate::identify::{self, Channel, Experiment, Identification, Options as IdOptions};
+use crate::model::{Effect, Params};
+use analysis::Disagreement;
+
+/// ΔBIC an effect must reach against the model without it, and against the runner-up.
+pub const BIC_MARGIN: f64 = 10.0;
+/// Share of the held-out gap to the noise floor an effect must close.
+pub const GAP_CLOSED: f64 = 0.5;
+/// Points of held-out fit an effect must gain.
+pub const MIN_GAIN: f64 = 0.2;
+/// Residual variance beyond the noise, as a fraction of it, below which a model is at the
+/// noise floor.
+pub const NOISE_FLOOR_EXCESS: f64 = 0.05;
+/// Points of held-out fit within which a model with an effect counts as at the noise floor:
+/// a further effect is looked for only beyond it (the library's term is rarely the data's
+/// exact form, and what it leaves is not a second mechanism).
+pub const FIT_TOLERANCE: f64 = 1.0;
+
+/// Settings of a diagnosis.
+#[derive(Clone, Debug)]
+pub struct Options {
+    /// Candidates refitted in each round, the best scores of the screening.
+    pub refits: usize,
+    /// Effects added at most.
+    pub max_effects: usize,
+    /// The base parameters stay within start / range … start · range: the plausible spread of
+    /// a device around its identified table. Without it a constant load is indistinguishable
+    /// from a common scale of Kb, b and γ1², as gravity is.
+    pub base_range: f64,
+    pub rtol: f64,
+}
+
+impl Default for Options {
+    fn default() -> Self {
+        Options {
+            refits: 3,
+            max_effects: 3,
+            base_range: 2.0,
+            rtol: 1e-8,
+        }
+    }
+}
+
+/// The answer.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Verdict {
+    Effect,
+    None,
+    Ambiguous,
+    Unexplained,
+}
+
+impl Verdict {
+    pub fn name(self) -> &'static str {
+        match self {
+            Verdict::Effect => "effect",
+            Verdict::None => "none",
+            Verdict::Ambiguous => "ambiguous",
+            Verdict::Unexplained => "unexplained",
+        }
+    }
+}
+
+/// One candidate of one round.
+#[derive(Clone, Debug)]
+pub struct Candidate {
+    pub effect: Effect,
+    /// Share of the residual its probe explains beyond the base parameters.
+    pub score: f64,
+    /// Start values of its parameters from the screening.
+    pub start: Vec<(&'static str, f64)>,
+    pub refit: Option<Refit>,
+    /// Why the refit could not run, if it could not.
+    pub refit_error: Option<String>,
+}
+
+/// A candidate added to the model and re-identified.
+#[derive(Clone, Debug)]
+pub struct Refit {
+    pub id: Identification,
+    /// BIC with the effect minus BIC without it, on the estimation data.
+    pub delta_bic: f64,
+    /// Mean gain of fit on held-out data [points].
+    pub fit_gain: f64,
+    /// Share of the held-out gap to the noise floor closed.
+    pub gap_closed: f64,
+    /// The magnitude's 95 % interval, and whether it excludes the neutral value.
+    pub interval: Option<(String, f64, f64)>,
+    pub interval_excludes_neutral: bool,
+    /// Why it failed, if it did.
+    pub failed: Vec<String>,
+}
+
+impl Refit {
+    pub fn passes(&self) -> bool {
+        self.failed.is_empty()
+    }
+}
+
+/// One round: the model it starts from and its candidates, best first.
+#[derive(Clone, Debug)]
+pub struct Round {
+    pub effects_before: Vec<Effect>,
+    pub candidates: Vec<Candidate>,
+    pub added: Option<Effect>,
+}
+
+/// Everything a diagnosis found.
+#[derive(Clone, Debug)]
+pub struct Diagnosis {
+    pub verdict: Verdict,
+    pub effects: Vec<Effect>,
+    pub ambiguous_between: Vec<Effect>,
+    /// For `ambiguous`: the experiment that would tell the candidates apart.
+    pub separating_experiment: Option<String>,
+    /// Names of the estimation and the held-out experiments.
+    pub estimation: String,
+    pub held_out: Vec<String>,
+    pub base: Identification,
+    pub last: Identification,
+    pub before: Vec<Disagreement>,
+    pub after: Vec<Disagreement>,
+    pub rounds: Vec<Round>,
+    /// Wall time per stage [s].
+    pub timing: Vec<(String, f64)>,
+    pub experiments: Vec<Experiment>,
+}
+
+/// Per-channel NRMSE fits on the held-out experiments (the estimation one when there is
+/// none), averaged over experiments, with the noise floor's fit beside them.
+pub fn held_out_fits(id: &Identification) -> BTreeMap<String, f64> {
+    let fits = if id.validation.is_empty() {
+        &id.estimation
+    } else {
+        &id.validation
+    };
+    let mut sum: BTreeMap<String, (f64, usize)> = BTreeMap::new();
+    for e in fits {
+        for (name, f) in &e.fits {
+            let s = sum.entry(name.clone()).or_default();
+            s.0 += f;
+            s.1 += 1;
+        }
+    }
+    sum.into_iter()
+        .map(|(k, (s, n))| (k, s / n as f64))
+        .collect()
+}
+
+/// BIC over the channels of one experiment: Σ_c N_c ln(RSS_c / N_c) + k ln N.
+fn bic(exp: &Experiment, sim: &[crate::simulation::Sample], k: usize) -> f64 {
+    let mut total = 0.0;
+    let mut n_all = 0;
+    for (c, y) in &exp.channels {
+        let rss: f64 = y.iter().zip(sim).map(|(m, s)| (m - c.of(s)).powi(2)).sum();
+        total += y.len() as f64 * (rss / y.len() as f64).ln();
+        n_all += y.len();
+    }
+    total + k as f64 * (n_all as f64).ln()
+}
+
+/// Mean fit gain and gap closed on held-out data between two identifications.
+fn held_out_gain(
+    held: &[Experiment],
+    before: &Identification,
+    after: &Identification,
+) -> (f64, f64) {
+    let (fb, fa) = if held.is_empty() {
+        (&before.estimation, &after.estimation)
+    } else {
+        (&before.validation, &after.validation)
+    };
+    let exps: Vec<&Experiment> = held.iter().collect();
+    let (mut gain, mut gap, mut n) = (0.0, 0.0, 0);
+    for (k, (b, a)) in fb.iter().zip(fa).enumerate() {
+        // the 2-D tip fit repeats tip_x and tip_y
+        for ((name, f0), (_, f1)) in b
+            .fits
+            .iter()
+            .zip(&a.fits)
+            .filter(|((n, _), _)| n != "tip_xy")
+        {
+            let floor = exps
+                .get(k)
+                .and_then(|e| floor_fit(e, name))
+                .unwrap_or(100.0);
+            gain += f1 - f0;
+            gap += (floor - f0).max(1e-9);
+            n += 1;
+        }
+    }
+    (
+        gain / n.max(1) as f64,
+        if gap > 0.0 {
+            (gain / gap).min(1.0)
+        } else {
+            0.0
+        },
+    )
+}
+
+fn held_or_estimation(estimation: &[Experiment], held: &[Experiment]) -> Vec<Experiment> {
+    if held.is_empty() {
+        estimation.to_vec()
+    } else {
+        held.to_vec()
+    }
+}
+
+/// The largest distance of a held-out fit below the noise floor's [points].
+fn worst_gap_to_floor(held: &[Experiment], id: &Identification) -> f64 {
+    let fits = if id.validation.is_empty() {
+        &id.estimation
+    } else {
+        &id.validation
+    };
+    let mut worst: f64 = 0.0;
+    for (e, f) in held.iter().zip(fits) {
+        for (name, v) in &f.fits {
+            if let Some(floor) = floor_fit(e, name) {
+                worst = worst.max(floor - v);
+            }
+        }
+    }
+    worst
+}
+
+/// The fit that the noise alone allows on channel `name` of `exp`.
+pub fn floor_fit(exp: &Experiment, name: &str) -> Option<f64> {
+    let (_, y) = exp.channels.iter().find(|(c, _)| c.name() == name)?;
+    let noise = analysis::noise_level(y);
+    let mean = y.iter().sum::<f64>() / y.len() as f64;
+    let spread = (y.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / y.len() as f64).sqrt();
+    Some(100.0 * (1.0 - noise / spread))
+}
+
+fn pooled_excess(d: &[Disagreement]) -> f64 {
+    d.iter().map(|x| x.excess).sum::<f64>() / d.len().max(1) as f64
+}
+
+fn disagreements(exps: &[Experiment], id: &Identification) -> Vec<Disagreement> {
+    exps.iter()
+        .zip(&id.simulated)
+        .flat_map(|(e, s)| analysis::disagreements(e, s))
+        .collect()
+}
+
+/// The free parameters: the base ones and those of `effects`.
+fn free_list(effects: &[Effect]) -> Vec<String> {
+    let mut free = identify::default_free();
+    for e in effects {
+        free.extend(e.parameters().iter().map(|s| s.to_string()));
+    }
+    free
+}
+
+/// Diagnoses `experiments` (the first estimates, the others are held out) from `start`.
+pub fn diagnose(
+    start: &Params,
+    experiments: Vec<Experiment>,
+    opts: &Options,
+) -> Result<Diagnosis, String> {
+    if experiments.is_empty() {
+        return Err("no experiment".into());
+    }
+    let mut timing = Vec::new();
+    let began = Instant::now();
+    let (estimation, held) = experiments.split_at(1);
+    // the ordering of the experiments in the identification's `simulated`
+    let ordered: Vec<Experiment> = estimation.iter().chain(held).cloned().collect();
+    let mut bounds = BTreeMap::new();
+    for name in identify::default_free() {
+        let v = start.get(&name).map_err(|e| e.to_string())?;
+        bounds.insert(name, (v / opts.base_range, v * opts.base_range));
+    }
+    let id_opts = |free: Vec<String>| IdOptions {
+        free,
+        bounds: bounds.clone(),
+        rtol: opts.rtol,
+        ..IdOptions::default()
+    };
+    let base = identify::identify(start, estimation, held, &id_opts(free_list(&[])))?;
+    timing.push((
+        "re-identify the paper's model".to_string(),
+        began.elapsed().as_secs_f64(),
+    ));
+    let before = disagreements(&ordered, &base);
+
+    let mut effects: Vec<Effect> = Vec::new();
+    let mut current = base.clone();
+    let mut rounds = Vec::new();
+    let mut verdict = None;
+    let mut ambiguous_between = Vec::new();
+    while effects.len() < opts.max_effects {
+        let now = disagreements(&ordered, &current);
+        if pooled_excess(&now) < NOISE_FLOOR_EXCESS {
+            break;
+        }
+        if !effects.is_empty()
+            && worst_gap_to_floor(&held_or_estimation(estimation, held), &current) <= FIT_TOLERANCE
+        {
+            break;
+        }
+        let t0 = Instant::now();
+        let mut candidates = screen(&current, &estimation[0], &effects, opts)?;
+        timing.push((
+            format!("screen candidates (round {})", rounds.len() + 1),
+            t0.elapsed().as_secs_f64(),
+        ));
+        let t0 = Instant::now();
+        for c in candidates.iter_mut().take(opts.refits) {
+            let mut p = current.params.clone();
+            for &(name, v) in &c.start {
+                p.set(name, v).map_err(|e| e.to_string())?;
+            }
+            let mut with = effects.clone();
+            with.push(c.effect);
+            // a refit that cannot run (the model leaves its domain) is a failed candidate
+            match identify::identify(&p, estimation, held, &id_opts(free_list(&with))) {
+                Ok(id) => c.refit = Some(judge(c.effect, id, &current, estimation, held, &effects)),
+                Err(e) => c.refit_error = Some(e),
+            }
+        }
+        timing.push((
+            format!(
+                "refit {} candidates (round {})",
+                opts.refits.min(candidates.len()),
+                rounds.len() + 1
+            ),
+            t0.elapsed().as_secs_f64(),
+        ));
+        let mut passing: Vec<&Candidate> = candidates
+            .iter()
+            .filter(|c| c.refit.as_ref().is_some_and(|r| r.passes()))
+            .collect();
+        passing.sort_by(|a, b| {
+            let (ra, rb) = (a.refit.as_ref().unwrap(), b.refit.as_ref().unwrap());
+            ra.delta_bic.total_cmp(&rb.delta_bic)
+        });
+        let round_effects = effects.clone();
+        match passing.as_slice() {
+            [] => {
+                if effects.is_empty() {
+                    verdict = Some(Verdict::Unexplained);
+                }
+                rounds.push(Round {
+                    effects_before: round_effects,
+                    candidates,
+                    added: None,
+                });
+                break;
+            }
+            [best, rest @ ..] => {
+                let rb = best.refit.as_ref().unwrap();
+                if let Some(second) = rest.first() {
+                    let rs = second.refit.as_ref().unwrap();
+                    let held_tie = (rb.fit_gain - rs.fit_gain).abs() < MIN_GAIN;
+                    if rs.delta_bic - rb.delta_bic < BIC_MARGIN && held_tie {
+                        ambiguous_between = vec![best.effect, second.effect];
+                        verdict = Some(Verdict::Ambiguous);
+                        rounds.push(Round {
+                            effects_before: round_effects,
+                            candidates: candidates.clone(),
+                            added: None,
+                        });
+                        break;
+                    }
+                }
+                let added = best.effect;
+                current = rb.id.clone();
+                effects.push(added);
+                rounds.push(Round {
+                    effects_before: round_effects,
+                    candidates: candidates.clone(),
+                    added: Some(added),
+                });
+            }
+        }
+    }
+    let verdict = verdict.unwrap_or(if effects.is_empty() {
+        Verdict::None
+    } else {
+        Verdict::Effect
+    });
+    let after = disagreements(&ordered, &current);
+    let separating_experiment = (verdict == Verdict::Ambiguous)
+        .then(|| separating_experiment(ambiguous_between[0], ambiguous_between[1]));
+    timing.push(("total".to_string(), began.elapsed().as_secs_f64()));
+    Ok(Diagnosis {
+        verdict,
+        effects,
+        ambiguous_between,
+        separating_experiment,
+        estimation: estimation[0].name.clone(),
+        held_out: held.iter().map(|e| e.name.clone()).collect(),
+        base,
+        last: current,
+        before,
+        after,
+        rounds,
+        timing,
+        experiments: ordered,
+    })
+}
+
+/// The screening of one round: every effect not yet added, scored, best first.
+fn screen(
+    current: &Identification,
+    exp: &Experiment,
+    effects: &[Effect],
+    opts: &Options,
+) -> Result<Vec<Candidate>, String> {
+    let params = &current.params;
+    let weights: Vec<(Channel, f64)> = exp
+        .channels
+        .iter()
+        .map(|(c, y)| (*c, analysis::noise_level(y).max(1e-15)))
+        .collect();
+    let y0 = screen::outputs(params, exp, &weights, opts.rtol)?;
+    let mut measured = Vec::new();
+    for (_, y) in &exp.channels {
+        let w = weights
+            .iter()
+            .find(|(c, _)| exp.measured(*c) == Some(y.as_slice()))
+            .unwrap()
+            .1;
+        measured.extend(y.iter().map(|v| v / w));
+    }
+    let residual = DVector::from_vec(measured) - &y0;
+    // base sensitivities: the base parameters and those of the effects already added
+    let names = free_list(effects);
+    let mut cols = Vec::new();
+    for name in &names {
+        let v = params.get(name).map_err(|e| e.to_string())?;
+        let mut p = params.clone();
+        let h = if v != 0.0 { 1e-3 * v } else { 1e-6 };
+        p.set(name, v + h).map_err(|e| e.to_string())?;
+        cols.push(screen::outputs(&p, exp, &weights, opts.rtol)? - &y0);
+    }
+    let base_dirs = DMatrix::from_columns(&cols);
+    let u_peak = exp
+        .t
+        .iter()
+        .map(|&t| {
+            exp.input
+                .value(t)
+                .iter()
+                .fold(0.0f64, |m, u| m.max(u.abs()))
+        })
+        .fold(0.0, f64::max);
+    let probes = screen::probes(params, u_peak);
+    let scores: Vec<screen::Score> = std::thread::scope(|s| {
+        let handles: Vec<_> = probes
+            .iter()
+            .map(|p| {
+                s.spawn(|| {
+                    screen::score(
+                        p, params, exp, &weights, opts.rtol, &base_dirs, &residual, &y0,
+                    )
+                })
+            })
+            .collect();
+        handles
+            .into_iter()
+            .map(|h| h.join().expect("a probe does not panic"))
+            .collect::<Result<Vec<_>, _>>()
+    })?;
+    let mut best: BTreeMap<Effect, screen::Score> = BTreeMap::new();
+    for s in scores {
+        if best.get(&s.effect).is_none_or(|b| s.score > b.score) {
+            best.insert(s.effect, s);
+        }
+    }
+    let mut out: Vec<Candidate> = best
+        .into_values()
+        .map(|s| Candidate {
+            effect: s.effect,
+            score: s.score,
+            start: s.start,
+            refit: None,
+            refit_error: None,
+        })
+        .collect();
+    out.sort_by(|a, b| b.score.total_cmp(&a.score));
+    Ok(out)
+}
+
+/// The evidence for adding `effect`, re-identified as `id`, to the model `before`.
+fn judge(
+    effect: Effect,
+    id: Identification,
+    before: &Identification,
+    estimation: &[Experiment],
+    held: &[Experiment],
+    effects: &[Effect],
+) -> Refit {
+    let k_before = free_list(effects).len();
+    let k_after = k_before + effect.parameters().len();
+    let delta_bic = bic(&estimation[0], &id.simulated[0], k_after)
+        - bic(&estimation[0], &before.simulated[0], k_before);
+    let held_exps: &[Experiment] = if held.is_empty() { estimation } else { held };
+    let (fit_gain, gap_closed) = held_out_gain(held_exps, before, &id);
+    let (interval, excludes) = magnitude_interval(effect, &id, estimation);
+    let mut failed = Vec::new();
+    if delta_bic > -BIC_MARGIN {
+        failed.push(format!(
+            "BIC drops by {:.1}, less than {BIC_MARGIN}",
+            -delta_bic
+        ));
+    }
+    if gap_closed < GAP_CLOSED {
+        failed.push(format!(
+            "closes {:.0} % of the held-out gap to the noise floor, less than {:.0} %",
+            100.0 * gap_closed,
+            100.0 * GAP_CLOSED
+        ));
+    }
+    if fit_gain < MIN_GAIN {
+        failed.push(format!(
+            "held-out fit gain {fit_gain:.2} points, less than {MIN_GAIN}"
+        ));
+    }
+    if !excludes {
+        failed.push("the 95 % interval of its magnitude includes the neutral value".into());
+    }
+    Refit {
+        id,
+        delta_bic,
+        fit_gain,
+        gap_closed,
+        interval,
+        interval_excludes_neutral: excludes,
+        failed,
+    }
+}
+
+/// The 95 % interval of the effect's magnitude and whether it excludes the neutral value
+/// (0, or for U_max the largest command: a limit above it clips nothing).
+fn magnitude_interval(
+    effect: Effect,
+    id: &Identification,
+    estimation: &[Experiment],
+) -> (Option<(String, f64, f64)>, bool) {
+    let ci = |name: &str| {
+        id.estimates
+            .iter()
+            .find(|e| e.name == name)
+            .and_then(|e| e.ci95.map(|(lo, hi)| (name.to_string(), lo, hi)))
+    };
+    match effect {
+        Effect::Saturation => {
+            let u_peak = estimation[0]
+                .t
+                .iter()
+                .map(|&t| {
+                    estimation[0]
+                        .input
+                        .value(t)
+                        .iter()
+                        .fold(0.0f64, |m, u| m.max(u.abs()))
+                })
+                .fold(0.0, f64::max);
+            let c = ci("U_max");
+            let ok = c.as_ref().is_some_and(|(_, _, hi)| *hi < u_peak);
+            (c, ok)
+        }
+        Effect::Preload => {
+            let cs: Vec<_> = effect.parameters().iter().filter_map(|n| ci(n)).collect();
+            let best = cs
+                .iter()
+                .find(|(_, lo, hi)| lo * hi > 0.0)
+                .or(cs.first())
+                .cloned();
+            let ok = cs.iter().any(|(_, lo, hi)| lo * hi > 0.0);
+            (best, ok)
+        }
+        _ => {
+            let c = ci(effect.parameters()[0]);
+            // in log coordinates the interval is positive; its relative width must exclude 0
+            // in linear terms: value / (1.96 se) > 1
+            let ok = id
+                .estimates
+                .iter()
+                .find(|e| e.name == effect.parameters()[0])
+                .and_then(|e| e.std_error.map(|se| e.value > 1.96 * se.abs()))
+                .unwrap_or(false);
+            (c, ok)
+        }
+    }
+}
+
+/// Which experiment tells two effects apart: what exposes each.
+pub fn separating_experiment(a: Effect, b: Effect) -> String {
+    let exposes = |e: Effect| match e {
+        Effect::Coupling => "driving one actuator alone: coupling moves the undriven ones",
+        Effect::ChargeDrift => {
+            "a unipolar voltage step held for tens of seconds: trapped charge keeps drifting the stroke"
+        }
+        Effect::Creep => {
+            "a step held for tens of seconds and then released: creep relaxes and recovers mechanically"
+        }
+        Effect::Hysteresis => {
+            "a slow triangle at two amplitudes: rate-independent loops keep their width at any speed"
+        }
+        Effect::AmplifierLag => "a multisine up to 100 rad/s: a lag attenuates the fast tones",
+        Effect::Delay => {
+            "a multisine up to 100 rad/s: a delay shifts the fast tones' phase without attenuating them"
+        }
+        Effect::Saturation => "the same sine at 30 V and 60 V: clipping acts only above U_max",
+        Effect::Stiffening => {
+            "the same sine at 30 V and 60 V: stiffening grows with the stroke, not the voltage peak"
+        }
+        Effect::Preload => {
+            "a record of the rest position before the drive starts: a preload shifts it"
+        }
+    };
+    format!("{}: {}; {}: {}", a, exposes(a), b, exposes(b))
+}

@@ -1,0 +1,441 @@
+//! `diagnosis.json`, `report.md` with its figures, and `fitted.toml` (the model with the
+//! named effects, ready for `hasel simulate` and `hasel fmu --params`).
+
+use std::fmt::Write as _;
+use std::path::Path;
+
+use serde_json::{Map, Value, json};
+
+use super::analysis::Disagreement;
+use super::{Candidate, Diagnosis, Verdict, floor_fit, held_out_fits};
+use crate::identify::ExperimentFit;
+use crate::io::csv::{FileError, write_text_atomic};
+use crate::io::params_file;
+use crate::plot::{self, Panel, Series};
+
+fn round(x: f64, digits: i32) -> f64 {
+    let f = 10f64.powi(digits);
+    (x * f).round() / f
+}
+
+fn fits_map(fits: &[ExperimentFit]) -> Value {
+    fits.iter()
+        .map(|f| {
+            let m: Map<String, Value> = f
+                .fits
+                .iter()
+                .map(|(c, v)| (c.clone(), json!(round(*v, 2))))
+                .collect();
+            (f.experiment.clone(), Value::Object(m))
+        })
+        .collect::<Map<_, _>>()
+        .into()
+}
+
+fn candidate_json(c: &Candidate) -> Value {
+    let mut v = json!({ "effect": c.effect.name(), "score": round(c.score, 4) });
+    if let Some(r) = &c.refit {
+        v["delta_bic"] = json!(round(r.delta_bic, 1));
+        v["fit_gain"] = json!(round(r.fit_gain, 2));
+        v["gap_closed"] = json!(round(r.gap_closed, 3));
+        v["interval"] = r.interval.as_ref().map_or(
+            Value::Null,
+            |(n, lo, hi)| json!({"parameter": n, "ci95": [lo, hi]}),
+        );
+        v["passes"] = json!(r.passes());
+        v["failed"] = json!(r.failed);
+    } else if let Some(e) = &c.refit_error {
+        v["refit_error"] = json!(e);
+    } else {
+        v["refit"] = json!("not refitted (lower screening score)");
+    }
+    v
+}
+
+fn disagreement_json(d: &Disagreement) -> Value {
+    json!({
+        "experiment": d.experiment,
+        "output": d.channel.name(),
+        "rms_um": round(d.rms * 1e6, 4),
+        "noise_um": round(d.noise * 1e6, 4),
+        "excess": round(d.excess, 4),
+        "omega": round(d.omega, 4),
+        "harmonics_um": d.harmonics.iter().map(|a| round(a * 1e6, 4)).collect::<Vec<_>>(),
+        "drift_um": round(d.drift * 1e6, 4),
+        "worst_window_s": [round(d.worst_window.0.0, 3), round(d.worst_window.0.1, 3)],
+        "correlations": d.correlations.iter().map(|(n, c)| (n.clone(), json!(round(*c, 3)))).collect::<Map<_, _>>(),
+        "off_harmonic": round(d.off_harmonic, 3),
+    })
+}
+
+/// The noise-floor fit of every held-out output, averaged over experiments.
+fn floor_map(d: &Diagnosis) -> Map<String, Value> {
+    let exps: Vec<_> = if d.held_out.is_empty() {
+        d.experiments.iter().take(1).collect()
+    } else {
+        d.experiments.iter().skip(1).collect()
+    };
+    let mut m = std::collections::BTreeMap::<String, (f64, usize)>::new();
+    for e in exps {
+        for (c, _) in &e.channels {
+            if let Some(f) = floor_fit(e, c.name()) {
+                let s = m.entry(c.name().to_string()).or_default();
+                s.0 += f;
+                s.1 += 1;
+            }
+        }
+    }
+    m.into_iter()
+        .map(|(k, (s, n))| (k, json!(round(s / n as f64, 2))))
+        .collect()
+}
+
+/// The JSON of effects.md, and the evidence behind it.
+pub fn to_json(d: &Diagnosis) -> Value {
+    let effect_params: Map<String, Value> = d
+        .effects
+        .iter()
+        .flat_map(|e| e.parameters().iter())
+        .filter_map(|name| {
+            let e = d.last.estimates.iter().find(|e| e.name == *name)?;
+            Some((name.to_string(), json!({"value": e.value, "ci95": e.ci95.map(|(a, b)| vec![a, b]), "estimated": e.estimated})))
+        })
+        .collect();
+    let as_map = |f: std::collections::BTreeMap<String, f64>| -> Map<String, Value> {
+        f.into_iter()
+            .map(|(k, v)| (k, json!(round(v, 2))))
+            .collect()
+    };
+    json!({
+        "verdict": d.verdict.name(),
+        "effects": d.effects.iter().map(|e| e.name()).collect::<Vec<_>>(),
+        "ambiguous_between": d.ambiguous_between.iter().map(|e| e.name()).collect::<Vec<_>>(),
+        "separating_experiment": d.separating_experiment,
+        "fit_before": as_map(held_out_fits(&d.base)),
+        "fit_after": as_map(held_out_fits(&d.last)),
+        "noise_floor_fit": floor_map(d),
+        "fits_on": if d.held_out.is_empty() { "estimation (no held-out experiment)" } else { "held-out experiments" },
+        "candidates": d.rounds.first().map(|r| r.candidates.iter().map(candidate_json).collect::<Vec<_>>()).unwrap_or_default(),
+        "rounds": d.rounds.iter().map(|r| json!({
+            "effects_before": r.effects_before.iter().map(|e| e.name()).collect::<Vec<_>>(),
+            "added": r.added.map(|e| e.name()),
+            "candidates": r.candidates.iter().map(candidate_json).collect::<Vec<_>>(),
+        })).collect::<Vec<_>>(),
+        "parameters": effect_params,
+        "estimation": d.estimation,
+        "held_out": d.held_out,
+        "fits": {
+            "before": { "estimation": fits_map(&d.base.estimation), "held_out": fits_map(&d.base.validation) },
+            "after": { "estimation": fits_map(&d.last.estimation), "held_out": fits_map(&d.last.validation) },
+        },
+        "disagreement_before": d.before.iter().map(disagreement_json).collect::<Vec<_>>(),
+        "disagreement_after": d.after.iter().map(disagreement_json).collect::<Vec<_>>(),
+        "timing_s": d.timing.iter().map(|(s, t)| (s.clone(), json!(round(*t, 2)))).collect::<Map<_, _>>(),
+    })
+}
+
+/// One sentence on the answer.
+fn headline(d: &Diagnosis) -> String {
+    let names = |v: &[crate::model::Effect]| {
+        v.iter()
+            .map(|e| format!("`{}` ({})", e.name(), e.mechanism()))
+            .collect::<Vec<_>>()
+            .join(", then ")
+    };
+    match d.verdict {
+        Verdict::Effect => format!("The missing effect: {}.", names(&d.effects)),
+        Verdict::None => "No missing effect: the paper's model, re-identified, explains the data to the noise floor.".into(),
+        Verdict::Ambiguous => format!(
+            "Ambiguous: {} explain the data equally well. The experiment that tells them apart: {}.",
+            names(&d.ambiguous_between),
+            d.separating_experiment.as_deref().unwrap_or("")
+        ),
+        Verdict::Unexplained => "Unexplained: the disagreement is structured, beyond the noise, but no effect of the library explains it.".into(),
+    }
+}
+
+fn disagreement_table(md: &mut String, ds: &[Disagreement]) {
+    let _ = writeln!(
+        md,
+        "| experiment | output | residual RMS [um] | noise [um] | excess over noise | mean [um] | 1st / 2nd / 3rd harmonic [um] | drift [um] | worst window [s] | strongest correlation | off-harmonic share |\n|---|---|---|---|---|---|---|---|---|---|---|"
+    );
+    for d in ds {
+        let strongest = d
+            .correlations
+            .iter()
+            .max_by(|a, b| a.1.abs().total_cmp(&b.1.abs()))
+            .map(|(n, c)| format!("{n} {c:+.2}"))
+            .unwrap_or_default();
+        let h = |k: usize| d.harmonics.get(k).map_or(0.0, |a| a * 1e6);
+        let _ = writeln!(
+            md,
+            "| {} | {} | {:.3} | {:.3} | {:.0} % | {:.3} | {:.3} / {:.3} / {:.3} | {:.3} | {:.2}–{:.2} | {} | {:.0} % |",
+            d.experiment,
+            d.channel.name(),
+            d.rms * 1e6,
+            d.noise * 1e6,
+            100.0 * d.excess,
+            h(0),
+            h(1),
+            h(2),
+            h(3),
+            d.drift * 1e6,
+            d.worst_window.0.0,
+            d.worst_window.0.1,
+            strongest,
+            100.0 * d.off_harmonic
+        );
+    }
+}
+
+fn candidates_table(md: &mut String, cs: &[Candidate]) {
+    let _ = writeln!(
+        md,
+        "| effect | screening score | ΔBIC (estimation) | held-out fit gain [points] | held-out gap closed | magnitude, 95 % interval | evidence |\n|---|---|---|---|---|---|---|"
+    );
+    for c in cs {
+        match (&c.refit, &c.refit_error) {
+            (Some(r), _) => {
+                let interval = r
+                    .interval
+                    .as_ref()
+                    .map_or("not determined".to_string(), |(n, lo, hi)| {
+                        format!("{n} in [{lo:.4e}, {hi:.4e}]")
+                    });
+                let _ = writeln!(
+                    md,
+                    "| {} | {:.3} | {:.1} | {:+.2} | {:.0} % | {} | {} |",
+                    c.effect.name(),
+                    c.score,
+                    r.delta_bic,
+                    r.fit_gain,
+                    100.0 * r.gap_closed,
+                    interval,
+                    if r.passes() {
+                        "passes every test".to_string()
+                    } else {
+                        r.failed.join("; ")
+                    }
+                );
+            }
+            (None, Some(e)) => {
+                let _ = writeln!(
+                    md,
+                    "| {} | {:.3} | | | | | refit failed: {e} |",
+                    c.effect.name(),
+                    c.score
+                );
+            }
+            (None, None) => {
+                let _ = writeln!(
+                    md,
+                    "| {} | {:.3} | | | | | not refitted (lower score) |",
+                    c.effect.name(),
+                    c.score
+                );
+            }
+        }
+    }
+}
+
+/// Measured, before and after for each output of one experiment, and the residuals.
+fn figure(d: &Diagnosis, k: usize) -> Vec<Panel> {
+    let um = 1e6;
+    let exp = &d.experiments[k];
+    let (before, after) = (&d.base.simulated[k], &d.last.simulated[k]);
+    exp.channels
+        .iter()
+        .flat_map(|(c, y)| {
+            let line = |label: &str, sim: &[crate::simulation::Sample], color| Series {
+                label: label.into(),
+                points: exp
+                    .t
+                    .iter()
+                    .zip(sim)
+                    .map(|(t, s)| (*t, c.of(s) * um))
+                    .collect(),
+                color,
+                dots: false,
+            };
+            let resid = |label: &str, sim: &[crate::simulation::Sample], color| Series {
+                label: label.into(),
+                points: exp
+                    .t
+                    .iter()
+                    .zip(y)
+                    .zip(sim)
+                    .map(|((t, v), s)| (*t, (v - c.of(s)) * um))
+                    .collect(),
+                color,
+                dots: true,
+            };
+            [
+                Panel {
+                    title: format!(
+                        "{} {}: measured, paper's model, with effect",
+                        exp.name,
+                        c.name()
+                    ),
+                    x_label: "t [s]".into(),
+                    y_label: "[um]".into(),
+                    series: vec![
+                        Series {
+                            label: "measured".into(),
+                            points: exp.t.iter().zip(y).map(|(t, v)| (*t, v * um)).collect(),
+                            color: 3,
+                            dots: true,
+                        },
+                        line("paper's model", before, 0),
+                        line("with effect", after, 1),
+                    ],
+                    equal_axes: false,
+                },
+                Panel {
+                    title: format!("{} {}: residuals before and after", exp.name, c.name()),
+                    x_label: "t [s]".into(),
+                    y_label: "[um]".into(),
+                    series: vec![resid("before", before, 0), resid("after", after, 1)],
+                    equal_axes: false,
+                },
+            ]
+        })
+        .collect()
+}
+
+fn fits_table(md: &mut String, d: &Diagnosis) {
+    let _ = writeln!(
+        md,
+        "| experiment | role | output | paper's model [%] | with effect [%] | noise floor [%] |\n|---|---|---|---|---|---|"
+    );
+    let rows = d
+        .base
+        .estimation
+        .iter()
+        .chain(&d.base.validation)
+        .zip(d.last.estimation.iter().chain(&d.last.validation));
+    for (k, (b, a)) in rows.enumerate() {
+        let role = if k == 0 { "estimation" } else { "held out" };
+        for ((c, fb), (_, fa)) in b.fits.iter().zip(&a.fits) {
+            let floor = floor_fit(&d.experiments[k], c).map_or("".into(), |f| format!("{f:.2}"));
+            let _ = writeln!(
+                md,
+                "| {} | {role} | {c} | {fb:.2} | {fa:.2} | {floor} |",
+                b.experiment
+            );
+        }
+    }
+}
+
+/// Writes `diagnosis.json`, `report.md`, its figures and `fitted.toml` into `dir`.
+pub fn write(dir: &Path, d: &Diagnosis) -> Result<(), FileError> {
+    std::fs::create_dir_all(dir)
+        .map_err(|e| FileError::new(dir, format!("cannot create folder: {e}")))?;
+    let mut md = format!("# Diagnosis: {}\n\n{}\n\n", d.verdict.name(), headline(d));
+    let _ = writeln!(
+        md,
+        "The paper's model was re-identified (Kb, b, gamma1, gamma2 of each actuator) on `{}`; decisions use {}.\n",
+        d.estimation,
+        if d.held_out.is_empty() {
+            "the same experiment (none was held out)".to_string()
+        } else {
+            format!(
+                "the held-out {}",
+                d.held_out
+                    .iter()
+                    .map(|n| format!("`{n}`"))
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            )
+        }
+    );
+    let _ = writeln!(md, "## Where and how the paper's model disagreed\n");
+    disagreement_table(&mut md, &d.before);
+    let _ = writeln!(
+        md,
+        "\nExcess over noise: residual variance beyond the measurement noise (estimated from the data's second differences), relative to it; 0 % is the noise floor. Harmonics are of the drive frequency found in U1; the off-harmonic share is residual power neither at a harmonic nor slow.\n"
+    );
+    for (k, r) in d.rounds.iter().enumerate() {
+        let _ = writeln!(
+            md,
+            "## Candidates, round {} (model with {})\n",
+            k + 1,
+            if r.effects_before.is_empty() {
+                "no effect".to_string()
+            } else {
+                r.effects_before
+                    .iter()
+                    .map(|e| e.name())
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            }
+        );
+        candidates_table(&mut md, &r.candidates);
+        let _ = writeln!(
+            md,
+            "\n{}\n",
+            match r.added {
+                Some(e) => format!("Added: `{}`, {}.", e.name(), e.form()),
+                None => "Nothing added in this round.".into(),
+            }
+        );
+    }
+    let _ = writeln!(
+        md,
+        "An effect is added when it lowers the BIC on the estimation data by more than {} (and by that margin more than the runner-up), closes at least {:.0} % of the held-out gap to the noise floor, gains at least {} points of held-out fit, and the 95 % interval of its magnitude excludes the neutral value.\n",
+        super::BIC_MARGIN,
+        100.0 * super::GAP_CLOSED,
+        super::MIN_GAIN
+    );
+    if !d.effects.is_empty() {
+        let _ = writeln!(
+            md,
+            "## The named effects and their parameters\n\n| effect | term | parameter | estimate | 95 % interval |\n|---|---|---|---|---|"
+        );
+        for e in &d.effects {
+            for name in e.parameters() {
+                if let Some(est) = d.last.estimates.iter().find(|x| x.name == *name) {
+                    let ci = est
+                        .ci95
+                        .map_or("held (not determined)".to_string(), |(a, b)| {
+                            format!("[{a:.4e}, {b:.4e}]")
+                        });
+                    let _ = writeln!(
+                        md,
+                        "| {} | {} | {} | {:.4e} | {} |",
+                        e.name(),
+                        e.form(),
+                        name,
+                        est.value,
+                        ci
+                    );
+                }
+            }
+        }
+        let _ = writeln!(md);
+    }
+    let _ = writeln!(md, "## Fits before and after (NRMSE, MATLAB `compare`)\n");
+    fits_table(&mut md, d);
+    let _ = writeln!(md, "\n## Where the disagreement went\n");
+    disagreement_table(&mut md, &d.after);
+    let _ = writeln!(md, "\n## Figures\n");
+    for k in 0..d.experiments.len() {
+        let file = format!("diagnosis_{k}.png");
+        let panels = figure(d, k);
+        let rows = panels.len() / 2;
+        plot::draw(
+            &dir.join(&file),
+            &panels,
+            2,
+            (1200, 330 * rows.max(1) as u32),
+        )?;
+        let _ = writeln!(md, "![{}]({file})\n", d.experiments[k].name);
+    }
+    let _ = writeln!(md, "## Time\n\n| stage | s |\n|---|---|");
+    for (s, t) in &d.timing {
+        let _ = writeln!(md, "| {s} | {t:.1} |");
+    }
+    let json = serde_json::to_string_pretty(&to_json(d)).expect("JSON of plain values");
+    write_text_atomic(&dir.join("diagnosis.json"), &(json + "\n"))?;
+    params_file::write(&dir.join("fitted.toml"), &d.last.params)?;
+    write_text_atomic(&dir.join("report.md"), &md)
+}

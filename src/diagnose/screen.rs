@@ -1,0 +1,172 @@
+//! Ranking the candidates before refitting them: a score test. At the re-identified model,
+//! each effect is switched on at a probe value and its change of the outputs is projected out
+//! of what the base parameters can already do (their sensitivities); the share of the
+//! residual that the rest explains is the effect's score, and the projection's coefficient
+//! scales the probe into a starting value for the refit.
+
+use nalgebra::{DMatrix, DVector};
+
+use crate::identify::{Channel, Experiment, simulate};
+use crate::model::{Effect, Params};
+
+/// Effect parameter settings that switch an effect on, each giving one direction in output
+/// space; several settings of one probe span a subspace (the preload's three torques).
+pub struct Probe {
+    pub effect: Effect,
+    pub columns: Vec<Vec<(&'static str, f64)>>,
+    pub scaling: Scaling,
+}
+
+/// How a probe's first setting (its magnitude) becomes a start value.
+#[derive(Clone, Copy, PartialEq, Eq)]
+pub enum Scaling {
+    /// A positive magnitude, scaled by the projection coefficient (within ×/÷ 5).
+    Magnitude,
+    /// A magnitude of either sign, scaled by the coefficient.
+    Signed,
+    /// A limit (U_max): the probe value is kept.
+    Fixed,
+}
+
+/// Probes of every effect not yet in `params`, at values that change the response by a few
+/// percent of its range at the paper's excitation.
+pub fn probes(params: &Params, u_peak: f64) -> Vec<Probe> {
+    let kb = params.act.iter().map(|a| a.kb).sum::<f64>() / 3.0;
+    let one = |effect, settings: Vec<(&'static str, f64)>| Probe {
+        effect,
+        columns: vec![settings],
+        scaling: Scaling::Magnitude,
+    };
+    let mut out = Vec::new();
+    for e in Effect::ALL
+        .into_iter()
+        .filter(|e| !e.is_active(&params.effects))
+    {
+        match e {
+            Effect::Coupling => out.push(one(e, vec![("k_c", 1000.0)])),
+            Effect::ChargeDrift => {
+                for tau in [0.3, 1.0, 3.0] {
+                    out.push(one(e, vec![("R3", 3e4), ("tau3", tau)]));
+                }
+            }
+            Effect::Creep => {
+                for tau in [0.2, 0.6, 2.0] {
+                    out.push(one(e, vec![("k_v", 0.2 * kb), ("tau_v", tau)]));
+                }
+            }
+            Effect::Hysteresis => {
+                for theta in [1e-3, 3e-3] {
+                    out.push(one(e, vec![("k_h", 0.2 * kb), ("theta_h", theta)]));
+                }
+            }
+            Effect::AmplifierLag => {
+                for tau in [0.01, 0.04] {
+                    out.push(one(e, vec![("tau_a", tau)]));
+                }
+            }
+            Effect::Delay => {
+                for tau in [0.005, 0.02] {
+                    out.push(one(e, vec![("tau_d", tau)]));
+                }
+            }
+            Effect::Saturation => {
+                for f in [0.8, 0.9, 0.97] {
+                    out.push(Probe {
+                        effect: e,
+                        columns: vec![vec![("U_max", f * u_peak)]],
+                        scaling: Scaling::Fixed,
+                    });
+                }
+            }
+            Effect::Stiffening => out.push(one(e, vec![("k3", 0.2 * kb / 0.015f64.powi(2))])),
+            Effect::Preload => out.push(Probe {
+                effect: e,
+                columns: ["tau0_1", "tau0_2", "tau0_3"]
+                    .iter()
+                    .map(|n| vec![(*n, kb * 1e-3)])
+                    .collect(),
+                scaling: Scaling::Signed,
+            }),
+        }
+    }
+    out
+}
+
+/// The stacked outputs of `params` on `exp`, each channel divided by its weight.
+pub fn outputs(
+    params: &Params,
+    exp: &Experiment,
+    weights: &[(Channel, f64)],
+    rtol: f64,
+) -> Result<DVector<f64>, String> {
+    let sim = simulate(params, exp, rtol)?;
+    let mut v = Vec::new();
+    for &(c, w) in weights {
+        v.extend(sim.iter().map(|s| c.of(s) / w));
+    }
+    Ok(DVector::from_vec(v))
+}
+
+/// A probe's outcome: its score and the start values it suggests.
+pub struct Score {
+    pub effect: Effect,
+    /// Share of the weighted residual the probe explains beyond the base parameters [0, 1].
+    pub score: f64,
+    pub start: Vec<(&'static str, f64)>,
+}
+
+/// Scores every probe on `exp` at `params`, whose base sensitivities are `base_directions`
+/// (weighted outputs' changes per unit change of each base parameter), `residual` the weighted
+/// measured − simulated, `y0` the weighted outputs at `params`.
+pub fn score(
+    probe: &Probe,
+    params: &Params,
+    exp: &Experiment,
+    weights: &[(Channel, f64)],
+    rtol: f64,
+    base_directions: &DMatrix<f64>,
+    residual: &DVector<f64>,
+    y0: &DVector<f64>,
+) -> Result<Score, String> {
+    let mut cols = Vec::new();
+    let mut settings = Vec::new();
+    for column in &probe.columns {
+        let mut p = params.clone();
+        for &(name, v) in column {
+            p.set(name, v).map_err(|e| e.to_string())?;
+        }
+        cols.push(outputs(&p, exp, weights, rtol)? - y0);
+        settings.push(column.clone());
+    }
+    let d = DMatrix::from_columns(&cols);
+    // project out the base sensitivities: D⊥ = D − B (B⁺ D)
+    let b = base_directions;
+    let svd = b.clone().svd(true, true);
+    let d_perp = &d - b * svd.solve(&d, 1e-12).map_err(|e| e.to_string())?;
+    let r_perp = residual - b * svd.solve(residual, 1e-12).map_err(|e| e.to_string())?;
+    let qr = d_perp.clone().svd(true, true);
+    let coef = qr.solve(&r_perp, 1e-9).map_err(|e| e.to_string())?;
+    let explained = (&d_perp * &coef).norm_squared();
+    let total = r_perp.norm_squared().max(1e-300);
+    let mut start = Vec::new();
+    for (k, column) in settings.iter().enumerate() {
+        let c = coef[k];
+        for (i, &(name, v)) in column.iter().enumerate() {
+            // the first setting of a column is its magnitude; the others (time constants,
+            // saturation angles) are kept
+            let value = match probe.scaling {
+                Scaling::Magnitude if i == 0 => v * c.clamp(0.2, 5.0),
+                Scaling::Signed if i == 0 => v * c,
+                _ => v,
+            };
+            start.push((name, value));
+        }
+    }
+    // an effect that can only act with one sign explains nothing against it
+    let wrong_sign = probe.scaling == Scaling::Magnitude && coef[0] <= 0.0;
+    Ok(Score {
+        effect: probe.effect,
+        score: if wrong_sign { 0.0 } else { explained / total },
+        start,
+    })
+}
