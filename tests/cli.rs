@@ -228,3 +228,66 @@ fn identify_refuses_bad_data_and_writes_nothing() {
     );
     assert!(!out.exists());
 }
+
+#[test]
+fn diagnose_answers_in_json_and_refuses_bad_data() {
+    let dir = scratch("diagnose");
+    let (a, b) = (dir.join("w3pi.csv"), dir.join("w11.csv"));
+    for (file, sine, seed) in [(&a, "60,9.42477796", "1"), (&b, "60,11", "2")] {
+        let o = hasel(&[
+            "synth",
+            "--effect",
+            "none",
+            "--sine",
+            sine,
+            "--t-end",
+            "3",
+            "--seed",
+            seed,
+            "--out",
+            s(file),
+        ]);
+        assert!(o.status.success(), "{}", stderr(&o));
+        assert!(String::from_utf8_lossy(&o.stdout).contains("hidden: no effect"));
+    }
+    let out = dir.join("out");
+    let o = hasel(&["diagnose", s(&a), s(&b), "--out", s(&out), "--json"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let json: serde_json::Value = serde_json::from_slice(&o.stdout).expect("JSON on stdout");
+    assert_eq!(json["verdict"], "none");
+    assert_eq!(json["effects"], serde_json::json!([]));
+    for key in ["fit_before", "fit_after", "candidates", "ambiguous_between"] {
+        assert!(json.get(key).is_some(), "{key} missing");
+    }
+    for file in [
+        "diagnosis.json",
+        "report.md",
+        "fitted.toml",
+        "diagnosis_0.png",
+    ] {
+        assert!(out.join(file).exists(), "{file} missing");
+    }
+
+    let bad = dir.join("bad.csv");
+    let text = std::fs::read_to_string(&b).unwrap();
+    std::fs::write(&bad, text.replacen("\n0.001,", "\n0.001,x", 1)).unwrap();
+    let out = dir.join("out2");
+    let o = hasel(&["diagnose", s(&a), s(&bad), "--out", s(&out)]);
+    assert!(!o.status.success());
+    assert!(
+        stderr(&o).contains(&format!("{}:3", bad.display())),
+        "{}",
+        stderr(&o)
+    );
+    assert!(!out.exists());
+
+    let o = hasel(&[
+        "synth",
+        "--effect",
+        "gremlins",
+        "--out",
+        s(&dir.join("g.csv")),
+    ]);
+    assert!(!o.status.success());
+    assert!(stderr(&o).contains("--effect gremlins"), "{}", stderr(&o));
+}

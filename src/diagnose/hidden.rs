@@ -57,18 +57,18 @@ pub struct Hidden {
     pub params: Params,
     /// Measurement noise as a fraction of each output's range.
     pub noise: f64,
-    /// Window of a moving average between command and amplifier [s], if any: a linear-phase
-    /// digital filter, whose delay is half its window.
-    pub average_window: Option<f64>,
+    /// A transport delay between command and amplifier that wanders around its mean [s]
+    /// (mean, phase of the wander), if any.
+    pub wandering_delay: Option<(f64, f64)>,
     /// Floor vibration: amplitude (fraction of range), frequency [Hz], phase [rad].
     pub vibration: Option<(f64, f64, f64)>,
     /// The hidden mechanism and its values, in words.
     pub description: String,
 }
 
-/// Angle at which the stiffness terms are compared with Kb θ: about the stroke of actuators 2
+/// Angle at which the stiffness terms are compared with Kb θ: within the stroke of actuators 2
 /// and 3 [rad].
-const THETA_REF: f64 = 0.015;
+const THETA_REF: f64 = 0.012;
 
 /// Draws a case hiding `truth`; `seed` fixes everything.
 pub fn hide(truth: Truth, seed: u64) -> Result<Hidden, String> {
@@ -84,7 +84,7 @@ pub fn hide(truth: Truth, seed: u64) -> Result<Hidden, String> {
     let noise = between(0.005, 0.02);
     let kb = params.act.map(|a| a.kb);
     let mean_kb = kb.iter().sum::<f64>() / 3.0;
-    let mut average_window = None;
+    let mut wandering_delay = None;
     let mut vibration = None;
     let fx = &mut params.effects;
     let description = match truth {
@@ -130,8 +130,8 @@ pub fn hide(truth: Truth, seed: u64) -> Result<Hidden, String> {
         }
         Truth::Effect(Effect::Hysteresis) => {
             fx.hysteresis.law = HysteresisLaw::Dahl;
-            fx.hysteresis.k_h = between(0.15, 0.4) * mean_kb;
-            fx.hysteresis.theta_h = log_between(&mut between, 1e-3, 4e-3);
+            fx.hysteresis.k_h = between(0.25, 0.5) * mean_kb;
+            fx.hysteresis.theta_h = log_between(&mut between, 2e-3, 6e-3);
             format!(
                 "Dahl hysteresis, k_h = {:.3} N.m/rad, theta_h = {:.2e} rad",
                 fx.hysteresis.k_h, fx.hysteresis.theta_h
@@ -141,16 +141,17 @@ pub fn hide(truth: Truth, seed: u64) -> Result<Hidden, String> {
             fx.amplifier_lag.order = 2;
             fx.amplifier_lag.tau_a = log_between(&mut between, 0.02, 0.06);
             format!(
-                "second-order amplifier, two stages of {:.1} ms",
-                500.0 * fx.amplifier_lag.tau_a
+                "two-stage amplifier, {:.1} ms and {:.1} ms",
+                800.0 * fx.amplifier_lag.tau_a,
+                200.0 * fx.amplifier_lag.tau_a
             )
         }
         Truth::Effect(Effect::Delay) => {
             let tau = log_between(&mut between, 0.008, 0.025);
-            average_window = Some(2.0 * tau);
+            wandering_delay = Some((tau, between(0.0, 2.0 * PI)));
             format!(
-                "moving average of the command over {:.1} ms (a linear-phase filter, delay {:.1} ms)",
-                2000.0 * tau,
+                "a transport delay wandering by +-{:.0} % around {:.1} ms at {WANDER_HZ} Hz (network jitter)",
+                100.0 * WANDER,
                 1000.0 * tau
             )
         }
@@ -163,11 +164,11 @@ pub fn hide(truth: Truth, seed: u64) -> Result<Hidden, String> {
             )
         }
         Truth::Effect(Effect::Stiffening) => {
-            fx.stiffening.exponent = 6;
+            fx.stiffening.exponent = 5;
             let s = between(0.3, 0.8);
-            fx.stiffening.k3 = s * mean_kb / THETA_REF.powi(4);
+            fx.stiffening.k3 = s * mean_kb / THETA_REF.powi(3);
             format!(
-                "sixth-power stiffening H += k theta^6 / 6, {:.0} % of Kb theta at theta = {THETA_REF} rad",
+                "fifth-power stiffening H += k |theta|^5 / 5, {:.0} % of Kb theta at theta = {THETA_REF} rad",
                 100.0 * s
             )
         }
@@ -188,7 +189,7 @@ pub fn hide(truth: Truth, seed: u64) -> Result<Hidden, String> {
         truth,
         params,
         noise,
-        average_window,
+        wandering_delay,
         vibration,
         description: format!("{description}; noise {:.2} % of range", 100.0 * noise),
     })
@@ -198,38 +199,28 @@ fn log_between(between: &mut impl FnMut(f64, f64) -> f64, lo: f64, hi: f64) -> f
     between(lo.ln(), hi.ln()).exp()
 }
 
-/// The command averaged over the last `window` seconds (0 before t = 0), tabulated every
-/// 0.5 ms and replayed as a spline.
-fn moving_average(input: &Input, window: f64, t_end: f64) -> Result<Input, String> {
+/// Relative wander of the hidden transport delay, and its frequency [Hz].
+const WANDER: f64 = 0.05;
+const WANDER_HZ: f64 = 0.37;
+
+/// The command late by τ(t) = τ (1 + WANDER sin(2π WANDER_HZ t + phase)), 0 before it
+/// arrives, tabulated every 0.5 ms and replayed linearly.
+fn delayed(input: &Input, tau: f64, phase: f64, t_end: f64) -> Result<Input, String> {
     const STEP: f64 = 5e-4;
-    const NODES: usize = 32; // Simpson's rule, even
     let n = (t_end / STEP).ceil() as usize + 1;
     let t: Vec<f64> = (0..=n).map(|k| k as f64 * STEP).collect();
     let u = t
         .iter()
         .map(|&tk| {
-            let (a, h) = (
-                (tk - window).max(0.0),
-                (tk - (tk - window).max(0.0)) / NODES as f64,
-            );
-            let mut sum = [0.0; 3];
-            for j in 0..=NODES {
-                let w = if j == 0 || j == NODES {
-                    1.0
-                } else if j % 2 == 1 {
-                    4.0
-                } else {
-                    2.0
-                };
-                let v = input.value(a + j as f64 * h);
-                for i in 0..3 {
-                    sum[i] += w * v[i];
-                }
+            let late = tk - tau * (1.0 + WANDER * (2.0 * PI * WANDER_HZ * tk + phase).sin());
+            if late < 0.0 {
+                [0.0; 3]
+            } else {
+                input.value(late)
             }
-            sum.map(|s| s * h / 3.0 / window)
         })
         .collect();
-    Input::sampled(t, u, Interpolation::Spline)
+    Input::sampled(t, u, Interpolation::Linear)
 }
 
 impl Hidden {
@@ -243,8 +234,8 @@ impl Hidden {
         columns: Columns,
         seed: u64,
     ) -> Result<Spec, String> {
-        let drive = match self.average_window {
-            Some(window) => Some(moving_average(&input, window, t_end)?),
+        let drive = match self.wandering_delay {
+            Some((tau, phase)) => Some(delayed(&input, tau, phase, t_end)?),
             None => None,
         };
         Ok(Spec {

@@ -75,3 +75,19 @@ def test_parameters_can_be_set_as_start_values(fmu_path):
     stiffer = simulate_fmu(fmu_path, stop_time=0.3, step_size=1e-3, output=["h2"], start_values={"Kb_2": 0.6})
     # the rest state sags less with a stiffer bending spring
     assert abs(stiffer["h2"][0]) < abs(ref["h2"][0])
+
+
+def test_effects_are_parameters_and_their_states_variables(fmu_path):
+    # amplifier_lag: the amplifier's output follows a 50 V command with its time constant
+    lag = simulate_fmu(fmu_path, stop_time=0.1, step_size=1e-3, output=["U_amp_1", "h1"],
+                       start_values={"tau_a": 0.03, "U1": 50.0})
+    k = int(np.argmin(np.abs(lag["time"] - 0.03)))
+    assert abs(lag["U_amp_1"][k] - 50.0 * (1.0 - np.exp(-1.0))) < 0.5
+    # delay: nothing moves before the command arrives, then the actuator does
+    late = simulate_fmu(fmu_path, stop_time=0.1, step_size=1e-3, output=["h1"],
+                        start_values={"tau_d": 0.05, "U1": 60.0})
+    before, after = late["h1"][late["time"] < 0.049], late["h1"][late["time"] > 0.09]
+    assert np.ptp(before) < 1e-12 and after[-1] - before[0] > 0.5e-6
+    # the states of effects that are off read 0
+    off = simulate_fmu(fmu_path, stop_time=0.01, step_size=1e-3, output=["Q3_1", "z_v_2"])
+    assert np.all(off["Q3_1"] == 0.0) and np.all(off["z_v_2"] == 0.0)

@@ -185,12 +185,13 @@ pub struct Hysteresis {
     pub law: HysteresisLaw,
 }
 
-/// Bandwidth of the amplifier: first order in the library, or two equal stages.
+/// Bandwidth of the amplifier: first order in the library, or two stages.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct AmplifierLag {
     /// τ_a [s]; 0 is an ideal amplifier.
     pub tau_a: f64,
-    /// Library form: 1. With 2, two stages of τ_a/2 each (same low-frequency phase lag).
+    /// Library form: 1. With 2, two stages of 0.8 τ_a and 0.2 τ_a (the same low-frequency
+    /// phase lag, a steeper roll-off).
     pub order: usize,
 }
 
@@ -212,7 +213,7 @@ pub struct Saturation {
     pub soft: bool,
 }
 
-/// Nonlinear film stiffness: H += k3 θ^n / n.
+/// Nonlinear film stiffness: H += k3 |θ|^n / n.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Stiffening {
     /// k3 [N m/rad^(n−1)].

@@ -51,7 +51,7 @@ pub struct Terms {
     drift: Vec<(usize, f64, f64)>, // (index, R, τ) per stage
     creep: Vec<(usize, f64, f64)>, // (index, k, τ) per branch
     hyst: Option<usize>,
-    amp: Vec<usize>,
+    amp: Vec<(usize, f64)>, // (index, time constant) per stage
 }
 
 /// The voltage at an actuator's port.
@@ -99,9 +99,16 @@ impl Terms {
             None
         };
         let mut amp = Vec::new();
-        if fx.amplifier_lag.tau_a > 0.0 {
-            for k in 0..fx.amplifier_lag.order.max(1) {
-                amp.push(push(Extra::Amplifier(k)).unwrap());
+        let tau = fx.amplifier_lag.tau_a;
+        if tau > 0.0 {
+            // two stages keep the low-frequency phase lag of one: τ = 0.8 τ_a + 0.2 τ_a
+            let stages = if fx.amplifier_lag.order >= 2 {
+                vec![0.8 * tau, 0.2 * tau]
+            } else {
+                vec![tau]
+            };
+            for (k, t) in stages.into_iter().enumerate() {
+                amp.push((push(Extra::Amplifier(k)).unwrap(), t));
             }
         }
         Terms {
@@ -166,7 +173,7 @@ impl Terms {
 
     /// The voltage at the actuator's port: U through the amplifier's lag and its clipping.
     pub fn port(&self, x: &[f64], u: f64) -> Port {
-        let v = self.amp.last().map_or(u, |&k| x[k]);
+        let v = self.amp.last().map_or(u, |&(k, _)| x[k]);
         let (u_eff, slope) = self.clip(v);
         Port { u_eff, slope }
     }
@@ -190,9 +197,10 @@ impl Terms {
         }
         let st = self.fx.stiffening;
         if st.k3 != 0.0 {
+            // H = k3 |θ|ⁿ / n: the torque k3 θ |θ|ⁿ⁻², odd in θ for any n
             let n = st.exponent;
-            h_t += st.k3 * th.powi(n - 1);
-            h_tt += st.k3 * f64::from(n - 1) * th.powi(n - 2);
+            h_t += st.k3 * th * th.abs().powi(n - 2);
+            h_tt += st.k3 * f64::from(n - 1) * th.abs().powi(n - 2);
         }
         let tau0 = self.fx.preload.tau0[i];
         if tau0 != 0.0 {
@@ -249,14 +257,11 @@ impl Terms {
                 dx[k] = i0 - xi[k] / tk;
             }
         }
-        if let Some((&first, rest)) = self.amp.split_first() {
-            let rate = self.amp.len() as f64 / self.fx.amplifier_lag.tau_a;
-            dx[first] = rate * (u - xi[first]);
-            let mut prev = first;
-            for &k in rest {
-                dx[k] = rate * (xi[prev] - xi[k]);
-                prev = k;
-            }
+        // each stage follows the one before it (the first follows U)
+        let mut prev = u;
+        for &(k, t) in &self.amp {
+            dx[k] = (prev - xi[k]) / t;
+            prev = xi[k];
         }
         Ok(())
     }
@@ -331,7 +336,7 @@ impl Terms {
         let port = self.port(xi, u);
         // the port voltage's dependence on the last amplifier state
         let source = act.g0 * act.ga(xi[THETA]) * port.slope;
-        if let Some(&last) = self.amp.last() {
+        if let Some(&(last, _)) = self.amp.last() {
             add(o + Q1, o + last, source);
             add(o + Q2, o + last, source);
         }
@@ -356,20 +361,18 @@ impl Terms {
                     add(o + k, o + j, -g0 * rj / tj);
                 }
                 add(o + k, o + k, -1.0 / tk);
-                if let Some(&last) = self.amp.last() {
+                if let Some(&(last, _)) = self.amp.last() {
                     add(o + k, o + last, source);
                 }
             }
         }
-        if let Some((&first, rest)) = self.amp.split_first() {
-            let rate = self.amp.len() as f64 / self.fx.amplifier_lag.tau_a;
-            add(o + first, o + first, -rate);
-            let mut prev = first;
-            for &k in rest {
-                add(o + k, o + prev, rate);
-                add(o + k, o + k, -rate);
-                prev = k;
+        let mut prev = None;
+        for &(k, t) in &self.amp {
+            add(o + k, o + k, -1.0 / t);
+            if let Some(j) = prev {
+                add(o + k, o + j, 1.0 / t);
             }
+            prev = Some(k);
         }
         Ok(())
     }
@@ -389,7 +392,7 @@ impl Terms {
             let th = x[i][THETA];
             let st = self.fx.stiffening;
             if st.k3 != 0.0 {
-                e += st.k3 * th.powi(st.exponent) / f64::from(st.exponent);
+                e += st.k3 * th.abs().powi(st.exponent) / f64::from(st.exponent);
             }
             let tau0 = self.fx.preload.tau0[i];
             e += match self.fx.preload.law {
