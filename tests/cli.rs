@@ -270,7 +270,11 @@ fn diagnose_answers_in_json_and_refuses_bad_data() {
 
     let bad = dir.join("bad.csv");
     let text = std::fs::read_to_string(&b).unwrap();
-    std::fs::write(&bad, text.replacen("\n0.001,", "\n0.001,x", 1)).unwrap();
+    std::fs::write(
+        &bad,
+        text.replacen("\n1.000000000000e-3,", "\n1.000000000000e-3,x", 1),
+    )
+    .unwrap();
     let out = dir.join("out2");
     let o = hasel(&["diagnose", s(&a), s(&bad), "--out", s(&out)]);
     assert!(!o.status.success());

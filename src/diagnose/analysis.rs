@@ -67,6 +67,14 @@ pub fn drive_frequency(exp: &Experiment) -> f64 {
     std::f64::consts::PI * (crossings.len() - 1) as f64 / span
 }
 
+/// The largest |U_i| commanded in an experiment [V].
+pub fn peak_command(exp: &Experiment) -> f64 {
+    exp.t
+        .iter()
+        .flat_map(|&t| exp.input.value(t))
+        .fold(0.0, |m: f64, u| m.max(u.abs()))
+}
+
 fn correlation(a: &[f64], b: &[f64]) -> f64 {
     let n = a.len() as f64;
     let (ma, mb) = (a.iter().sum::<f64>() / n, b.iter().sum::<f64>() / n);

@@ -175,9 +175,8 @@ pub fn hide(truth: Truth, seed: u64) -> Result<Hidden, String> {
         Truth::Effect(Effect::Preload) => {
             fx.preload.law = PreloadLaw::Weight;
             // a load that lowers each actuator by 3–10 µm at rest: Δθ = 2 Δh / Lv
-            for i in 0..3 {
-                let dh = between(3e-6, 10e-6);
-                fx.preload.tau0[i] = kb[i] * 2.0 * dh / 0.012;
+            for (tau0, kb) in fx.preload.tau0.iter_mut().zip(kb) {
+                *tau0 = kb * 2.0 * between(3e-6, 10e-6) / params.lv;
             }
             format!(
                 "a weight on the platform, torques {:.2e} {:.2e} {:.2e} N.m (tau0 cos theta)",

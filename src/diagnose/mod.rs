@@ -23,9 +23,7 @@ pub mod screen;
 use std::collections::BTreeMap;
 use std::time::Instant;
 
-use nalgebra::{DMatrix, DVector};
-
-use crate::identify::{self, Channel, Experiment, Identification, Options as IdOptions};
+use crate::identify::{self, Experiment, Identification, Options as IdOptions};
 use crate::model::{Effect, Params};
 use analysis::Disagreement;
 
@@ -438,55 +436,11 @@ fn screen(
     opts: &Options,
 ) -> Result<Vec<Candidate>, String> {
     let params = &current.params;
-    let weights: Vec<(Channel, f64)> = exp
-        .channels
-        .iter()
-        .map(|(c, y)| (*c, analysis::noise_level(y).max(1e-15)))
-        .collect();
-    let y0 = screen::outputs(params, exp, &weights, opts.rtol)?;
-    let mut measured = Vec::new();
-    for (_, y) in &exp.channels {
-        let w = weights
-            .iter()
-            .find(|(c, _)| exp.measured(*c) == Some(y.as_slice()))
-            .unwrap()
-            .1;
-        measured.extend(y.iter().map(|v| v / w));
-    }
-    let residual = DVector::from_vec(measured) - &y0;
     // base sensitivities: the base parameters and those of the effects already added
-    let names = free_list(effects);
-    let mut cols = Vec::new();
-    for name in &names {
-        let v = params.get(name).map_err(|e| e.to_string())?;
-        let mut p = params.clone();
-        let h = if v != 0.0 { 1e-3 * v } else { 1e-6 };
-        p.set(name, v + h).map_err(|e| e.to_string())?;
-        cols.push(screen::outputs(&p, exp, &weights, opts.rtol)? - &y0);
-    }
-    let base_dirs = DMatrix::from_columns(&cols);
-    let u_peak = exp
-        .t
-        .iter()
-        .map(|&t| {
-            exp.input
-                .value(t)
-                .iter()
-                .fold(0.0f64, |m, u| m.max(u.abs()))
-        })
-        .fold(0.0, f64::max);
-    let probes = screen::probes(params, u_peak);
+    let point = screen::Point::new(params, exp, &free_list(effects), opts.rtol)?;
+    let probes = screen::probes(params, analysis::peak_command(exp));
     let scores: Vec<screen::Score> = std::thread::scope(|s| {
-        let handles: Vec<_> = probes
-            .iter()
-            .map(|p| {
-                s.spawn(|| {
-                    screen::score(
-                        p, params, exp, &weights, opts.rtol, &base_dirs, &residual, &y0,
-                    )
-                })
-            })
-            .collect();
+        let handles: Vec<_> = probes.iter().map(|p| s.spawn(|| point.score(p))).collect();
         handles
             .into_iter()
             .map(|h| h.join().expect("a probe does not panic"))
@@ -576,17 +530,7 @@ fn magnitude_interval(
     };
     match effect {
         Effect::Saturation => {
-            let u_peak = estimation[0]
-                .t
-                .iter()
-                .map(|&t| {
-                    estimation[0]
-                        .input
-                        .value(t)
-                        .iter()
-                        .fold(0.0f64, |m, u| m.max(u.abs()))
-                })
-                .fold(0.0, f64::max);
+            let u_peak = analysis::peak_command(&estimation[0]);
             let c = ci("U_max");
             let ok = c.as_ref().is_some_and(|(_, _, hi)| *hi < u_peak);
             (c, ok)

@@ -6,6 +6,7 @@
 
 use nalgebra::{DMatrix, DVector};
 
+use super::analysis::noise_level;
 use crate::identify::{Channel, Experiment, simulate};
 use crate::model::{Effect, Params};
 
@@ -93,7 +94,7 @@ pub fn probes(params: &Params, u_peak: f64) -> Vec<Probe> {
 }
 
 /// The stacked outputs of `params` on `exp`, each channel divided by its weight.
-pub fn outputs(
+fn outputs(
     params: &Params,
     exp: &Experiment,
     weights: &[(Channel, f64)],
@@ -115,58 +116,101 @@ pub struct Score {
     pub start: Vec<(&'static str, f64)>,
 }
 
-/// Scores every probe on `exp` at `params`, whose base sensitivities are `base_directions`
-/// (weighted outputs' changes per unit change of each base parameter), `residual` the weighted
-/// measured − simulated, `y0` the weighted outputs at `params`.
-pub fn score(
-    probe: &Probe,
-    params: &Params,
-    exp: &Experiment,
-    weights: &[(Channel, f64)],
+/// The model at which the probes are scored: its weighted outputs and residual on one
+/// experiment, and the directions in which its free parameters move the outputs.
+pub struct Point<'a> {
+    params: &'a Params,
+    exp: &'a Experiment,
+    /// Each channel divided by its noise level.
+    weights: Vec<(Channel, f64)>,
     rtol: f64,
-    base_directions: &DMatrix<f64>,
-    residual: &DVector<f64>,
-    y0: &DVector<f64>,
-) -> Result<Score, String> {
-    let mut cols = Vec::new();
-    let mut settings = Vec::new();
-    for column in &probe.columns {
-        let mut p = params.clone();
-        for &(name, v) in column {
-            p.set(name, v).map_err(|e| e.to_string())?;
+    y0: DVector<f64>,
+    residual: DVector<f64>,
+    base_directions: DMatrix<f64>,
+}
+
+impl<'a> Point<'a> {
+    pub fn new(
+        params: &'a Params,
+        exp: &'a Experiment,
+        free: &[String],
+        rtol: f64,
+    ) -> Result<Point<'a>, String> {
+        let weights: Vec<(Channel, f64)> = exp
+            .channels
+            .iter()
+            .map(|(c, y)| (*c, noise_level(y).max(1e-15)))
+            .collect();
+        let y0 = outputs(params, exp, &weights, rtol)?;
+        let mut measured = Vec::new();
+        for ((_, y), (_, w)) in exp.channels.iter().zip(&weights) {
+            measured.extend(y.iter().map(|v| v / w));
         }
-        cols.push(outputs(&p, exp, weights, rtol)? - y0);
-        settings.push(column.clone());
-    }
-    let d = DMatrix::from_columns(&cols);
-    // project out the base sensitivities: D⊥ = D − B (B⁺ D)
-    let b = base_directions;
-    let svd = b.clone().svd(true, true);
-    let d_perp = &d - b * svd.solve(&d, 1e-12).map_err(|e| e.to_string())?;
-    let r_perp = residual - b * svd.solve(residual, 1e-12).map_err(|e| e.to_string())?;
-    let qr = d_perp.clone().svd(true, true);
-    let coef = qr.solve(&r_perp, 1e-9).map_err(|e| e.to_string())?;
-    let explained = (&d_perp * &coef).norm_squared();
-    let total = r_perp.norm_squared().max(1e-300);
-    let mut start = Vec::new();
-    for (k, column) in settings.iter().enumerate() {
-        let c = coef[k];
-        for (i, &(name, v)) in column.iter().enumerate() {
-            // the first setting of a column is its magnitude; the others (time constants,
-            // saturation angles) are kept
-            let value = match probe.scaling {
-                Scaling::Magnitude if i == 0 => v * c.clamp(0.2, 5.0),
-                Scaling::Signed if i == 0 => v * c,
-                _ => v,
-            };
-            start.push((name, value));
+        let residual = DVector::from_vec(measured) - &y0;
+        let mut cols = Vec::new();
+        for name in free {
+            let v = params.get(name).map_err(|e| e.to_string())?;
+            let mut p = params.clone();
+            let h = if v != 0.0 { 1e-3 * v } else { 1e-6 };
+            p.set(name, v + h).map_err(|e| e.to_string())?;
+            cols.push(outputs(&p, exp, &weights, rtol)? - &y0);
         }
+        Ok(Point {
+            params,
+            exp,
+            weights,
+            rtol,
+            y0,
+            residual,
+            base_directions: DMatrix::from_columns(&cols),
+        })
     }
-    // an effect that can only act with one sign explains nothing against it
-    let wrong_sign = probe.scaling == Scaling::Magnitude && coef[0] <= 0.0;
-    Ok(Score {
-        effect: probe.effect,
-        score: if wrong_sign { 0.0 } else { explained / total },
-        start,
-    })
+
+    /// Scores `probe` here.
+    pub fn score(&self, probe: &Probe) -> Result<Score, String> {
+        let mut cols = Vec::new();
+        for column in &probe.columns {
+            let mut p = self.params.clone();
+            for &(name, v) in column {
+                p.set(name, v).map_err(|e| e.to_string())?;
+            }
+            cols.push(outputs(&p, self.exp, &self.weights, self.rtol)? - &self.y0);
+        }
+        let d = DMatrix::from_columns(&cols);
+        // project out the base sensitivities: D⊥ = D − B (B⁺ D)
+        let b = &self.base_directions;
+        let svd = b.clone().svd(true, true);
+        let d_perp = &d - b * svd.solve(&d, 1e-12).map_err(|e| e.to_string())?;
+        let r_perp = &self.residual
+            - b * svd
+                .solve(&self.residual, 1e-12)
+                .map_err(|e| e.to_string())?;
+        let coef = d_perp
+            .clone()
+            .svd(true, true)
+            .solve(&r_perp, 1e-9)
+            .map_err(|e| e.to_string())?;
+        let explained = (&d_perp * &coef).norm_squared();
+        let total = r_perp.norm_squared().max(1e-300);
+        let mut start = Vec::new();
+        for (k, column) in probe.columns.iter().enumerate() {
+            for (i, &(name, v)) in column.iter().enumerate() {
+                // the first setting of a column is its magnitude; the others (time constants,
+                // saturation angles) are kept
+                let value = match probe.scaling {
+                    Scaling::Magnitude if i == 0 => v * coef[k].clamp(0.2, 5.0),
+                    Scaling::Signed if i == 0 => v * coef[k],
+                    _ => v,
+                };
+                start.push((name, value));
+            }
+        }
+        // an effect that can only act with one sign explains nothing against it
+        let wrong_sign = probe.scaling == Scaling::Magnitude && coef[0] <= 0.0;
+        Ok(Score {
+            effect: probe.effect,
+            score: if wrong_sign { 0.0 } else { explained / total },
+            start,
+        })
+    }
 }

@@ -70,13 +70,17 @@ pub struct SynthArgs {
     /// Hide a mechanism in the data, in a form that differs from the library's term: an effect
     /// of the library (coupling, charge_drift, creep, hysteresis, amplifier_lag, delay,
     /// saturation, stiffening, preload), `vibration` (outside the library) or `none`; with the
-    /// base parameters Kb, b, gamma1, gamma2 off by up to 20 %, all drawn from --seed
+    /// base parameters Kb, b, gamma1, gamma2 off by up to 20 %, all drawn from --case
     #[arg(long, value_name = "NAME", conflicts_with_all = ["params", "set"])]
     effect: Option<String>,
+    /// With --effect: the seed of the hidden case (the device); experiments of one device share
+    /// it and differ in --seed
+    #[arg(long, default_value_t = 1, requires = "effect")]
+    case: u64,
     /// Recorded outputs: h (h1..h3) or tip (tip_x, tip_y, as the paper's laser)
     #[arg(long, default_value = "h", value_parser = ["h", "tip"])]
     columns: String,
-    /// Seed of the noise
+    /// Seed of the measurement noise
     #[arg(long, default_value_t = 1)]
     seed: u64,
     #[arg(long, default_value_t = 10.0)]
@@ -175,7 +179,7 @@ pub fn synth(a: SynthArgs) -> Result<(), String> {
             let truth = Truth::from_name(name).ok_or_else(|| {
                 format!("--effect {name}: not an effect of the library, `vibration` or `none`")
             })?;
-            let mut hidden = hidden::hide(truth, a.seed)?;
+            let mut hidden = hidden::hide(truth, a.case)?;
             if let Some(noise) = a.noise {
                 hidden.noise = noise;
             }

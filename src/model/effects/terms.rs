@@ -388,22 +388,21 @@ impl Terms {
                 e += 0.5 * c.k_c * c.weights[pair(i, j)] * (h[i] - h[j]).powi(2);
             }
         }
-        for i in 0..3 {
-            let th = x[i][THETA];
+        for (xi, tau0) in x.iter().zip(self.fx.preload.tau0) {
+            let th = xi[THETA];
             let st = self.fx.stiffening;
             if st.k3 != 0.0 {
                 e += st.k3 * th.abs().powi(st.exponent) / f64::from(st.exponent);
             }
-            let tau0 = self.fx.preload.tau0[i];
             e += match self.fx.preload.law {
                 PreloadLaw::Constant => tau0 * th,
                 PreloadLaw::Weight => tau0 * th.sin(),
             };
             for &(k, kb, _) in &self.creep {
-                e += 0.5 * kb * (th - x[i][k]).powi(2);
+                e += 0.5 * kb * (th - xi[k]).powi(2);
             }
             for &(k, r, t) in &self.drift {
-                e += 0.5 * r * x[i][k] * x[i][k] / t;
+                e += 0.5 * r * xi[k] * xi[k] / t;
             }
         }
         e
