@@ -105,3 +105,26 @@ fn every_effect_changes_the_response_and_runs_from_rest() {
         );
     }
 }
+
+#[test]
+fn a_held_command_arrives_after_the_delay_in_co_simulation() {
+    // as a master steps: t accumulated in floating point, the command set before the first step
+    let mut p = Params::default();
+    p.effects.delay.tau_d = 0.05;
+    let mut sim = Simulator::new(Platform::new(p).unwrap(), 0.0, 1e-6).unwrap();
+    let (mut t, h) = (0.0, 1e-3);
+    let rest = sim.sample().h[0];
+    while t < 0.1 {
+        sim.step_held([60.0, 0.0, 0.0], t + h)
+            .unwrap_or_else(|e| panic!("at t = {t}: {e}"));
+        t += h;
+        if t < 0.0495 {
+            assert_eq!(
+                sim.sample().h[0],
+                rest,
+                "moved before the command arrived, t = {t}"
+            );
+        }
+    }
+    assert!(sim.sample().h[0] - rest > 0.5e-6);
+}

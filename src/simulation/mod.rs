@@ -13,6 +13,9 @@ pub use input::{Input, Interpolation, Piece, Tone};
 /// (model.md, "Accuracy contract"; the FMU's DefaultExperiment declares the same).
 pub const DEFAULT_RTOL: f64 = 1e-6;
 
+/// Relative length under which the rest of a held step is not worth a segment of its own.
+const SLIVER: f64 = 1e-12;
+
 /// First step size [s] from a fresh start: the electrical modes have a 2.7 ns time constant.
 const FIRST_STEP: f64 = 1e-9;
 
@@ -294,14 +297,27 @@ impl Simulator {
         }
         let t = self.t();
         self.history.retain(|&(tk, _)| tk < t);
-        self.history.push((t, u));
+        if self.history.last().is_none_or(|&(_, last)| last != u) {
+            self.history.push((t, u));
+        }
+        // a command arriving within rounding of a segment's ends counts as arrived there: a
+        // sliver of 1e-17 s is no step an integrator can take
+        let tol = SLIVER * t_end.abs().max(1.0);
         while self.t() < t_end {
-            let (mut c, mut next) = self.held_at(self.t() - delay);
-            if next + delay <= self.t() {
-                // rounding put us at the end of that command: take the next one
+            let now = self.t();
+            let (mut c, mut next) = self.held_at(now - delay);
+            while next + delay <= now + tol {
                 (c, next) = self.held_at(next);
             }
-            self.advance_held(c, (next + delay).min(t_end))?;
+            let arrival = next + delay;
+            self.advance_held(
+                c,
+                if arrival >= t_end - tol {
+                    t_end
+                } else {
+                    arrival
+                },
+            )?;
         }
         // forget what the delay can no longer reach (keep the command in effect there)
         let reach = self.history.partition_point(|&(tk, _)| tk <= t_end - delay);
@@ -396,7 +412,11 @@ impl Simulator {
         loop {
             let (piece, piece_end) = self.drive_at(input, t_run, self.t());
             self.apply(piece)?;
-            let seg_end = piece_end.min(t_end);
+            let seg_end = if t_end - piece_end <= SLIVER * t_end.abs().max(1.0) {
+                t_end
+            } else {
+                piece_end
+            };
             let sys = Driven {
                 model: &self.model,
                 piece,
