@@ -151,6 +151,20 @@ pub struct Diagnosis {
     pub experiments: Vec<Experiment>,
 }
 
+impl Diagnosis {
+    /// The answer in one word: the effects added (`coupling+creep`), `ambiguous(a,b)`, `none`
+    /// or `unexplained`.
+    pub fn answer(&self) -> String {
+        let join =
+            |v: &[Effect], sep: &str| v.iter().map(|e| e.name()).collect::<Vec<_>>().join(sep);
+        match self.verdict {
+            Verdict::Effect => join(&self.effects, "+"),
+            Verdict::Ambiguous => format!("ambiguous({})", join(&self.ambiguous_between, ",")),
+            v => v.name().to_string(),
+        }
+    }
+}
+
 /// Per-channel NRMSE fits on the held-out experiments (the estimation one when there is
 /// none), averaged over experiments, with the noise floor's fit beside them.
 pub fn held_out_fits(id: &Identification) -> BTreeMap<String, f64> {

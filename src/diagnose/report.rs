@@ -9,6 +9,7 @@ use serde_json::{Map, Value, json};
 use super::analysis::Disagreement;
 use super::{Candidate, Diagnosis, Verdict, floor_fit, held_out_fits};
 use crate::identify::ExperimentFit;
+use crate::identify::report::residual_series;
 use crate::io::csv::{FileError, write_text_atomic};
 use crate::io::params_file;
 use crate::plot::{self, Panel, Series};
@@ -257,17 +258,8 @@ fn figure(d: &Diagnosis, k: usize) -> Vec<Panel> {
                 color,
                 dots: false,
             };
-            let resid = |label: &str, sim: &[crate::simulation::Sample], color| Series {
-                label: label.into(),
-                points: exp
-                    .t
-                    .iter()
-                    .zip(y)
-                    .zip(sim)
-                    .map(|((t, v), s)| (*t, (v - c.of(s)) * um))
-                    .collect(),
-                color,
-                dots: true,
+            let resid = |label: &str, sim: &[crate::simulation::Sample], color| {
+                residual_series(exp, *c, sim, label, color)
             };
             [
                 Panel {

@@ -73,6 +73,29 @@ pub fn to_json(id: &Identification) -> Value {
     })
 }
 
+/// The residual (measured − simulated) of channel `c` over time [µm], as dots.
+pub fn residual_series(
+    exp: &Experiment,
+    c: Channel,
+    sim: &[Sample],
+    label: &str,
+    color: usize,
+) -> Series {
+    let y = exp.measured(c).unwrap_or(&[]);
+    Series {
+        label: label.into(),
+        points: exp
+            .t
+            .iter()
+            .zip(y)
+            .zip(sim)
+            .map(|((t, v), s)| (*t, (v - c.of(s)) * 1e6))
+            .collect(),
+        color,
+        dots: true,
+    }
+}
+
 /// Measured against simulated outputs of one experiment, the tip path, and the residuals.
 pub fn experiment_panels(exp: &Experiment, sim: &[Sample], label: &str) -> Vec<Panel> {
     let um = 1e6;
@@ -100,18 +123,7 @@ pub fn experiment_panels(exp: &Experiment, sim: &[Sample], label: &str) -> Vec<P
             color: k,
             dots: false,
         });
-        residuals.push(Series {
-            label: c.name().into(),
-            points: exp
-                .t
-                .iter()
-                .zip(y)
-                .zip(sim)
-                .map(|((t, v), s)| (*t, (v - c.of(s)) * um))
-                .collect(),
-            color: k,
-            dots: true,
-        });
+        residuals.push(residual_series(exp, *c, sim, c.name(), k));
     }
     panels.push(Panel {
         title: format!("{}: measured and {label}", exp.name),

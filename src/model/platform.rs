@@ -276,7 +276,7 @@ impl Platform {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
 
     fn platform() -> Platform {
@@ -312,19 +312,18 @@ mod tests {
         }
     }
 
-    #[test]
-    fn jacobian_matches_finite_differences() {
-        let p = platform();
-        let x = busy_state(&p);
-        let u = [60.0, 25.0, -40.0];
-        let n = N_STATES;
+    /// The analytic ∂f/∂x of `p` at `x`, `u` against central differences, each entry relative
+    /// to its row's largest entry times the column's state scale.
+    pub(crate) fn assert_jacobian_matches(p: &Platform, x: &[f64], u: [f64; 3]) {
+        let n = p.n_states();
         let mut jac = vec![0.0; n * n];
-        p.jacobian(&x, u, &mut jac).unwrap();
+        p.jacobian(x, u, &mut jac).unwrap();
         let scales = p.state_scales();
+        let names = p.state_names();
         let (mut fp, mut fm) = (vec![0.0; n], vec![0.0; n]);
         for c in 0..n {
             let hc = 1e-6 * scales[c];
-            let (mut xp, mut xm) = (x.clone(), x.clone());
+            let (mut xp, mut xm) = (x.to_vec(), x.to_vec());
             xp[c] += hc;
             xm[c] -= hc;
             p.rhs(&xp, u, &mut fp).unwrap();
@@ -332,16 +331,23 @@ mod tests {
             for r in 0..n {
                 let fd = (fp[r] - fm[r]) / (2.0 * hc);
                 let an = jac[c * n + r];
-                // compare relative to the row's largest entry times the column's scale
                 let row_scale = (0..n)
                     .map(|k| (jac[k * n + r] * scales[k]).abs())
                     .fold(0.0, f64::max);
                 assert!(
                     (an - fd).abs() * scales[c] <= 1e-6 * row_scale + 1e-300,
-                    "J[{r},{c}] analytic {an:e} vs fd {fd:e}"
+                    "d{}/d{}: analytic {an:e} vs fd {fd:e}",
+                    names[r],
+                    names[c]
                 );
             }
         }
+    }
+
+    #[test]
+    fn jacobian_matches_finite_differences() {
+        let p = platform();
+        assert_jacobian_matches(&p, &busy_state(&p), [60.0, 25.0, -40.0]);
     }
 
     #[test]

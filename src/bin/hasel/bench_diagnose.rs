@@ -5,30 +5,9 @@
 use std::collections::BTreeMap;
 
 use hasel_fmu::diagnose::hidden::{self, Truth};
-use hasel_fmu::diagnose::{self, Options, Verdict};
+use hasel_fmu::diagnose::{self, Options};
 use hasel_fmu::identify::synth::Columns;
 use hasel_fmu::model::Params;
-
-/// What a diagnosis answered, in the confusion matrix's terms.
-fn answer(d: &diagnose::Diagnosis) -> String {
-    match d.verdict {
-        Verdict::Effect => d
-            .effects
-            .iter()
-            .map(|e| e.name())
-            .collect::<Vec<_>>()
-            .join("+"),
-        Verdict::Ambiguous => format!(
-            "ambiguous({})",
-            d.ambiguous_between
-                .iter()
-                .map(|e| e.name())
-                .collect::<Vec<_>>()
-                .join(",")
-        ),
-        v => v.name().to_string(),
-    }
-}
 
 /// The answer a case expects.
 fn expected(t: Truth) -> &'static str {
@@ -56,7 +35,7 @@ pub fn run(seeds: u64, columns: Columns, only: Option<String>) -> Result<(), Str
             let case = hidden::hide(truth, seed)?;
             let exps = case.experiments(columns, 6.0, seed)?;
             let d = diagnose::diagnose(&Params::default(), exps, &Options::default())?;
-            let got = answer(&d);
+            let got = d.answer();
             let ok = got == expected(truth);
             let seconds = d.timing.last().map_or(0.0, |t| t.1);
             slowest = slowest.max(seconds);

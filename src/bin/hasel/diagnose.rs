@@ -2,7 +2,7 @@
 
 use std::path::PathBuf;
 
-use hasel_fmu::diagnose::{self, Options, Verdict, report};
+use hasel_fmu::diagnose::{self, Options, report};
 
 use crate::identify::read_all;
 use crate::simulate::load_params;
@@ -52,22 +52,7 @@ pub fn run(a: Args) -> Result<(), String> {
             serde_json::to_string_pretty(&report::to_json(&d)).expect("JSON of plain values");
         say!("{json}");
     } else {
-        let what = match d.verdict {
-            Verdict::Effect => d
-                .effects
-                .iter()
-                .map(|e| e.name())
-                .collect::<Vec<_>>()
-                .join(", "),
-            Verdict::Ambiguous => d
-                .ambiguous_between
-                .iter()
-                .map(|e| e.name())
-                .collect::<Vec<_>>()
-                .join(" or "),
-            _ => String::new(),
-        };
-        say!("verdict: {} {what}", d.verdict.name());
+        say!("verdict: {} ({})", d.verdict.name(), d.answer());
         say!(
             "wrote {}/diagnosis.json, report.md, fitted.toml ({:.1} s)",
             a.out.display(),

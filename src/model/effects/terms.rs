@@ -71,24 +71,18 @@ impl Terms {
         };
         let mut drift = Vec::new();
         if fx.charge_drift.r3 > 0.0 {
-            let (r, t) = (fx.charge_drift.r3, fx.charge_drift.tau3);
-            let stages = if fx.charge_drift.two_stages {
-                vec![(0.5 * r, t / 3.0), (0.5 * r, 3.0 * t)]
-            } else {
-                vec![(r, t)]
-            };
+            let stages = spread(
+                fx.charge_drift.r3,
+                fx.charge_drift.tau3,
+                fx.charge_drift.two_stages,
+            );
             for (k, (rk, tk)) in stages.into_iter().enumerate() {
                 drift.push((push(Extra::Q3(k)).unwrap(), rk, tk));
             }
         }
         let mut creep = Vec::new();
         if fx.creep.k_v > 0.0 {
-            let (k, t) = (fx.creep.k_v, fx.creep.tau_v);
-            let branches = if fx.creep.two_branches {
-                vec![(0.5 * k, t / 3.0), (0.5 * k, 3.0 * t)]
-            } else {
-                vec![(k, t)]
-            };
+            let branches = spread(fx.creep.k_v, fx.creep.tau_v, fx.creep.two_branches);
             for (b, (kb, tb)) in branches.into_iter().enumerate() {
                 creep.push((push(Extra::Creep(b)).unwrap(), kb, tb));
             }
@@ -436,6 +430,16 @@ impl Terms {
             }
         }
         Ok(p)
+    }
+}
+
+/// One element (magnitude, time constant), or its magnitude split in two halves at a third and
+/// three times the time constant: the other forms of the drift and creep.
+fn spread(magnitude: f64, tau: f64, two: bool) -> Vec<(f64, f64)> {
+    if two {
+        vec![(0.5 * magnitude, tau / 3.0), (0.5 * magnitude, 3.0 * tau)]
+    } else {
+        vec![(magnitude, tau)]
     }
 }
 

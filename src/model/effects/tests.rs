@@ -1,4 +1,5 @@
 use super::*;
+use crate::model::platform::tests::assert_jacobian_matches;
 use crate::model::{Params, Platform};
 
 /// Every effect on, in library form or in the other forms.
@@ -55,34 +56,7 @@ fn busy_state(m: &Platform) -> Vec<f64> {
 
 fn check_jacobian(p: Params, u: [f64; 3]) {
     let m = Platform::new(p).unwrap();
-    let x = busy_state(&m);
-    let n = m.n_states();
-    let mut jac = vec![0.0; n * n];
-    m.jacobian(&x, u, &mut jac).unwrap();
-    let scales = m.state_scales();
-    let names = m.state_names();
-    let (mut fp, mut fm) = (vec![0.0; n], vec![0.0; n]);
-    for c in 0..n {
-        let hc = 1e-6 * scales[c];
-        let (mut xp, mut xm) = (x.clone(), x.clone());
-        xp[c] += hc;
-        xm[c] -= hc;
-        m.rhs(&xp, u, &mut fp).unwrap();
-        m.rhs(&xm, u, &mut fm).unwrap();
-        for r in 0..n {
-            let fd = (fp[r] - fm[r]) / (2.0 * hc);
-            let an = jac[c * n + r];
-            let row_scale = (0..n)
-                .map(|k| (jac[k * n + r] * scales[k]).abs())
-                .fold(0.0, f64::max);
-            assert!(
-                (an - fd).abs() * scales[c] <= 1e-6 * row_scale + 1e-300,
-                "d{}/d{}: analytic {an:e} vs fd {fd:e}",
-                names[r],
-                names[c]
-            );
-        }
-    }
+    assert_jacobian_matches(&m, &busy_state(&m), u);
 }
 
 #[test]
