@@ -32,7 +32,8 @@ pub struct Disagreement {
     /// The window of the record where the residual RMS is largest: (start, end) [s], RMS [m].
     pub worst_window: ((f64, f64), f64),
     /// Correlation of the residual with: the other outputs' simulated values, the simulated
-    /// velocity, its sign, U² of the own actuator (for heights) or of the sum (tip).
+    /// velocity, its sign, U² of the own actuator (for heights) or of the sum (tip); and of its
+    /// size with the output's distance from its mean (amplitude dependence).
     pub correlations: Vec<(String, f64)>,
     /// Share of the residual power at frequencies that are not harmonics of the drive nor slow
     /// (below ω/2): structure no term driven by U can produce.
@@ -167,6 +168,14 @@ pub fn disagreements(exp: &Experiment, sim: &[Sample]) -> Vec<Disagreement> {
             correlations.push(("velocity".into(), correlation(&r, &velocity)));
             correlations.push(("sign of velocity".into(), correlation(&r, &sign)));
             correlations.push(("U^2".into(), correlation(&r, &u2)));
+            // amplitude dependence: does the misfit grow where the output swings far?
+            let mean_hat = yhat.iter().sum::<f64>() / n as f64;
+            let level: Vec<f64> = yhat.iter().map(|v| (v - mean_hat).abs()).collect();
+            let size: Vec<f64> = r.iter().map(|v| v.abs()).collect();
+            correlations.push((
+                "|residual| with |output - mean|".into(),
+                correlation(&size, &level),
+            ));
             let explained: f64 =
                 harmonics[1..].iter().map(|a| 0.5 * a * a).sum::<f64>() + harmonics[0].powi(2);
             let slow = slow_power(t, &r, 0.5 * omega);

@@ -368,17 +368,19 @@ pub fn diagnose(
             ),
             t0.elapsed().as_secs_f64(),
         ));
-        let mut passing: Vec<&Candidate> = candidates
+        let evidence: Vec<Option<Evidence>> = candidates
             .iter()
-            .filter(|c| c.refit.as_ref().is_some_and(|r| r.passes()))
+            .map(|c| {
+                c.refit.as_ref().map(|r| Evidence {
+                    delta_bic: r.delta_bic,
+                    fit_gain: r.fit_gain,
+                    passes: r.passes(),
+                })
+            })
             .collect();
-        passing.sort_by(|a, b| {
-            let (ra, rb) = (a.refit.as_ref().unwrap(), b.refit.as_ref().unwrap());
-            ra.delta_bic.total_cmp(&rb.delta_bic)
-        });
         let round_effects = effects.clone();
-        match passing.as_slice() {
-            [] => {
+        match decide(&evidence) {
+            Decision::Nothing => {
                 if effects.is_empty() {
                     verdict = Some(Verdict::Unexplained);
                 }
@@ -389,22 +391,22 @@ pub fn diagnose(
                 });
                 break;
             }
-            [best, rest @ ..] => {
-                let rb = best.refit.as_ref().unwrap();
-                if let Some(second) = rest.first() {
-                    let rs = second.refit.as_ref().unwrap();
-                    let held_tie = (rb.fit_gain - rs.fit_gain).abs() < MIN_GAIN;
-                    if rs.delta_bic - rb.delta_bic < BIC_MARGIN && held_tie {
-                        ambiguous_between = vec![best.effect, second.effect];
-                        verdict = Some(Verdict::Ambiguous);
-                        rounds.push(Round {
-                            effects_before: round_effects,
-                            candidates: candidates.clone(),
-                            added: None,
-                        });
-                        break;
-                    }
-                }
+            Decision::Tie(a, b) => {
+                ambiguous_between = vec![candidates[a].effect, candidates[b].effect];
+                verdict = Some(Verdict::Ambiguous);
+                rounds.push(Round {
+                    effects_before: round_effects,
+                    candidates,
+                    added: None,
+                });
+                break;
+            }
+            Decision::Add(k) => {
+                let best = &candidates[k];
+                let rb = best
+                    .refit
+                    .as_ref()
+                    .expect("a decided candidate was refitted");
                 let added = best.effect;
                 current = rb.id.clone();
                 effects.push(added);
@@ -440,6 +442,47 @@ pub fn diagnose(
         timing,
         experiments: ordered,
     })
+}
+
+/// One refitted candidate as the decision sees it.
+#[derive(Clone, Copy, Debug)]
+struct Evidence {
+    delta_bic: f64,
+    fit_gain: f64,
+    passes: bool,
+}
+
+/// What a round decides: add candidate k, call two candidates a tie, or add nothing.
+#[derive(Debug, PartialEq)]
+enum Decision {
+    Nothing,
+    Add(usize),
+    Tie(usize, usize),
+}
+
+/// Among the candidates that pass, the lowest BIC wins if it beats the runner-up by the BIC
+/// margin; within the margin the larger held-out gain wins if it is larger by [`MIN_GAIN`];
+/// otherwise the two are a tie.
+fn decide(evidence: &[Option<Evidence>]) -> Decision {
+    let mut passing: Vec<(usize, Evidence)> = evidence
+        .iter()
+        .enumerate()
+        .filter_map(|(k, e)| e.filter(|e| e.passes).map(|e| (k, e)))
+        .collect();
+    passing.sort_by(|a, b| a.1.delta_bic.total_cmp(&b.1.delta_bic));
+    match passing.as_slice() {
+        [] => Decision::Nothing,
+        [(k, _)] => Decision::Add(*k),
+        [(a, ea), (b, eb), ..] => {
+            if eb.delta_bic - ea.delta_bic >= BIC_MARGIN || ea.fit_gain - eb.fit_gain >= MIN_GAIN {
+                Decision::Add(*a)
+            } else if eb.fit_gain - ea.fit_gain >= MIN_GAIN {
+                Decision::Add(*b)
+            } else {
+                Decision::Tie(*a, *b)
+            }
+        }
+    }
 }
 
 /// The screening of one round: every effect not yet added, scored, best first.
@@ -600,4 +643,55 @@ pub fn separating_experiment(a: Effect, b: Effect) -> String {
         }
     };
     format!("{}: {}; {}: {}", a, exposes(a), b, exposes(b))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn e(delta_bic: f64, fit_gain: f64, passes: bool) -> Option<Evidence> {
+        Some(Evidence {
+            delta_bic,
+            fit_gain,
+            passes,
+        })
+    }
+
+    #[test]
+    fn the_decision_weighs_bic_then_held_out_fit() {
+        assert_eq!(decide(&[e(-50.0, 3.0, false), None]), Decision::Nothing);
+        assert_eq!(decide(&[None, e(-50.0, 3.0, true)]), Decision::Add(1));
+        // a clear BIC margin decides
+        assert_eq!(
+            decide(&[e(-50.0, 3.0, true), e(-500.0, 3.0, true)]),
+            Decision::Add(1)
+        );
+        // within the margin, the held-out gain decides…
+        assert_eq!(
+            decide(&[e(-500.0, 3.0, true), e(-495.0, 3.5, true)]),
+            Decision::Add(1)
+        );
+        assert_eq!(
+            decide(&[e(-500.0, 3.5, true), e(-495.0, 3.0, true)]),
+            Decision::Add(0)
+        );
+        // …and without either it is a tie, best BIC first
+        assert_eq!(
+            decide(&[
+                e(-495.0, 3.0, true),
+                e(-500.0, 3.1, true),
+                e(-10.0, 0.0, false)
+            ]),
+            Decision::Tie(1, 0)
+        );
+    }
+
+    #[test]
+    fn a_tie_names_the_experiment_that_separates() {
+        let text = separating_experiment(Effect::AmplifierLag, Effect::Delay);
+        assert!(
+            text.starts_with("amplifier_lag: ") && text.contains("; delay: "),
+            "{text}"
+        );
+    }
 }
