@@ -238,12 +238,12 @@ fn held_out_gain(
     )
 }
 
-fn held_or_estimation(estimation: &[Experiment], held: &[Experiment]) -> Vec<Experiment> {
-    if held.is_empty() {
-        estimation.to_vec()
-    } else {
-        held.to_vec()
-    }
+/// The experiments decisions are made on: the held-out ones, or the estimation one alone.
+fn held_or_estimation<'e>(
+    estimation: &'e [Experiment],
+    held: &'e [Experiment],
+) -> &'e [Experiment] {
+    if held.is_empty() { estimation } else { held }
 }
 
 /// The largest distance of a held-out fit below the noise floor's [points].
@@ -336,7 +336,7 @@ pub fn diagnose(
             break;
         }
         if !effects.is_empty()
-            && worst_gap_to_floor(&held_or_estimation(estimation, held), &current) <= FIT_TOLERANCE
+            && worst_gap_to_floor(held_or_estimation(estimation, held), &current) <= FIT_TOLERANCE
         {
             break;
         }
@@ -379,27 +379,17 @@ pub fn diagnose(
             })
             .collect();
         let round_effects = effects.clone();
-        match decide(&evidence) {
+        let added = match decide(&evidence) {
             Decision::Nothing => {
                 if effects.is_empty() {
                     verdict = Some(Verdict::Unexplained);
                 }
-                rounds.push(Round {
-                    effects_before: round_effects,
-                    candidates,
-                    added: None,
-                });
-                break;
+                None
             }
             Decision::Tie(a, b) => {
                 ambiguous_between = vec![candidates[a].effect, candidates[b].effect];
                 verdict = Some(Verdict::Ambiguous);
-                rounds.push(Round {
-                    effects_before: round_effects,
-                    candidates,
-                    added: None,
-                });
-                break;
+                None
             }
             Decision::Add(k) => {
                 let best = &candidates[k];
@@ -407,15 +397,18 @@ pub fn diagnose(
                     .refit
                     .as_ref()
                     .expect("a decided candidate was refitted");
-                let added = best.effect;
                 current = rb.id.clone();
-                effects.push(added);
-                rounds.push(Round {
-                    effects_before: round_effects,
-                    candidates: candidates.clone(),
-                    added: Some(added),
-                });
+                effects.push(best.effect);
+                Some(best.effect)
             }
+        };
+        rounds.push(Round {
+            effects_before: round_effects,
+            candidates,
+            added,
+        });
+        if added.is_none() {
+            break;
         }
     }
     let verdict = verdict.unwrap_or(if effects.is_empty() {
@@ -536,8 +529,7 @@ fn judge(
     let k_after = k_before + effect.parameters().len();
     let delta_bic = bic(&estimation[0], &id.simulated[0], k_after)
         - bic(&estimation[0], &before.simulated[0], k_before);
-    let held_exps: &[Experiment] = if held.is_empty() { estimation } else { held };
-    let (fit_gain, gap_closed) = held_out_gain(held_exps, before, &id);
+    let (fit_gain, gap_closed) = held_out_gain(held_or_estimation(estimation, held), before, &id);
     let (interval, excludes) = magnitude_interval(effect, &id, estimation);
     let mut failed = Vec::new();
     if delta_bic > -BIC_MARGIN {
