@@ -1,12 +1,17 @@
 #!/usr/bin/env bash
-# Every test: the Rust suite (model, solver, FMI shell, CLI, FMU import), then the packed FMU
+# Every test: the repository's self-containment, formatting and lints, the Rust suite (model, solver, FMI shell, CLI, FMU import), then the packed FMU
 # through fmpy, fmutool, libcosimpy, ecospy and ctypes.
 source "$(dirname "${BASH_SOURCE[0]}")/lib.sh"
+step "the repository refers to nothing outside it (ci/self_contained.py)"
+python3 ci/self_contained.py
 ensure_apt
+step "formatting and lints (cargo fmt --check, cargo clippy -D warnings)"
+cargo fmt --check
+cargo clippy -q --release --all-targets -- -D warnings
 build_fmu
 step "Rust tests"
 cargo test --release --all-targets
-step "the library-solver comparison of hasel bench compiles (feature compare, diffsol)"
-cargo check -q --features compare --bin hasel
+step "the library-solver comparison of hasel bench compiles lint-free (feature compare, diffsol)"
+cargo clippy -q --release --features compare --bin hasel -- -D warnings
 step "Python tests of the packed FMU"
 python -m pytest tests/python -q -p no:cacheprovider

@@ -32,7 +32,7 @@ fn fmu_path() -> PathBuf {
 /// The 1 ms ZOH reference: rows of t, U1..U3, h1..h3, tip_x..tip_z.
 fn reference() -> Vec<[f64; 10]> {
     let path = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("../shared/data/reference/zoh1ms_sine60_w3pi.csv");
+        .join("tests/data/reference/zoh1ms_sine60_w3pi.csv");
     let text = std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
     let mut lines = text.lines();
     assert_eq!(

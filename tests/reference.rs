@@ -1,5 +1,5 @@
 //! The model and solver against the independent reference trajectories of
-//! `../shared/data/reference/` (computed at relative tolerance 1e-10).
+//! `tests/data/reference/` (computed at relative tolerance 1e-10; see its README).
 
 use std::path::PathBuf;
 
@@ -9,7 +9,7 @@ use hasel_fmu::simulation::{Input, Interpolation, Sample, Simulator};
 
 fn reference(name: &str) -> Table {
     let path = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("../shared/data/reference")
+        .join("tests/data/reference")
         .join(name);
     Table::read(&path).unwrap()
 }

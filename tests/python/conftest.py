@@ -17,4 +17,4 @@ def fmu_path():
 
 @pytest.fixture(scope="session")
 def reference_dir():
-    return ROOT.parent / "shared" / "data" / "reference"
+    return ROOT / "tests" / "data" / "reference"

@@ -12,9 +12,10 @@ use hasel_fmu::solver::Stats;
 
 #[derive(clap::Args)]
 pub struct Args {
-    /// Folder of the reference trajectories (sine60_w3pi.csv, zoh1ms_sine60_w3pi.csv)
-    #[arg(long, default_value = concat!(env!("CARGO_MANIFEST_DIR"), "/../shared/data/reference"))]
-    reference: PathBuf,
+    /// Folder of other reference trajectories (sine60_w3pi.csv, zoh1ms_sine60_w3pi.csv);
+    /// default: the repository's tests/data/reference/, built into this executable
+    #[arg(long)]
+    reference: Option<PathBuf>,
     /// Repetitions; the best wall time is reported
     #[arg(long, default_value_t = 5)]
     repeat: usize,
@@ -35,9 +36,36 @@ pub struct Args {
     only: Option<String>,
 }
 
-/// Largest |Δh| and |Δtip| [µm] against a reference file, over the rows both have.
-pub(crate) fn error_against(path: &Path, samples: &[Sample]) -> Option<(f64, f64)> {
-    let table = Table::read(path).ok()?;
+/// The reference trajectories of tests/data/reference/ (see its README), built into the
+/// executable so that an installed `hasel bench` needs no source tree.
+const EMBEDDED: [(&str, &str); 2] = [
+    (
+        "sine60_w3pi.csv",
+        include_str!("../../../tests/data/reference/sine60_w3pi.csv"),
+    ),
+    (
+        "zoh1ms_sine60_w3pi.csv",
+        include_str!("../../../tests/data/reference/zoh1ms_sine60_w3pi.csv"),
+    ),
+];
+
+/// The reference trajectory `name`: from `dir` when given, else the embedded copy.
+pub(crate) fn reference(dir: Option<&Path>, name: &str) -> Result<Table, String> {
+    match dir {
+        Some(dir) => Table::read(&dir.join(name)).map_err(|e| e.to_string()),
+        None => {
+            let (_, text) = EMBEDDED
+                .iter()
+                .find(|(n, _)| *n == name)
+                .ok_or_else(|| format!("no embedded reference trajectory {name}"))?;
+            Table::parse(Path::new(name), text).map_err(|e| e.to_string())
+        }
+    }
+}
+
+/// Largest |Δh| and |Δtip| [µm] against a reference trajectory, over the rows both have;
+/// `None` when its columns or times do not match the samples.
+pub(crate) fn error_against(table: &Table, samples: &[Sample]) -> Option<(f64, f64)> {
     let cols: Vec<usize> = ["h1", "h2", "h3", "tip_x", "tip_y", "tip_z"]
         .iter()
         .map(|c| table.find(c))
@@ -84,7 +112,7 @@ fn report(name: &str, wall: Duration, stats: Stats, error: Option<(f64, f64)>, t
         Some((dh, dtip)) => {
             say!("  max error vs reference: |dh| {dh:.2e} um, |dtip| {dtip:.2e} um")
         }
-        None => say!("  (reference data not found: no error figure)"),
+        None => say!("  (the reference's columns or times do not match: no error figure)"),
     }
 }
 
@@ -115,7 +143,10 @@ pub fn run(a: Args) -> Result<(), String> {
             .expect("the default run succeeds");
         (sim.stats(), samples)
     });
-    let error = error_against(&a.reference.join("sine60_w3pi.csv"), &samples);
+    let error = error_against(
+        &reference(a.reference.as_deref(), "sine60_w3pi.csv")?,
+        &samples,
+    );
     #[cfg(feature = "compare")]
     let sine_row = (wall, stats, error);
     report(
@@ -140,7 +171,10 @@ pub fn run(a: Args) -> Result<(), String> {
         }
         (sim.stats(), samples)
     });
-    let error = error_against(&a.reference.join("zoh1ms_sine60_w3pi.csv"), &samples);
+    let error = error_against(
+        &reference(a.reference.as_deref(), "zoh1ms_sine60_w3pi.csv")?,
+        &samples,
+    );
     report(
         "10,000 co-simulation steps of 1 ms, input held and changed at every step",
         wall,
@@ -161,7 +195,7 @@ pub fn run(a: Args) -> Result<(), String> {
             ),
             case_row("Radau IIA(5)", Case::Held, wall, stats, error.map(|e| e.0)),
         ];
-        crate::compare::print(&model, DEFAULT_RTOL, a.repeat, &a.reference, ours)?;
+        crate::compare::print(&model, DEFAULT_RTOL, a.repeat, a.reference.as_deref(), ours)?;
     }
     Ok(())
 }

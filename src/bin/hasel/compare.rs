@@ -17,6 +17,7 @@ use diffsol::{
     NalgebraContext, NalgebraLU, NalgebraMat, NalgebraVec, OdeBuilder, OdeEquationsImplicit,
     OdeSolverMethod, OdeSolverStopReason, ode_solver::OdeSolverStatistics,
 };
+use hasel_fmu::io::csv::Table;
 use hasel_fmu::model::Platform;
 use hasel_fmu::simulation::{Input, Sample};
 use hasel_fmu::solver::Stats;
@@ -312,8 +313,8 @@ impl Drive<'_, '_> {
     }
 }
 
-fn dh_against(reference: &Path, case: Case, samples: &[Sample]) -> Option<f64> {
-    error_against(&reference.join(case.reference()), samples).map(|(dh, _)| dh)
+fn dh_against(reference: &Table, samples: &[Sample]) -> Option<f64> {
+    error_against(reference, samples).map(|(dh, _)| dh)
 }
 
 /// Runs both cases with each diffsol method (best of `repeat`) and prints them under `ours`.
@@ -321,11 +322,12 @@ pub fn print(
     model: &Platform,
     rtol: f64,
     repeat: usize,
-    reference: &Path,
+    reference_dir: Option<&Path>,
     ours: Vec<Row>,
 ) -> Result<(), String> {
     let mut rows = ours;
     for case in [Case::Sine, Case::Held] {
+        let reference = crate::bench::reference(reference_dir, case.reference())?;
         for method in Method::ALL {
             let mut failed = None;
             let (wall, out) = best(repeat, || match run_once(model, method, case, rtol) {
@@ -341,7 +343,7 @@ pub fn print(
                     case,
                     wall,
                     work,
-                    dh: dh_against(reference, case, &samples),
+                    dh: dh_against(&reference, &samples),
                 }),
                 None => say!(
                     "{} on {}: failed: {}",
