@@ -1,6 +1,9 @@
-//! The missing-effect workflow (effects.md, "What `hasel diagnose` answers"): re-identify the
-//! paper's model, find where it disagrees with the data, rank the effects of the library that
-//! could explain it, add the best, re-identify and decide by evidence on held-out data.
+//! The missing-effect workflow (src/diagnose/diagnose.md, "What `hasel diagnose` answers"):
+//! re-identify the paper's model, find where it disagrees with the data, rank the effects of the
+//! library that could explain it, add the best, re-identify and decide by evidence on held-out
+//! data.
+//!
+//! Verdicts, decision rule and outputs: [src/diagnose/diagnose.md](diagnose.md).
 //!
 //! The first experiment estimates, the others are held out (with one experiment it does both
 //! and says so). An effect is added when, over the model without it:

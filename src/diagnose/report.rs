@@ -91,7 +91,7 @@ fn floor_map(d: &Diagnosis) -> Map<String, Value> {
         .collect()
 }
 
-/// The JSON of effects.md, and the evidence behind it.
+/// The JSON of src/diagnose/diagnose.md ("diagnosis.json"), and the evidence behind it.
 pub fn to_json(d: &Diagnosis) -> Value {
     let effect_params: Map<String, Value> = d
         .effects

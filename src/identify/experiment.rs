@@ -1,6 +1,6 @@
-//! Measured experiments (effects.md, "Measured data files"): CSV with `t`, `U1..U3` (the
-//! voltages as commanded) and any of `h1..h3`, `tip_x`, `tip_y`, `tip_z`. One file is one
-//! experiment; a bad file gets an error naming the file, the line and the column.
+//! Measured experiments (src/identify/identify.md, "Measured data files"): CSV with `t`,
+//! `U1..U3` (the voltages as commanded) and any of `h1..h3`, `tip_x`, `tip_y`, `tip_z`. One file
+//! is one experiment; a bad file gets an error naming the file, the line and the column.
 
 use std::path::{Path, PathBuf};
 

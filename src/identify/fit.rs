@@ -1,4 +1,4 @@
-//! NRMSE fit in percent, as MATLAB's `compare` reports it (effects.md, "Fit metric").
+//! NRMSE fit in percent, as MATLAB's `compare` reports it (src/identify/identify.md, "Fit metric").
 
 /// fit = 100 (1 − ‖y − ŷ‖ / ‖y − mean(y)‖).
 pub fn nrmse_fit(measured: &[f64], simulated: &[f64]) -> f64 {

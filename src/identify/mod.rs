@@ -2,6 +2,8 @@
 //! (output) error over all estimation experiments at once, NRMSE fits on estimation and
 //! validation data, standard errors and 95 % intervals from the covariance, and an honest list
 //! of the parameters the data cannot determine (held at their prior).
+//!
+//! Data files, fit metric and outputs: [src/identify/identify.md](identify.md).
 
 pub mod experiment;
 pub mod fit;
@@ -21,7 +23,8 @@ use crate::simulation::{Sample, Simulator};
 pub use experiment::{Channel, Experiment};
 use group::{fit_group, groups};
 
-/// The parameters the spec shows to be practically identifiable from h or tip data.
+/// The parameters practically identifiable from h or tip data (src/model/model.md, "Facts that
+/// shape the implementation").
 pub fn default_free() -> Vec<String> {
     ["Kb", "b", "gamma1", "gamma2"]
         .iter()

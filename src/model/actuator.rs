@@ -1,4 +1,5 @@
-//! One HASEL actuator as a port-Hamiltonian system (model.md, "State and energy" and "Dynamics").
+//! One HASEL actuator as a port-Hamiltonian system (src/model/model.md, "State and energy" and
+//! "Dynamics").
 //!
 //! State x = (θ, l_p, p, Q1, Q2):
 //!
@@ -28,7 +29,8 @@ pub const N: usize = 5;
 #[derive(Clone, Debug)]
 pub struct Actuator {
     pub par: ActuatorParams,
-    /// I = Lv m / 24, as written in the paper (model.md, "open choices").
+    /// I = Lv m / 24, as written in the paper (src/model/model.md, "Open choices and pinned
+    /// defaults").
     pub inertia: f64,
     pub g0: f64,
     pub g1: f64,
@@ -288,7 +290,7 @@ impl Actuator {
     }
 
     /// The U = 0 equilibrium under gravity on the curve through (0, Lp), with p = Q1 = Q2 = 0
-    /// (model.md, "open choices": initial state): ṗ = 0 ⇔ ∂H/∂θ + d ∂H/∂l_p = 0, solved by the
+    /// (src/model/model.md, "Initial state"): ṗ = 0 ⇔ ∂H/∂θ + d ∂H/∂l_p = 0, solved by the
     /// secant method on θ.
     pub fn rest_state(&self) -> Result<[f64; N], DomainError> {
         self.rest_state_with(|_| 0.0)

@@ -1,6 +1,6 @@
-//! Kinematics of the 3PS platform (model.md, "Kinematics"): forward kinematics from the three
-//! actuator heights to the antenna tip, the paper's closed-form inverse, an exact inverse, and the
-//! inverse from tip X, Y alone given the mean height.
+//! Kinematics of the 3PS platform (src/model/model.md, "Kinematics"): forward kinematics from the
+//! three actuator heights to the antenna tip, the paper's closed-form inverse, an exact inverse,
+//! and the inverse from tip X, Y alone given the mean height.
 
 use nalgebra::{Matrix3, Vector3};
 
@@ -210,7 +210,8 @@ mod tests {
                 worst_closed = worst_closed.max((closed[i] - h[i]).abs());
             }
         }
-        // model.md: the closed form is off by up to about 0.35 µm on [−5, 200] µm
+        // src/model/model.md, "Inverse kinematics": the closed form is off by up to about
+        // 0.35 µm on [−5, 200] µm
         assert!(
             worst_closed > 1e-8 && worst_closed < 0.4e-6,
             "closed-form error {worst_closed}"

@@ -1,6 +1,8 @@
-//! The physics of the HASEL platform (model.md) and nothing else: parameters, the three
+//! The physics of the HASEL platform and nothing else: parameters, the three
 //! port-Hamiltonian actuators, the platform's right-hand side and Jacobian, and kinematics.
 //! It knows no solver and no FMI.
+//!
+//! Equations, parameters and defaults: [src/model/model.md](model.md).
 
 pub mod actuator;
 pub mod effects;

@@ -8,7 +8,8 @@ use std::fmt;
 
 use super::effects::EffectParams;
 
-/// Parameters of one HASEL actuator (the paper's identified table, model.md).
+/// Parameters of one HASEL actuator (the paper's identified table: src/model/model.md,
+/// "Parameters").
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ActuatorParams {
     /// Top-film stiffness K [N/m].
@@ -32,7 +33,7 @@ pub struct ActuatorParams {
 }
 
 /// All parameters of the platform: the three actuators, the common shell values, the pinned
-/// open choices of model.md and the kinematics.
+/// open choices (src/model/model.md, "Open choices and pinned defaults") and the kinematics.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Params {
     pub act: [ActuatorParams; 3],
@@ -69,7 +70,7 @@ pub struct Params {
 }
 
 impl Default for Params {
-    /// The paper's identified table and the defaults pinned in model.md.
+    /// The paper's identified table and the pinned defaults (src/model/model.md, "Parameters").
     fn default() -> Self {
         let a = |k, kb, b, r1, r2, c1, gamma1, gamma2| ActuatorParams {
             k,
@@ -315,7 +316,8 @@ impl Params {
     }
 
     /// A_s(θ = 0, l_p = Lp) + Xh·Le: the liquid area for which the electrode is unzipped
-    /// (le = 0) at θ = 0, the pinned default of A_T (model.md, "open choices").
+    /// (le = 0) at θ = 0, the pinned default of A_T (src/model/model.md, "Open choices and
+    /// pinned defaults").
     pub fn unzipped_liquid_area(&self) -> f64 {
         let geometry = crate::model::shell::Shell::new(0.0, self.lp, self.lv)
             .expect("Lp > Lv at theta = 0 for the default geometry");
@@ -364,7 +366,7 @@ mod tests {
 
     #[test]
     fn default_liquid_area_matches_the_spec() {
-        // model.md: A_T = 61.63 mm²
+        // src/model/model.md, "Parameters": A_T = 61.63 mm²
         let a_t = Params::default().a_t;
         assert!((a_t * 1e6 - 61.63).abs() < 0.005, "A_T = {} mm²", a_t * 1e6);
     }

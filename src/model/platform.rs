@@ -170,8 +170,9 @@ impl Platform {
         }
     }
 
-    /// The spec's initial state: each actuator at its U = 0 equilibrium under gravity (and the
-    /// static loads of the effects), solved actuator by actuator until the coupling settles.
+    /// The initial state (src/model/model.md, "Initial state"): each actuator at its U = 0
+    /// equilibrium under gravity (and the static loads of the effects), solved actuator by
+    /// actuator until the coupling settles.
     pub fn rest_state(&self) -> Result<Vec<f64>, ModelError> {
         let refs = self.refs();
         let mut rest = self.each(|_, a| a.rest_state())?;
@@ -299,7 +300,8 @@ pub(crate) mod tests {
         let p = platform();
         let x = p.rest_state().unwrap();
         let h = p.heights(&x);
-        // model.md: θ ≈ −2.2e-4 rad, h ≈ −1.31 / −1.33 / −1.33 µm, l_p − Lp ≈ −0.68 µm
+        // src/model/model.md, "Initial state": θ ≈ −2.2e-4 rad, h ≈ −1.31 / −1.33 / −1.33 µm,
+        // l_p − Lp ≈ −0.68 µm
         for (hi, want) in h.iter().zip([-1.31e-6, -1.33e-6, -1.33e-6]) {
             assert!((hi - want).abs() < 0.006e-6, "h = {h:?}");
         }

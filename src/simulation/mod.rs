@@ -10,7 +10,7 @@ use crate::solver::{OdeSystem, Radau5, RhsError, SolverError, Stats, Tolerances}
 pub use input::{Input, Interpolation, Piece, Tone};
 
 /// Relative tolerance of every way of running the model unless the user picks another
-/// (model.md, "Accuracy contract"; the FMU's DefaultExperiment declares the same).
+/// (src/model/model.md, "Accuracy contract"; the FMU's DefaultExperiment declares the same).
 pub const DEFAULT_RTOL: f64 = 1e-6;
 
 /// Relative length under which the rest of a held step is not worth a segment of its own.

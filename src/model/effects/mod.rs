@@ -1,22 +1,24 @@
-//! The missing-effect library (effects.md, "The effect library"): mechanisms the paper's model
-//! leaves out, each an optional extension with its own parameters and, where it needs them, its
-//! own states. Every effect is neutral at its default parameters, so the default model is the
-//! paper's, state for state.
+//! The missing-effect library (src/model/effects/effects.md, "The effect library"): mechanisms
+//! the paper's model leaves out, each an optional extension with its own parameters and, where it
+//! needs them, its own states. Every effect is neutral at its default parameters, so the default
+//! model is the paper's, state for state.
 //!
-//! Each effect has its library form (the canonical term of effects.md, the one `hasel diagnose`
-//! fits) and, for some, other forms of the same mechanism (another coupling geometry, a drift
-//! stage elsewhere in the circuit, another hysteresis law, …). The other forms are not in the
-//! parameter table: they exist so that synthetic data can hide a mechanism whose form differs
-//! from the library's term, as real data does.
+//! Each effect has its library form (the canonical term of src/model/effects/effects.md, the one
+//! `hasel diagnose` fits) and, for some, other forms of the same mechanism (another coupling
+//! geometry, a drift stage elsewhere in the circuit, another hysteresis law, …). The other forms
+//! are not in the parameter table: they exist so that synthetic data can hide a mechanism whose
+//! form differs from the library's term, as real data does.
 //!
 //! The terms themselves (their energy, right-hand side and Jacobian) are in [`terms`]; the
 //! platform assembles them around the unchanged actuator equations.
+//!
+//! Terms, parameters and energy of each effect: [src/model/effects/effects.md](effects.md).
 
 pub mod terms;
 
 use std::fmt;
 
-/// The effects of the library, in the order of effects.md.
+/// The effects of the library, in the order of src/model/effects/effects.md.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
 pub enum Effect {
     Coupling,
@@ -43,7 +45,7 @@ impl Effect {
         Effect::Preload,
     ];
 
-    /// The effect's name in effects.md, the CLI and the reports.
+    /// The effect's name in src/model/effects/effects.md, the CLI and the reports.
     pub fn name(self) -> &'static str {
         match self {
             Effect::Coupling => "coupling",
@@ -77,7 +79,7 @@ impl Effect {
         }
     }
 
-    /// The library's term, as written in effects.md.
+    /// The library's term, as written in src/model/effects/effects.md ("The effect library").
     pub fn form(self) -> &'static str {
         match self {
             Effect::Coupling => "H += 1/2 k_c sum_{i<j} (h_i - h_j)^2",
