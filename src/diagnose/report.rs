@@ -10,7 +10,7 @@ use super::analysis::Disagreement;
 use super::{Candidate, Diagnosis, Verdict, floor_fit, held_out_fits};
 use crate::identify::ExperimentFit;
 use crate::identify::report::residual_series;
-use crate::io::csv::{FileError, write_text_atomic};
+use crate::io::file::{FileError, write_text_atomic};
 use crate::io::params_file;
 use crate::plot::{self, Panel, Series};
 

@@ -4,7 +4,8 @@
 
 use std::path::{Path, PathBuf};
 
-use crate::io::csv::{FileError, Table};
+use crate::io::csv::Table;
+use crate::io::file::FileError;
 use crate::simulation::{Input, Interpolation, Sample};
 
 /// A measured output channel.

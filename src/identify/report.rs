@@ -8,7 +8,7 @@ use serde_json::{Value, json};
 
 use super::experiment::{Channel, Experiment};
 use super::{ExperimentFit, Identification};
-use crate::io::csv::{FileError, write_text_atomic};
+use crate::io::file::{FileError, write_text_atomic};
 use crate::io::params_file;
 use crate::plot::{self, Panel, Series};
 use crate::simulation::Sample;

@@ -3,7 +3,8 @@
 
 use std::path::Path;
 
-use super::csv::{FileError, Table};
+use super::csv::Table;
+use super::file::FileError;
 use crate::simulation::{Input, Interpolation};
 
 /// Reads the sampled voltages of `path`; time must increase strictly.

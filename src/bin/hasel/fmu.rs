@@ -3,7 +3,7 @@
 use std::path::PathBuf;
 
 use hasel_fmu::fmu_pack;
-use hasel_fmu::io::csv::write_text_atomic;
+use hasel_fmu::io::file::write_text_atomic;
 
 use crate::simulate::load_params;
 
