@@ -4,7 +4,6 @@
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
-use hasel_fmu::identify::synth::Columns;
 use hasel_fmu::io::csv::Table;
 use hasel_fmu::model::{Params, Platform};
 use hasel_fmu::simulation::{DEFAULT_RTOL, Input, Sample, Simulator};
@@ -118,12 +117,7 @@ fn report(name: &str, wall: Duration, stats: Stats, error: Option<(f64, f64)>, t
 
 pub fn run(a: Args) -> Result<(), String> {
     if a.diagnose {
-        let columns = if a.columns == "tip" {
-            Columns::TipXy
-        } else {
-            Columns::Heights
-        };
-        return crate::bench_diagnose::run(a.seeds, columns, a.only);
+        return crate::bench_diagnose::run(a.seeds, crate::common::columns(&a.columns), a.only);
     }
     if a.identify {
         return crate::bench_identify::run();

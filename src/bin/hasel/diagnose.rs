@@ -4,8 +4,7 @@ use std::path::PathBuf;
 
 use hasel_fmu::diagnose::{self, Options, report};
 
-use crate::identify::read_all;
-use crate::simulate::load_params;
+use crate::common::{load_params, read_all};
 
 #[derive(clap::Args)]
 pub struct Args {

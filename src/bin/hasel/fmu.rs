@@ -5,7 +5,7 @@ use std::path::PathBuf;
 use hasel_fmu::fmu_pack;
 use hasel_fmu::io::file::write_text_atomic;
 
-use crate::simulate::load_params;
+use crate::common::load_params;
 
 #[derive(clap::Args)]
 pub struct Args {

@@ -2,15 +2,15 @@
 
 use std::path::PathBuf;
 
-use hasel_fmu::identify::synth::{self, Columns, Spec};
-use hasel_fmu::identify::{self, Experiment, Options, report};
+use hasel_fmu::identify::synth::{self, Spec};
+use hasel_fmu::identify::{self, Options, report};
 use hasel_fmu::io::csv::write_atomic;
 use hasel_fmu::simulation::DEFAULT_RTOL;
 
 use hasel_fmu::diagnose::hidden::{self, Truth};
 use hasel_fmu::model::Params;
 
-use crate::simulate::{InputArgs, load_params};
+use crate::common::{InputArgs, columns, load_params, read_all};
 
 /// A parameter file over the defaults with `--set NAME=VALUE` overrides, validated.
 fn given_params(file: &Option<PathBuf>, set: &[String]) -> Result<Params, String> {
@@ -92,13 +92,6 @@ pub struct SynthArgs {
     out: PathBuf,
 }
 
-pub fn read_all(paths: &[PathBuf]) -> Result<Vec<Experiment>, String> {
-    paths
-        .iter()
-        .map(|p| Experiment::read(p).map_err(|e| e.to_string()))
-        .collect()
-}
-
 pub fn run(a: Args) -> Result<(), String> {
     let start = load_params(&a.params)?;
     let estimation = read_all(&a.experiments)?;
@@ -169,11 +162,7 @@ pub fn synth(a: SynthArgs) -> Result<(), String> {
     if let Some(noise) = a.noise.filter(|n| !(n.is_finite() && *n >= 0.0)) {
         return Err(format!("--noise {noise}: must be >= 0"));
     }
-    let columns = if a.columns == "tip" {
-        Columns::TipXy
-    } else {
-        Columns::Heights
-    };
+    let columns = columns(&a.columns);
     let spec = match &a.effect {
         Some(name) => {
             let truth = Truth::from_name(name).ok_or_else(|| {
