@@ -18,11 +18,7 @@ macro_rules! say_raw {
 }
 
 mod bench;
-mod bench_diagnose;
-mod bench_identify;
 mod common;
-#[cfg(feature = "compare")]
-mod compare;
 mod diagnose;
 mod fmu;
 mod identify;

@@ -22,7 +22,8 @@ use hasel_fmu::model::Platform;
 use hasel_fmu::simulation::{Input, Sample};
 use hasel_fmu::solver::Stats;
 
-use super::bench::{best, error_against};
+use super::reference::{error_against, reference};
+use super::timing::best;
 
 type M = NalgebraMat<f64>;
 type LS = NalgebraLU<f64>;
@@ -327,7 +328,7 @@ pub fn print(
 ) -> Result<(), String> {
     let mut rows = ours;
     for case in [Case::Sine, Case::Held] {
-        let reference = crate::bench::reference(reference_dir, case.reference())?;
+        let reference = reference(reference_dir, case.reference())?;
         for method in Method::ALL {
             let mut failed = None;
             let (wall, out) = best(repeat, || match run_once(model, method, case, rtol) {
