@@ -8,7 +8,7 @@
 use std::f64::consts::PI;
 
 use crate::identify::Experiment;
-use crate::identify::synth::{self, Columns, Normal, Spec};
+use crate::identify::synth::{self, Columns, DATA_RTOL, Normal, Spec};
 use crate::model::Params;
 use crate::model::effects::{Effect, HysteresisLaw, PreloadLaw};
 use crate::simulation::{Input, Interpolation};
@@ -247,7 +247,7 @@ impl Hidden {
             noise: self.noise,
             columns,
             seed,
-            rtol: 1e-9,
+            rtol: DATA_RTOL,
         })
     }
 

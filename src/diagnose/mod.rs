@@ -23,7 +23,7 @@ pub mod screen;
 use std::collections::BTreeMap;
 use std::time::Instant;
 
-use crate::identify::{self, Experiment, Identification, Options as IdOptions};
+use crate::identify::{self, Experiment, FIT_RTOL, Identification, Options as IdOptions};
 use crate::model::{Effect, Params};
 use analysis::Disagreement;
 
@@ -61,7 +61,7 @@ impl Default for Options {
             refits: 3,
             max_effects: 3,
             base_range: 2.0,
-            rtol: 1e-8,
+            rtol: FIT_RTOL,
         }
     }
 }

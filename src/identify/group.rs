@@ -115,6 +115,9 @@ pub(super) fn groups(free: &[&'static ParamDef], experiments: &[Experiment]) -> 
 /// A held direction whose largest component exceeds this is that one parameter.
 const SINGLE: f64 = 0.7;
 
+/// The covariance's simulations are this much tighter than the fit's (see `fit_group`).
+const COVARIANCE_RTOL_FACTOR: f64 = 1e-2;
+
 /// Central-difference step (in log parameters) of the covariance Jacobian.
 const COVARIANCE_FD_STEP: f64 = 1e-3;
 
@@ -259,7 +262,7 @@ pub(super) fn fit_group(
         coords: coords.clone(),
         channels: group.channels.clone(),
         experiments,
-        rtol: opts.rtol * 1e-2,
+        rtol: opts.rtol * COVARIANCE_RTOL_FACTOR,
         len,
         counter: Default::default(),
     };

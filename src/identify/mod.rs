@@ -17,7 +17,7 @@ use nalgebra::DMatrix;
 
 use crate::model::params::{ParamDef, parameter};
 use crate::model::{Params, Platform};
-use crate::simulation::{Sample, Simulator};
+use crate::simulation::{DEFAULT_RTOL, Sample, Simulator};
 pub use experiment::{Channel, Experiment};
 use group::{fit_group, groups};
 
@@ -29,6 +29,11 @@ pub fn default_free() -> Vec<String> {
         .collect()
 }
 
+/// Relative tolerance of the simulations of an identification (and of a diagnosis): 100 times
+/// tighter than the default, so that finite differences of the outputs see the parameters and
+/// not the step-size control.
+pub const FIT_RTOL: f64 = DEFAULT_RTOL * 1e-2;
+
 /// Settings of an identification.
 #[derive(Clone, Debug)]
 pub struct Options {
@@ -36,8 +41,7 @@ pub struct Options {
     pub free: Vec<String>,
     /// Bounds per parameter; default [prior/20, prior·20] for positive parameters.
     pub bounds: BTreeMap<String, (f64, f64)>,
-    /// Relative tolerance of the simulations: tight, so that finite differences of the
-    /// outputs see the parameters and not the step-size control.
+    /// Relative tolerance of the simulations (default [`FIT_RTOL`]).
     pub rtol: f64,
     pub lm: lm::Options,
 }
@@ -47,7 +51,7 @@ impl Default for Options {
         Options {
             free: default_free(),
             bounds: BTreeMap::new(),
-            rtol: 1e-8,
+            rtol: FIT_RTOL,
             lm: lm::Options {
                 fd_step: 1e-4,
                 ..lm::Options::default()

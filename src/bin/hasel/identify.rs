@@ -2,10 +2,9 @@
 
 use std::path::PathBuf;
 
-use hasel_fmu::identify::synth::{self, Spec};
+use hasel_fmu::identify::synth::{self, DATA_RTOL, Spec};
 use hasel_fmu::identify::{self, Options, report};
 use hasel_fmu::io::csv::write_atomic;
-use hasel_fmu::simulation::DEFAULT_RTOL;
 
 use hasel_fmu::diagnose::hidden::{self, Truth};
 use hasel_fmu::model::Params;
@@ -185,7 +184,7 @@ pub fn synth(a: SynthArgs) -> Result<(), String> {
             noise: a.noise.unwrap_or(0.0),
             columns,
             seed: a.seed,
-            rtol: DEFAULT_RTOL * 1e-3,
+            rtol: DATA_RTOL,
         },
     };
     let (header, rows) = synth::synthesize(&spec).map_err(|e| e.to_string())?;

@@ -19,7 +19,7 @@ use diffsol::{
 };
 use hasel_fmu::io::csv::Table;
 use hasel_fmu::model::Platform;
-use hasel_fmu::simulation::{Input, Sample};
+use hasel_fmu::simulation::{Input, Sample, tolerances};
 use hasel_fmu::solver::Stats;
 
 use super::reference::{error_against, reference};
@@ -183,11 +183,11 @@ fn run_once(
     };
     let evals = Evals::new(model);
     let x0 = model.rest_state().map_err(|e| e.to_string())?;
-    let atol: Vec<f64> = model.state_scales().iter().map(|s| rtol * s).collect();
+    let tol = tolerances(rtol, &model.state_scales()).map_err(|e| e.to_string())?;
     let mut problem = OdeBuilder::<M>::new()
         .t0(0.0)
-        .rtol(rtol)
-        .atol(atol)
+        .rtol(tol.rtol)
+        .atol(tol.atol)
         .rhs_implicit(
             |x: &[f64], _p: &[f64], t: f64, y: &mut [f64]| evals.rhs(x, u_at(t), y),
             |x: &[f64], _p: &[f64], t: f64, v: &[f64], y: &mut [f64]| {
