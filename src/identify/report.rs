@@ -13,7 +13,8 @@ use crate::io::params_file;
 use crate::plot::{self, Panel, Series};
 use crate::simulation::Sample;
 
-fn fits_json(fits: &[ExperimentFit]) -> Value {
+/// Fits per experiment and output, to 0.01 points: `{experiment: {output: fit}}`.
+pub(crate) fn fits_json(fits: &[ExperimentFit]) -> Value {
     Value::Object(
         fits.iter()
             .map(|f| {
@@ -31,7 +32,8 @@ fn fits_json(fits: &[ExperimentFit]) -> Value {
     )
 }
 
-fn round(v: f64, digits: i32) -> f64 {
+/// `v` rounded to `digits` decimals, for the reports' JSON.
+pub(crate) fn round(v: f64, digits: i32) -> f64 {
     let m = 10f64.powi(digits);
     (v * m).round() / m
 }

@@ -222,11 +222,6 @@ impl Simulator {
         self.solver.stats()
     }
 
-    /// The voltage the model sees now (the command, late by the `delay` effect if it is on).
-    pub fn drive(&self) -> [f64; 3] {
-        self.u_now
-    }
-
     fn delay(&self) -> f64 {
         self.model.params().effects.delay.tau_d
     }
