@@ -26,7 +26,7 @@ fn candidate_json(c: &Candidate) -> Value {
         v["passes"] = json!(r.passes());
         v["failed"] = json!(r.failed);
     } else if let Some(e) = &c.refit_error {
-        v["refit_error"] = json!(e);
+        v["refit_error"] = json!(e.to_string());
     } else {
         v["refit"] = json!("not refitted (lower screening score)");
     }

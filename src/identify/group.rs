@@ -5,7 +5,7 @@
 use nalgebra::{DMatrix, DVector};
 
 use super::experiment::{Channel, Experiment};
-use super::{Options, lm, simulate};
+use super::{Error, Options, lm, simulate};
 use crate::model::Params;
 use crate::model::params::{ParamDef, Rule};
 
@@ -45,10 +45,10 @@ struct Problem<'a> {
 }
 
 impl Problem<'_> {
-    fn params_at(&self, x: &[f64]) -> Result<Params, String> {
+    fn params_at(&self, x: &[f64]) -> Result<Params, Error> {
         let mut p = self.base.clone();
         for (c, &xi) in self.coords.iter().zip(x) {
-            p.set(c.def.name, c.to_p(xi)).map_err(|e| e.to_string())?;
+            p.set(c.def.name, c.to_p(xi))?;
         }
         Ok(p)
     }
@@ -58,7 +58,7 @@ impl lm::Residuals for Problem<'_> {
     fn count(&self) -> usize {
         self.len
     }
-    fn eval(&self, x: &[f64], r: &mut [f64]) -> Result<(), String> {
+    fn eval(&self, x: &[f64], r: &mut [f64]) -> Result<(), Error> {
         let p = self.params_at(x)?;
         let mut k = 0;
         for exp in self.experiments {
@@ -164,7 +164,7 @@ impl lm::Residuals for Reduced<'_, '_> {
     fn count(&self) -> usize {
         self.inner.len
     }
-    fn eval(&self, z: &[f64], r: &mut [f64]) -> Result<(), String> {
+    fn eval(&self, z: &[f64], r: &mut [f64]) -> Result<(), Error> {
         self.inner.eval(&self.x_of(z), r)
     }
 }
@@ -229,7 +229,7 @@ pub(super) fn fit_group(
     group: &Group,
     experiments: &[Experiment],
     opts: &Options,
-) -> Result<(Params, GroupResult), String> {
+) -> Result<(Params, GroupResult), Error> {
     let defs = &group.params;
     let n = defs.len();
     let len: usize = experiments
@@ -449,9 +449,7 @@ pub(super) fn fit_group(
         // held parameters keep their start value exactly (not exp(ln(value)))
         let mut fitted = base.clone();
         for &c in &active {
-            fitted
-                .set(coords[c].def.name, coords[c].to_p(x[c]))
-                .map_err(|e| e.to_string())?;
+            fitted.set(coords[c].def.name, coords[c].to_p(x[c]))?;
         }
         let estimates = active
             .iter()

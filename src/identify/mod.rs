@@ -3,6 +3,7 @@
 //! validation data, standard errors and 95 % intervals from the covariance, and an honest list
 //! of the parameters the data cannot determine (held at their prior).
 
+mod error;
 pub mod experiment;
 pub mod fit;
 mod group;
@@ -18,6 +19,7 @@ use nalgebra::DMatrix;
 use crate::model::params::{ParamDef, parameter};
 use crate::model::{Params, Platform};
 use crate::simulation::{DEFAULT_RTOL, Sample, Simulator};
+pub use error::Error;
 pub use experiment::{Channel, Experiment};
 use group::{fit_group, groups};
 
@@ -105,12 +107,15 @@ pub struct Identification {
 }
 
 /// Simulates `exp` from rest with `params`, sampled at the experiment's times.
-pub fn simulate(params: &Params, exp: &Experiment, rtol: f64) -> Result<Vec<Sample>, String> {
-    let model = Platform::new(params.clone()).map_err(|e| e.to_string())?;
-    let mut sim = Simulator::new(model, exp.t[0], rtol).map_err(|e| e.to_string())?;
+pub fn simulate(params: &Params, exp: &Experiment, rtol: f64) -> Result<Vec<Sample>, Error> {
+    let model = Platform::new(params.clone())?;
+    let mut sim = Simulator::new(model, exp.t[0], rtol)?;
     let mut out = Vec::with_capacity(exp.t.len());
     sim.run_at(&exp.input, &exp.t, |s| out.push(*s))
-        .map_err(|e| format!("{}: {e}", exp.name))?;
+        .map_err(|source| Error::Experiment {
+            experiment: exp.name.clone(),
+            source,
+        })?;
     Ok(out)
 }
 
@@ -142,25 +147,27 @@ pub fn identify(
     estimation: &[Experiment],
     validation: &[Experiment],
     opts: &Options,
-) -> Result<Identification, String> {
+) -> Result<Identification, Error> {
     let began = Instant::now();
     if estimation.is_empty() {
-        return Err("no estimation experiment".into());
+        return Err(Error::NoEstimationExperiment);
     }
     let mut free: Vec<&'static ParamDef> = Vec::new();
     for name in &opts.free {
-        let d = parameter(name)
-            .ok_or_else(|| format!("unknown parameter '{name}' in the free list"))?;
+        let d = parameter(name).ok_or_else(|| Error::UnknownFree(name.clone()))?;
         if !free.iter().any(|f| f.name == d.name) {
             free.push(d);
         }
     }
     for (name, (lo, hi)) in &opts.bounds {
-        let prior = start.get(name).map_err(|e| e.to_string())?;
+        let prior = start.get(name)?;
         if !(lo < hi && (*lo..=*hi).contains(&prior)) {
-            return Err(format!(
-                "bounds of {name}: [{lo}, {hi}] must be increasing and contain the start value {prior}"
-            ));
+            return Err(Error::Bounds {
+                name: name.clone(),
+                lo: *lo,
+                hi: *hi,
+                start: prior,
+            });
         }
     }
     let estimation_before = estimation
@@ -177,9 +184,7 @@ pub fn identify(
     for group in groups(&free, estimation) {
         let (fitted, r) = fit_group(start, &group, estimation, opts)?;
         for d in &group.params {
-            params
-                .set(d.name, (d.get)(&fitted))
-                .map_err(|e| e.to_string())?;
+            params.set(d.name, (d.get)(&fitted))?;
         }
         iterations += r.iterations;
         simulations += r.simulations;
@@ -217,7 +222,7 @@ pub fn identify(
         })
         .collect();
     let mut simulated = Vec::new();
-    let mut fit_all = |exps: &[Experiment]| -> Result<Vec<ExperimentFit>, String> {
+    let mut fit_all = |exps: &[Experiment]| -> Result<Vec<ExperimentFit>, Error> {
         exps.iter()
             .map(|e| {
                 let s = simulate(&params, e, opts.rtol)?;

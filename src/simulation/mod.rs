@@ -7,7 +7,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::model::{ModelError, Platform};
 use crate::solver::{OdeSystem, Radau5, RhsError, SolverError, Stats, Tolerances};
-pub use input::{Input, Interpolation, Piece, Tone};
+pub use input::{Input, InputError, Interpolation, Piece, Tone};
 
 /// Relative tolerance of every way of running the model unless the user picks another
 /// (model.md, "Accuracy contract"; the FMU's DefaultExperiment declares the same).

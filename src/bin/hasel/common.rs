@@ -10,20 +10,19 @@ use hasel_fmu::model::Params;
 use hasel_fmu::simulation::input::PAPER_PHASES;
 use hasel_fmu::simulation::{Input, Interpolation, Tone};
 
+use crate::error::Error;
+
 /// The parameters of `--params FILE.toml` over the defaults, or the defaults.
-pub fn load_params(path: &Option<PathBuf>) -> Result<Params, String> {
+pub fn load_params(path: &Option<PathBuf>) -> Result<Params, Error> {
     match path {
-        Some(p) => params_file::read(p).map_err(|e| e.to_string()),
+        Some(p) => Ok(params_file::read(p)?),
         None => Ok(Params::default()),
     }
 }
 
 /// The experiment files, read and checked.
-pub fn read_all(paths: &[PathBuf]) -> Result<Vec<Experiment>, String> {
-    paths
-        .iter()
-        .map(|p| Experiment::read(p).map_err(|e| e.to_string()))
-        .collect()
+pub fn read_all(paths: &[PathBuf]) -> Result<Vec<Experiment>, Error> {
+    paths.iter().map(|p| Ok(Experiment::read(p)?)).collect()
 }
 
 /// The recorded outputs of `--columns h|tip`.
@@ -59,7 +58,7 @@ pub struct InputArgs {
 
 impl InputArgs {
     /// The input and its natural end: the last sample of a file, else 10 s.
-    pub fn input(&self) -> Result<(Input, f64), String> {
+    pub fn input(&self) -> Result<(Input, f64), Error> {
         if let Some(path) = &self.input {
             let interpolation = match self.interp.as_str() {
                 "linear" => Interpolation::Linear,
@@ -67,7 +66,7 @@ impl InputArgs {
                 "spline" => Interpolation::Spline,
                 _ => Interpolation::ZeroOrderHold,
             };
-            let input = input_file::read(path, interpolation).map_err(|e| e.to_string())?;
+            let input = input_file::read(path, interpolation)?;
             let end = input.last_sample().unwrap_or(10.0);
             return Ok((input, end));
         }
@@ -94,7 +93,7 @@ impl InputArgs {
 }
 
 /// The tones of `--multisine`, shifted by the actuator's phase `phi`.
-fn multisine(text: &str, phi: f64) -> Result<Vec<Tone>, String> {
+fn multisine(text: &str, phi: f64) -> Result<Vec<Tone>, Error> {
     text.split(',')
         .map(|tone| {
             let parts: Vec<f64> = tone
@@ -102,7 +101,11 @@ fn multisine(text: &str, phi: f64) -> Result<Vec<Tone>, String> {
                 .map(|p| p.trim().parse::<f64>().ok().filter(|v| v.is_finite()))
                 .collect::<Option<_>>()
                 .ok_or_else(|| {
-                    format!("--multisine {text}: '{tone}' is not A:OMEGA[:PHASE] in numbers")
+                    Error::flag(
+                        "multisine",
+                        text,
+                        format!("'{tone}' is not A:OMEGA[:PHASE] in numbers"),
+                    )
                 })?;
             match parts.as_slice() {
                 [a, w] => Ok(Tone {
@@ -115,8 +118,10 @@ fn multisine(text: &str, phi: f64) -> Result<Vec<Tone>, String> {
                     omega: *w,
                     phase: p + phi,
                 }),
-                _ => Err(format!(
-                    "--multisine {text}: '{tone}' is not A:OMEGA[:PHASE]"
+                _ => Err(Error::flag(
+                    "multisine",
+                    text,
+                    format!("'{tone}' is not A:OMEGA[:PHASE]"),
                 )),
             }
         })
@@ -124,14 +129,14 @@ fn multisine(text: &str, phi: f64) -> Result<Vec<Tone>, String> {
 }
 
 /// The `U0,OMEGA` of `--sine` or `--offset-sine`.
-fn pair(flag: &str, text: &str) -> Result<(f64, f64), String> {
+fn pair(flag: &'static str, text: &str) -> Result<(f64, f64), Error> {
     let parts: Vec<&str> = text.split(',').map(str::trim).collect();
     let num = |s: &str| s.parse::<f64>().ok().filter(|v| v.is_finite());
     match parts.as_slice() {
         [a, b] => match (num(a), num(b)) {
             (Some(u0), Some(w)) => Ok((u0, w)),
-            _ => Err(format!("--{flag} {text}: expected two numbers U0,OMEGA")),
+            _ => Err(Error::flag(flag, text, "expected two numbers U0,OMEGA")),
         },
-        _ => Err(format!("--{flag} {text}: expected U0,OMEGA")),
+        _ => Err(Error::flag(flag, text, "expected U0,OMEGA")),
     }
 }

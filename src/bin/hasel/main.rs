@@ -20,6 +20,7 @@ macro_rules! say_raw {
 mod bench;
 mod common;
 mod diagnose;
+mod error;
 mod fmu;
 mod identify;
 mod simulate;

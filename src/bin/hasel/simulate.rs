@@ -10,6 +10,7 @@ use hasel_fmu::simulation::{DEFAULT_RTOL, Sample, Simulator};
 use indicatif::{ProgressBar, ProgressStyle};
 
 use crate::common::{InputArgs, load_params};
+use crate::error::Error;
 
 #[derive(clap::Args)]
 pub struct Args {
@@ -45,10 +46,10 @@ pub struct ParamsArgs {
     out: Option<PathBuf>,
 }
 
-pub fn params(a: ParamsArgs) -> Result<(), String> {
+pub fn params(a: ParamsArgs) -> Result<(), Error> {
     let p = load_params(&a.params)?;
     match a.out {
-        Some(path) => params_file::write(&path, &p).map_err(|e| e.to_string()),
+        Some(path) => Ok(params_file::write(&path, &p)?),
         None => {
             say_raw!("{}", params_file::to_toml(&p));
             Ok(())
@@ -56,15 +57,15 @@ pub fn params(a: ParamsArgs) -> Result<(), String> {
     }
 }
 
-pub fn run(a: Args) -> Result<(), String> {
+pub fn run(a: Args) -> Result<(), Error> {
     let params = load_params(&a.params)?;
     let (input, default_end) = a.input.input()?;
     let t_end = a.t_end.unwrap_or(default_end);
     if !(t_end.is_finite() && t_end > 0.0) {
-        return Err(format!("--t-end {t_end}: must be > 0"));
+        return Err(Error::flag("t-end", t_end, "must be > 0"));
     }
-    let model = Platform::new(params).map_err(|e| e.to_string())?;
-    let mut sim = Simulator::new(model, 0.0, a.rtol).map_err(|e| e.to_string())?;
+    let model = Platform::new(params)?;
+    let mut sim = Simulator::new(model, 0.0, a.rtol)?;
 
     let bar = (t_end >= 30.0).then(|| {
         let bar = ProgressBar::new((t_end * 1000.0) as u64);
@@ -81,8 +82,7 @@ pub fn run(a: Args) -> Result<(), String> {
             b.set_position((s.t * 1000.0) as u64);
         }
         samples.push(*s);
-    })
-    .map_err(|e| e.to_string())?;
+    })?;
     let wall = started.elapsed();
     if let Some(b) = bar {
         b.finish_and_clear();
@@ -117,11 +117,11 @@ pub fn run(a: Args) -> Result<(), String> {
         range(&|s| s.tip[1])
     );
     if let Some(path) = &a.out {
-        trajectory::write(path, &samples).map_err(|e| e.to_string())?;
+        trajectory::write(path, &samples)?;
         say!("wrote {}", path.display());
     }
     if let Some(path) = &a.plot {
-        plot::draw(path, &run_panels(&samples), 2, (1400, 560)).map_err(|e| e.to_string())?;
+        plot::draw(path, &run_panels(&samples), 2, (1400, 560))?;
         say!("wrote {}", path.display());
     }
     Ok(())

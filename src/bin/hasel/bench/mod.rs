@@ -5,6 +5,8 @@
 
 use std::path::PathBuf;
 
+use crate::error::Error;
+
 #[cfg(feature = "compare")]
 mod compare;
 mod diagnose;
@@ -39,7 +41,7 @@ pub struct Args {
     only: Option<String>,
 }
 
-pub fn run(a: Args) -> Result<(), String> {
+pub fn run(a: Args) -> Result<(), Error> {
     if a.diagnose {
         return diagnose::run(a.seeds, crate::common::columns(&a.columns), a.only);
     }

@@ -6,6 +6,8 @@ use std::path::Path;
 use hasel_fmu::io::csv::Table;
 use hasel_fmu::simulation::Sample;
 
+use crate::error::Error;
+
 /// The reference trajectories of tests/data/reference/ (see its README), built into the
 /// executable so that an installed `hasel bench` needs no source tree.
 const EMBEDDED: [(&str, &str); 2] = [
@@ -20,15 +22,15 @@ const EMBEDDED: [(&str, &str); 2] = [
 ];
 
 /// The reference trajectory `name`: from `dir` when given, else the embedded copy.
-pub fn reference(dir: Option<&Path>, name: &str) -> Result<Table, String> {
+pub fn reference(dir: Option<&Path>, name: &str) -> Result<Table, Error> {
     match dir {
-        Some(dir) => Table::read(&dir.join(name)).map_err(|e| e.to_string()),
+        Some(dir) => Ok(Table::read(&dir.join(name))?),
         None => {
             let (_, text) = EMBEDDED
                 .iter()
                 .find(|(n, _)| *n == name)
-                .ok_or_else(|| format!("no embedded reference trajectory {name}"))?;
-            Table::parse(Path::new(name), text).map_err(|e| e.to_string())
+                .ok_or_else(|| Error::NoEmbeddedReference(name.to_string()))?;
+            Ok(Table::parse(Path::new(name), text)?)
         }
     }
 }

@@ -10,6 +10,7 @@ use hasel_fmu::solver::Stats;
 
 use super::reference::{error_against, reference};
 use super::timing::best;
+use crate::error::Error;
 
 fn report(name: &str, wall: Duration, stats: Stats, error: Option<(f64, f64)>, target_ms: f64) {
     let ms = wall.as_secs_f64() * 1e3;
@@ -34,8 +35,8 @@ fn report(name: &str, wall: Duration, stats: Stats, error: Option<(f64, f64)>, t
 
 /// Both runs (the sine with dense output, the held co-simulation steps), best of `repeat`,
 /// against the reference trajectories of `reference_dir` (default: the embedded ones).
-pub fn run(repeat: usize, reference_dir: Option<&Path>) -> Result<(), String> {
-    let model = Platform::new(Params::default()).map_err(|e| e.to_string())?;
+pub fn run(repeat: usize, reference_dir: Option<&Path>) -> Result<(), Error> {
+    let model = Platform::new(Params::default())?;
     let omega = 3.0 * std::f64::consts::PI;
     let input = Input::sine(60.0, omega);
     say!(
