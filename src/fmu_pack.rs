@@ -8,7 +8,7 @@ use std::path::Path;
 use crate::fmi2::model_description::{guid_for, model_description_xml};
 use crate::fmi2::variables::{Causality, Variable};
 use crate::fmu_core::{MODEL_IDENTIFIER, RESOURCE_PARAMS, model_info, variables};
-use crate::io::csv::{FileError, write_bytes_atomic};
+use crate::io::file::{FileError, write_bytes_atomic};
 use crate::io::params_file;
 use crate::model::Params;
 use crate::simulation::DEFAULT_RTOL;

@@ -6,7 +6,7 @@ use std::sync::Once;
 
 use plotters::prelude::*;
 
-use crate::io::csv::FileError;
+use crate::io::file::FileError;
 
 /// One curve of a panel.
 pub struct Series {

@@ -7,11 +7,12 @@
 
 use std::f64::consts::PI;
 
+use super::Error;
 use crate::identify::Experiment;
-use crate::identify::synth::{self, Columns, Normal, Spec};
+use crate::identify::synth::{self, Columns, DATA_RTOL, Normal, Spec};
 use crate::model::Params;
 use crate::model::effects::{Effect, HysteresisLaw, PreloadLaw};
-use crate::simulation::{Input, Interpolation};
+use crate::simulation::{Input, InputError, Interpolation};
 
 /// What the data hide.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -71,15 +72,13 @@ pub struct Hidden {
 const THETA_REF: f64 = 0.012;
 
 /// Draws a case hiding `truth`; `seed` fixes everything.
-pub fn hide(truth: Truth, seed: u64) -> Result<Hidden, String> {
+pub fn hide(truth: Truth, seed: u64) -> Result<Hidden, Error> {
     let mut rng = Normal::new(seed.wrapping_mul(0x2545_F491_4F6C_DD1D) ^ 0x5EED);
     let mut between = |lo: f64, hi: f64| lo + (hi - lo) * rng.uniform();
     let mut params = Params::default();
     for name in crate::identify::default_free() {
-        let v = params.get(&name).map_err(|e| e.to_string())?;
-        params
-            .set(&name, v * between(0.8, 1.2))
-            .map_err(|e| e.to_string())?;
+        let v = params.get(&name)?;
+        params.set(&name, v * between(0.8, 1.2))?;
     }
     let noise = between(0.005, 0.02);
     let kb = params.act.map(|a| a.kb);
@@ -204,7 +203,7 @@ const WANDER_HZ: f64 = 0.37;
 
 /// The command late by τ(t) = τ (1 + WANDER sin(2π WANDER_HZ t + phase)), 0 before it
 /// arrives, tabulated every 0.5 ms and replayed linearly.
-fn delayed(input: &Input, tau: f64, phase: f64, t_end: f64) -> Result<Input, String> {
+fn delayed(input: &Input, tau: f64, phase: f64, t_end: f64) -> Result<Input, InputError> {
     const STEP: f64 = 5e-4;
     let n = (t_end / STEP).ceil() as usize + 1;
     let t: Vec<f64> = (0..=n).map(|k| k as f64 * STEP).collect();
@@ -232,7 +231,7 @@ impl Hidden {
         dt: f64,
         columns: Columns,
         seed: u64,
-    ) -> Result<Spec, String> {
+    ) -> Result<Spec, Error> {
         let drive = match self.wandering_delay {
             Some((tau, phase)) => Some(delayed(&input, tau, phase, t_end)?),
             None => None,
@@ -247,7 +246,7 @@ impl Hidden {
             noise: self.noise,
             columns,
             seed,
-            rtol: 1e-9,
+            rtol: DATA_RTOL,
         })
     }
 
@@ -257,7 +256,7 @@ impl Hidden {
         columns: Columns,
         t_end: f64,
         seed: u64,
-    ) -> Result<Vec<Experiment>, String> {
+    ) -> Result<Vec<Experiment>, Error> {
         OMEGAS
             .iter()
             .zip(["w3pi.csv", "w11.csv"])
@@ -270,7 +269,7 @@ impl Hidden {
                     columns,
                     seed.wrapping_mul(31).wrapping_add(k as u64),
                 )?;
-                synth::experiment(&spec, name)
+                Ok(synth::experiment(&spec, name)?)
             })
             .collect()
     }

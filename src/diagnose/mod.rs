@@ -19,6 +19,7 @@
 //! candidate passes.
 
 pub mod analysis;
+mod error;
 pub mod hidden;
 pub mod report;
 pub mod screen;
@@ -26,9 +27,10 @@ pub mod screen;
 use std::collections::BTreeMap;
 use std::time::Instant;
 
-use crate::identify::{self, Experiment, Identification, Options as IdOptions};
+use crate::identify::{self, Experiment, FIT_RTOL, Identification, Options as IdOptions};
 use crate::model::{Effect, Params};
 use analysis::Disagreement;
+pub use error::Error;
 
 /// ΔBIC an effect must reach against the model without it, and against the runner-up.
 pub const BIC_MARGIN: f64 = 10.0;
@@ -64,7 +66,7 @@ impl Default for Options {
             refits: 3,
             max_effects: 3,
             base_range: 2.0,
-            rtol: 1e-8,
+            rtol: FIT_RTOL,
         }
     }
 }
@@ -99,7 +101,7 @@ pub struct Candidate {
     pub start: Vec<(&'static str, f64)>,
     pub refit: Option<Refit>,
     /// Why the refit could not run, if it could not.
-    pub refit_error: Option<String>,
+    pub refit_error: Option<identify::Error>,
 }
 
 /// A candidate added to the model and re-identified.
@@ -301,9 +303,9 @@ pub fn diagnose(
     start: &Params,
     experiments: Vec<Experiment>,
     opts: &Options,
-) -> Result<Diagnosis, String> {
+) -> Result<Diagnosis, Error> {
     if experiments.is_empty() {
-        return Err("no experiment".into());
+        return Err(Error::NoExperiment);
     }
     let mut timing = Vec::new();
     let began = Instant::now();
@@ -312,7 +314,7 @@ pub fn diagnose(
     let ordered: Vec<Experiment> = estimation.iter().chain(held).cloned().collect();
     let mut bounds = BTreeMap::new();
     for name in identify::default_free() {
-        let v = start.get(&name).map_err(|e| e.to_string())?;
+        let v = start.get(&name)?;
         bounds.insert(name, (v / opts.base_range, v * opts.base_range));
     }
     let id_opts = |free: Vec<String>| IdOptions {
@@ -353,7 +355,7 @@ pub fn diagnose(
         for c in candidates.iter_mut().take(opts.refits) {
             let mut p = current.params.clone();
             for &(name, v) in &c.start {
-                p.set(name, v).map_err(|e| e.to_string())?;
+                p.set(name, v)?;
             }
             let mut with = effects.clone();
             with.push(c.effect);
@@ -487,7 +489,7 @@ fn screen(
     exp: &Experiment,
     effects: &[Effect],
     opts: &Options,
-) -> Result<Vec<Candidate>, String> {
+) -> Result<Vec<Candidate>, Error> {
     let params = &current.params;
     // base sensitivities: the base parameters and those of the effects already added
     let point = screen::Point::new(params, exp, &free_list(effects), opts.rtol)?;

@@ -8,30 +8,10 @@ use serde_json::{Map, Value, json};
 
 use super::analysis::Disagreement;
 use super::{Candidate, Diagnosis, Verdict, floor_fit, held_out_fits};
-use crate::identify::ExperimentFit;
-use crate::identify::report::residual_series;
-use crate::io::csv::{FileError, write_text_atomic};
+use crate::identify::report::{fits_json, residual_series, round};
+use crate::io::file::{FileError, write_text_atomic};
 use crate::io::params_file;
 use crate::plot::{self, Panel, Series};
-
-fn round(x: f64, digits: i32) -> f64 {
-    let f = 10f64.powi(digits);
-    (x * f).round() / f
-}
-
-fn fits_map(fits: &[ExperimentFit]) -> Value {
-    fits.iter()
-        .map(|f| {
-            let m: Map<String, Value> = f
-                .fits
-                .iter()
-                .map(|(c, v)| (c.clone(), json!(round(*v, 2))))
-                .collect();
-            (f.experiment.clone(), Value::Object(m))
-        })
-        .collect::<Map<_, _>>()
-        .into()
-}
 
 fn candidate_json(c: &Candidate) -> Value {
     let mut v = json!({ "effect": c.effect.name(), "score": round(c.score, 4) });
@@ -46,7 +26,7 @@ fn candidate_json(c: &Candidate) -> Value {
         v["passes"] = json!(r.passes());
         v["failed"] = json!(r.failed);
     } else if let Some(e) = &c.refit_error {
-        v["refit_error"] = json!(e);
+        v["refit_error"] = json!(e.to_string());
     } else {
         v["refit"] = json!("not refitted (lower screening score)");
     }
@@ -126,8 +106,8 @@ pub fn to_json(d: &Diagnosis) -> Value {
         "estimation": d.estimation,
         "held_out": d.held_out,
         "fits": {
-            "before": { "estimation": fits_map(&d.base.estimation), "held_out": fits_map(&d.base.validation) },
-            "after": { "estimation": fits_map(&d.last.estimation), "held_out": fits_map(&d.last.validation) },
+            "before": { "estimation": fits_json(&d.base.estimation), "held_out": fits_json(&d.base.validation) },
+            "after": { "estimation": fits_json(&d.last.estimation), "held_out": fits_json(&d.last.validation) },
         },
         "disagreement_before": d.before.iter().map(disagreement_json).collect::<Vec<_>>(),
         "disagreement_after": d.after.iter().map(disagreement_json).collect::<Vec<_>>(),

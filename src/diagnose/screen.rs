@@ -6,6 +6,7 @@
 
 use nalgebra::{DMatrix, DVector};
 
+use super::Error;
 use super::analysis::noise_level;
 use crate::identify::{Channel, Experiment, simulate};
 use crate::model::{Effect, Params};
@@ -99,7 +100,7 @@ fn outputs(
     exp: &Experiment,
     weights: &[(Channel, f64)],
     rtol: f64,
-) -> Result<DVector<f64>, String> {
+) -> Result<DVector<f64>, Error> {
     let sim = simulate(params, exp, rtol)?;
     let mut v = Vec::new();
     for &(c, w) in weights {
@@ -135,7 +136,7 @@ impl<'a> Point<'a> {
         exp: &'a Experiment,
         free: &[String],
         rtol: f64,
-    ) -> Result<Point<'a>, String> {
+    ) -> Result<Point<'a>, Error> {
         let weights: Vec<(Channel, f64)> = exp
             .channels
             .iter()
@@ -149,10 +150,10 @@ impl<'a> Point<'a> {
         let residual = DVector::from_vec(measured) - &y0;
         let mut cols = Vec::new();
         for name in free {
-            let v = params.get(name).map_err(|e| e.to_string())?;
+            let v = params.get(name)?;
             let mut p = params.clone();
             let h = if v != 0.0 { 1e-3 * v } else { 1e-6 };
-            p.set(name, v + h).map_err(|e| e.to_string())?;
+            p.set(name, v + h)?;
             cols.push(outputs(&p, exp, &weights, rtol)? - &y0);
         }
         Ok(Point {
@@ -167,12 +168,12 @@ impl<'a> Point<'a> {
     }
 
     /// Scores `probe` here.
-    pub fn score(&self, probe: &Probe) -> Result<Score, String> {
+    pub fn score(&self, probe: &Probe) -> Result<Score, Error> {
         let mut cols = Vec::new();
         for column in &probe.columns {
             let mut p = self.params.clone();
             for &(name, v) in column {
-                p.set(name, v).map_err(|e| e.to_string())?;
+                p.set(name, v)?;
             }
             cols.push(outputs(&p, self.exp, &self.weights, self.rtol)? - &self.y0);
         }
@@ -180,16 +181,16 @@ impl<'a> Point<'a> {
         // project out the base sensitivities: D⊥ = D − B (B⁺ D)
         let b = &self.base_directions;
         let svd = b.clone().svd(true, true);
-        let d_perp = &d - b * svd.solve(&d, 1e-12).map_err(|e| e.to_string())?;
+        let d_perp = &d - b * svd.solve(&d, 1e-12).map_err(Error::Projection)?;
         let r_perp = &self.residual
             - b * svd
                 .solve(&self.residual, 1e-12)
-                .map_err(|e| e.to_string())?;
+                .map_err(Error::Projection)?;
         let coef = d_perp
             .clone()
             .svd(true, true)
             .solve(&r_perp, 1e-9)
-            .map_err(|e| e.to_string())?;
+            .map_err(Error::Projection)?;
         let explained = (&d_perp * &coef).norm_squared();
         let total = r_perp.norm_squared().max(1e-300);
         let mut start = Vec::new();

@@ -4,7 +4,8 @@
 
 use std::path::{Path, PathBuf};
 
-use crate::io::csv::{FileError, Table};
+use crate::io::csv::Table;
+use crate::io::file::FileError;
 use crate::simulation::{Input, Interpolation, Sample};
 
 /// A measured output channel.
@@ -139,7 +140,7 @@ impl Experiment {
         }
         let samples = (0..t.len()).map(|k| [u[0][k], u[1][k], u[2][k]]).collect();
         let input = Input::sampled(t.clone(), samples, Interpolation::Spline)
-            .map_err(|e| FileError::new(path, e))?;
+            .map_err(|e| FileError::new(path, e.to_string()))?;
         let name = path.file_name().map_or_else(
             || path.display().to_string(),
             |n| n.to_string_lossy().into_owned(),

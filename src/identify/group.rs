@@ -5,7 +5,7 @@
 use nalgebra::{DMatrix, DVector};
 
 use super::experiment::{Channel, Experiment};
-use super::{Options, lm, simulate};
+use super::{Error, Options, lm, simulate};
 use crate::model::Params;
 use crate::model::params::{ParamDef, Rule};
 
@@ -45,10 +45,10 @@ struct Problem<'a> {
 }
 
 impl Problem<'_> {
-    fn params_at(&self, x: &[f64]) -> Result<Params, String> {
+    fn params_at(&self, x: &[f64]) -> Result<Params, Error> {
         let mut p = self.base.clone();
         for (c, &xi) in self.coords.iter().zip(x) {
-            p.set(c.def.name, c.to_p(xi)).map_err(|e| e.to_string())?;
+            p.set(c.def.name, c.to_p(xi))?;
         }
         Ok(p)
     }
@@ -58,7 +58,7 @@ impl lm::Residuals for Problem<'_> {
     fn count(&self) -> usize {
         self.len
     }
-    fn eval(&self, x: &[f64], r: &mut [f64]) -> Result<(), String> {
+    fn eval(&self, x: &[f64], r: &mut [f64]) -> Result<(), Error> {
         let p = self.params_at(x)?;
         let mut k = 0;
         for exp in self.experiments {
@@ -115,6 +115,9 @@ pub(super) fn groups(free: &[&'static ParamDef], experiments: &[Experiment]) -> 
 /// A held direction whose largest component exceeds this is that one parameter.
 const SINGLE: f64 = 0.7;
 
+/// The covariance's simulations are this much tighter than the fit's (see `fit_group`).
+const COVARIANCE_RTOL_FACTOR: f64 = 1e-2;
+
 /// Central-difference step (in log parameters) of the covariance Jacobian.
 const COVARIANCE_FD_STEP: f64 = 1e-3;
 
@@ -161,7 +164,7 @@ impl lm::Residuals for Reduced<'_, '_> {
     fn count(&self) -> usize {
         self.inner.len
     }
-    fn eval(&self, z: &[f64], r: &mut [f64]) -> Result<(), String> {
+    fn eval(&self, z: &[f64], r: &mut [f64]) -> Result<(), Error> {
         self.inner.eval(&self.x_of(z), r)
     }
 }
@@ -226,7 +229,7 @@ pub(super) fn fit_group(
     group: &Group,
     experiments: &[Experiment],
     opts: &Options,
-) -> Result<(Params, GroupResult), String> {
+) -> Result<(Params, GroupResult), Error> {
     let defs = &group.params;
     let n = defs.len();
     let len: usize = experiments
@@ -259,7 +262,7 @@ pub(super) fn fit_group(
         coords: coords.clone(),
         channels: group.channels.clone(),
         experiments,
-        rtol: opts.rtol * 1e-2,
+        rtol: opts.rtol * COVARIANCE_RTOL_FACTOR,
         len,
         counter: Default::default(),
     };
@@ -446,9 +449,7 @@ pub(super) fn fit_group(
         // held parameters keep their start value exactly (not exp(ln(value)))
         let mut fitted = base.clone();
         for &c in &active {
-            fitted
-                .set(coords[c].def.name, coords[c].to_p(x[c]))
-                .map_err(|e| e.to_string())?;
+            fitted.set(coords[c].def.name, coords[c].to_p(x[c]))?;
         }
         let estimates = active
             .iter()

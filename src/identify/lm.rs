@@ -4,12 +4,14 @@
 
 use nalgebra::{DMatrix, DVector};
 
+use super::Error;
+
 /// A least-squares problem: residuals r(x) of fixed length.
 pub trait Residuals: Sync {
     /// Number of residuals.
     fn count(&self) -> usize;
     /// r(x) into `r`; an error when the model cannot be evaluated at x.
-    fn eval(&self, x: &[f64], r: &mut [f64]) -> Result<(), String>;
+    fn eval(&self, x: &[f64], r: &mut [f64]) -> Result<(), Error>;
 }
 
 #[derive(Clone, Debug)]
@@ -51,11 +53,11 @@ pub struct Solution {
 }
 
 /// r(x), refusing non-finite residuals.
-pub fn evaluate(p: &impl Residuals, x: &[f64]) -> Result<DVector<f64>, String> {
+pub fn evaluate(p: &impl Residuals, x: &[f64]) -> Result<DVector<f64>, Error> {
     let mut r = DVector::zeros(p.count());
     p.eval(x, r.as_mut_slice())?;
     if r.iter().any(|v| !v.is_finite()) {
-        return Err("non-finite residual".into());
+        return Err(Error::NonFiniteResidual);
     }
     Ok(r)
 }
@@ -65,10 +67,10 @@ fn assemble(
     rows: usize,
     n: usize,
     threads: usize,
-    column: impl Fn(usize) -> Result<Vec<f64>, String> + Sync,
-) -> Result<DMatrix<f64>, String> {
+    column: impl Fn(usize) -> Result<Vec<f64>, Error> + Sync,
+) -> Result<DMatrix<f64>, Error> {
     let threads = threads.clamp(1, n.max(1));
-    let columns: Vec<(usize, Result<Vec<f64>, String>)> = std::thread::scope(|s| {
+    let columns: Vec<(usize, Result<Vec<f64>, Error>)> = std::thread::scope(|s| {
         let handles: Vec<_> = (0..threads)
             .map(|t| {
                 let column = &column;
@@ -101,7 +103,7 @@ pub fn jacobian(
     lo: &[f64],
     hi: &[f64],
     opts: &Options,
-) -> Result<DMatrix<f64>, String> {
+) -> Result<DMatrix<f64>, Error> {
     assemble(r.len(), x.len(), opts.threads, |j| {
         let h = opts.fd_step * x[j].abs().max(1.0);
         let mut xp = x.to_vec();
@@ -131,7 +133,7 @@ pub fn jacobian_central(
     x: &[f64],
     h: f64,
     threads: usize,
-) -> Result<DMatrix<f64>, String> {
+) -> Result<DMatrix<f64>, Error> {
     assemble(p.count(), x.len(), threads, |j| {
         let (mut xp, mut xm) = (x.to_vec(), x.to_vec());
         xp[j] += h;
@@ -152,10 +154,10 @@ pub fn minimize(
     lo: &[f64],
     hi: &[f64],
     opts: &Options,
-) -> Result<Solution, String> {
+) -> Result<Solution, Error> {
     let n = x0.len();
     let mut x: Vec<f64> = (0..n).map(|j| x0[j].clamp(lo[j], hi[j])).collect();
-    let mut r = evaluate(p, &x).map_err(|e| format!("at the starting point: {e}"))?;
+    let mut r = evaluate(p, &x).map_err(|e| Error::AtStart(Box::new(e)))?;
     let mut evaluations = 1;
     let mut cost = 0.5 * r.norm_squared();
     let (mut lambda, mut nu) = (-1.0, 2.0);
@@ -168,7 +170,7 @@ pub fn minimize(
         let a = jac.transpose() * &jac;
         let g = jac.transpose() * &r;
         if a.iter().any(|v| !v.is_finite()) {
-            return Err("the Jacobian of the residuals is not finite".into());
+            return Err(Error::NonFiniteJacobian);
         }
         let diag: Vec<f64> = (0..n)
             .map(|j| a[(j, j)].max(1e-12 * a.diagonal().max()))
@@ -260,7 +262,7 @@ mod tests {
         fn count(&self) -> usize {
             self.t.len()
         }
-        fn eval(&self, x: &[f64], r: &mut [f64]) -> Result<(), String> {
+        fn eval(&self, x: &[f64], r: &mut [f64]) -> Result<(), Error> {
             for (k, &t) in self.t.iter().enumerate() {
                 r[k] = x[0] * (-x[1] * t).exp() + x[2] - self.y[k];
             }

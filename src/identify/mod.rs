@@ -5,6 +5,7 @@
 //!
 //! Data files, fit metric and outputs: [src/identify/identify.md](identify.md).
 
+mod error;
 pub mod experiment;
 pub mod fit;
 mod group;
@@ -19,7 +20,8 @@ use nalgebra::DMatrix;
 
 use crate::model::params::{ParamDef, parameter};
 use crate::model::{Params, Platform};
-use crate::simulation::{Sample, Simulator};
+use crate::simulation::{DEFAULT_RTOL, Sample, Simulator};
+pub use error::Error;
 pub use experiment::{Channel, Experiment};
 use group::{fit_group, groups};
 
@@ -32,6 +34,11 @@ pub fn default_free() -> Vec<String> {
         .collect()
 }
 
+/// Relative tolerance of the simulations of an identification (and of a diagnosis): 100 times
+/// tighter than the default, so that finite differences of the outputs see the parameters and
+/// not the step-size control.
+pub const FIT_RTOL: f64 = DEFAULT_RTOL * 1e-2;
+
 /// Settings of an identification.
 #[derive(Clone, Debug)]
 pub struct Options {
@@ -39,8 +46,7 @@ pub struct Options {
     pub free: Vec<String>,
     /// Bounds per parameter; default [prior/20, prior·20] for positive parameters.
     pub bounds: BTreeMap<String, (f64, f64)>,
-    /// Relative tolerance of the simulations: tight, so that finite differences of the
-    /// outputs see the parameters and not the step-size control.
+    /// Relative tolerance of the simulations (default [`FIT_RTOL`]).
     pub rtol: f64,
     pub lm: lm::Options,
 }
@@ -50,7 +56,7 @@ impl Default for Options {
         Options {
             free: default_free(),
             bounds: BTreeMap::new(),
-            rtol: 1e-8,
+            rtol: FIT_RTOL,
             lm: lm::Options {
                 fd_step: 1e-4,
                 ..lm::Options::default()
@@ -104,12 +110,15 @@ pub struct Identification {
 }
 
 /// Simulates `exp` from rest with `params`, sampled at the experiment's times.
-pub fn simulate(params: &Params, exp: &Experiment, rtol: f64) -> Result<Vec<Sample>, String> {
-    let model = Platform::new(params.clone()).map_err(|e| e.to_string())?;
-    let mut sim = Simulator::new(model, exp.t[0], rtol).map_err(|e| e.to_string())?;
+pub fn simulate(params: &Params, exp: &Experiment, rtol: f64) -> Result<Vec<Sample>, Error> {
+    let model = Platform::new(params.clone())?;
+    let mut sim = Simulator::new(model, exp.t[0], rtol)?;
     let mut out = Vec::with_capacity(exp.t.len());
     sim.run_at(&exp.input, &exp.t, |s| out.push(*s))
-        .map_err(|e| format!("{}: {e}", exp.name))?;
+        .map_err(|source| Error::Experiment {
+            experiment: exp.name.clone(),
+            source,
+        })?;
     Ok(out)
 }
 
@@ -141,25 +150,27 @@ pub fn identify(
     estimation: &[Experiment],
     validation: &[Experiment],
     opts: &Options,
-) -> Result<Identification, String> {
+) -> Result<Identification, Error> {
     let began = Instant::now();
     if estimation.is_empty() {
-        return Err("no estimation experiment".into());
+        return Err(Error::NoEstimationExperiment);
     }
     let mut free: Vec<&'static ParamDef> = Vec::new();
     for name in &opts.free {
-        let d = parameter(name)
-            .ok_or_else(|| format!("unknown parameter '{name}' in the free list"))?;
+        let d = parameter(name).ok_or_else(|| Error::UnknownFree(name.clone()))?;
         if !free.iter().any(|f| f.name == d.name) {
             free.push(d);
         }
     }
     for (name, (lo, hi)) in &opts.bounds {
-        let prior = start.get(name).map_err(|e| e.to_string())?;
+        let prior = start.get(name)?;
         if !(lo < hi && (*lo..=*hi).contains(&prior)) {
-            return Err(format!(
-                "bounds of {name}: [{lo}, {hi}] must be increasing and contain the start value {prior}"
-            ));
+            return Err(Error::Bounds {
+                name: name.clone(),
+                lo: *lo,
+                hi: *hi,
+                start: prior,
+            });
         }
     }
     let estimation_before = estimation
@@ -176,9 +187,7 @@ pub fn identify(
     for group in groups(&free, estimation) {
         let (fitted, r) = fit_group(start, &group, estimation, opts)?;
         for d in &group.params {
-            params
-                .set(d.name, (d.get)(&fitted))
-                .map_err(|e| e.to_string())?;
+            params.set(d.name, (d.get)(&fitted))?;
         }
         iterations += r.iterations;
         simulations += r.simulations;
@@ -216,7 +225,7 @@ pub fn identify(
         })
         .collect();
     let mut simulated = Vec::new();
-    let mut fit_all = |exps: &[Experiment]| -> Result<Vec<ExperimentFit>, String> {
+    let mut fit_all = |exps: &[Experiment]| -> Result<Vec<ExperimentFit>, Error> {
         exps.iter()
             .map(|e| {
                 let s = simulate(&params, e, opts.rtol)?;

@@ -8,12 +8,13 @@ use serde_json::{Value, json};
 
 use super::experiment::{Channel, Experiment};
 use super::{ExperimentFit, Identification};
-use crate::io::csv::{FileError, write_text_atomic};
+use crate::io::file::{FileError, write_text_atomic};
 use crate::io::params_file;
 use crate::plot::{self, Panel, Series};
 use crate::simulation::Sample;
 
-fn fits_json(fits: &[ExperimentFit]) -> Value {
+/// Fits per experiment and output, to 0.01 points: `{experiment: {output: fit}}`.
+pub(crate) fn fits_json(fits: &[ExperimentFit]) -> Value {
     Value::Object(
         fits.iter()
             .map(|f| {
@@ -31,7 +32,8 @@ fn fits_json(fits: &[ExperimentFit]) -> Value {
     )
 }
 
-fn round(v: f64, digits: i32) -> f64 {
+/// `v` rounded to `digits` decimals, for the reports' JSON.
+pub(crate) fn round(v: f64, digits: i32) -> f64 {
     let m = 10f64.powi(digits);
     (v * m).round() / m
 }

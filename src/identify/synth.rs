@@ -3,10 +3,15 @@
 //! estimator on them.
 
 use crate::model::{Params, Platform};
-use crate::simulation::{Input, SimError, Simulator};
+use crate::simulation::{DEFAULT_RTOL, Input, Simulator};
 
+use super::Error;
 use super::experiment::{Channel, Experiment};
 use crate::io::csv::Table;
+
+/// Relative tolerance of synthetic data: 1000 times tighter than the default, so that the
+/// data's own integration error is far below anything an estimator is asked to resolve.
+pub const DATA_RTOL: f64 = DEFAULT_RTOL * 1e-3;
 
 /// Which outputs a synthetic experiment records.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -60,23 +65,23 @@ impl Spec {
             noise,
             columns,
             seed,
-            rtol: 1e-9,
+            rtol: DATA_RTOL,
         }
     }
 }
 
 /// `params` with each of `names` off by `fraction`, alternately up and down: a start for
 /// checking an estimator.
-pub fn offset(params: &Params, names: &[String], fraction: f64) -> Result<Params, String> {
+pub fn offset(params: &Params, names: &[String], fraction: f64) -> Result<Params, Error> {
     let mut out = params.clone();
     for (k, name) in names.iter().enumerate() {
-        let v = params.get(name).map_err(|e| e.to_string())?;
+        let v = params.get(name)?;
         let factor = if k % 2 == 0 {
             1.0 + fraction
         } else {
             1.0 - fraction
         };
-        out.set(name, v * factor).map_err(|e| e.to_string())?;
+        out.set(name, v * factor)?;
     }
     Ok(out)
 }
@@ -124,8 +129,8 @@ impl Normal {
 }
 
 /// The header and rows of the synthetic experiment `t,U1,U2,U3,<channels>`.
-pub fn synthesize(spec: &Spec) -> Result<(Vec<&'static str>, Vec<Vec<f64>>), SimError> {
-    let model = Platform::new(spec.params.clone()).map_err(|e| SimError::Setting(e.to_string()))?;
+pub fn synthesize(spec: &Spec) -> Result<(Vec<&'static str>, Vec<Vec<f64>>), Error> {
+    let model = Platform::new(spec.params.clone())?;
     let mut sim = Simulator::new(model, 0.0, spec.rtol)?;
     let mut rows = Vec::new();
     let channels = spec.columns.channels();
@@ -161,15 +166,15 @@ pub fn synthesize(spec: &Spec) -> Result<(Vec<&'static str>, Vec<Vec<f64>>), Sim
 }
 
 /// A synthetic experiment in memory, named `name`, as if read from a file.
-pub fn experiment(spec: &Spec, name: &str) -> Result<Experiment, String> {
-    let (header, rows) = synthesize(spec).map_err(|e| e.to_string())?;
+pub fn experiment(spec: &Spec, name: &str) -> Result<Experiment, Error> {
+    let (header, rows) = synthesize(spec)?;
     let table = Table {
         path: name.into(),
         header: header.iter().map(|h| h.to_string()).collect(),
         lines: (2..rows.len() + 2).collect(),
         rows,
     };
-    Experiment::from_table(&table).map_err(|e| e.to_string())
+    Ok(Experiment::from_table(&table)?)
 }
 
 #[cfg(test)]

@@ -3,7 +3,8 @@
 
 use std::path::Path;
 
-use super::csv::{FileError, Table};
+use super::csv::Table;
+use super::file::FileError;
 use crate::simulation::{Input, Interpolation};
 
 /// Reads the sampled voltages of `path`; time must increase strictly.
@@ -30,5 +31,5 @@ pub fn from_table(table: &Table, interpolation: Interpolation) -> Result<Input, 
     let u = (0..t.len())
         .map(|k| [cols[0][k], cols[1][k], cols[2][k]])
         .collect();
-    Input::sampled(t, u, interpolation).map_err(|e| FileError::new(&table.path, e))
+    Input::sampled(t, u, interpolation).map_err(|e| FileError::new(&table.path, e.to_string()))
 }

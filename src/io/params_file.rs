@@ -4,7 +4,7 @@
 
 use std::path::Path;
 
-use super::csv::{FileError, write_text_atomic};
+use super::file::{FileError, write_text_atomic};
 use crate::model::Params;
 use crate::model::params::{ParamError, parameters};
 

@@ -3,7 +3,8 @@
 
 use std::path::Path;
 
-use super::csv::{FileError, write_atomic};
+use super::csv::write_atomic;
+use super::file::FileError;
 use crate::simulation::Sample;
 
 pub const COLUMNS: [&str; 10] = [

@@ -29,6 +29,25 @@ pub enum Interpolation {
     Spline,
 }
 
+/// Why samples cannot make a sampled input.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum InputError {
+    #[error("{times} sample times but {voltages} voltage samples")]
+    Lengths { times: usize, voltages: usize },
+    #[error("{0} samples: a sampled input needs at least 2")]
+    TooFew(usize),
+    #[error("sample {sample}: time {t} is not finite")]
+    TimeNotFinite { sample: usize, t: f64 },
+    #[error("sample {sample}: time {t} does not increase from {previous}")]
+    NotIncreasing {
+        sample: usize,
+        t: f64,
+        previous: f64,
+    },
+    #[error("sample {sample}: voltages {u:?} are not finite")]
+    VoltageNotFinite { sample: usize, u: [f64; 3] },
+}
+
 /// Samples `u[k]` at strictly increasing `t[k]`, with the knot slopes of the interpolation.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Samples {
@@ -87,45 +106,33 @@ impl Input {
         }
     }
 
-    /// A constant voltage on each actuator.
-    pub fn constant(u: [f64; 3]) -> Input {
-        Input::Tones {
-            offset: u,
-            tones: [vec![], vec![], vec![]],
-        }
-    }
-
     /// A sampled input; at least two samples, strictly increasing finite times, finite values.
     pub fn sampled(
         t: Vec<f64>,
         u: Vec<[f64; 3]>,
         interpolation: Interpolation,
-    ) -> Result<Input, String> {
+    ) -> Result<Input, InputError> {
         if t.len() != u.len() {
-            return Err(format!(
-                "{} sample times but {} voltage samples",
-                t.len(),
-                u.len()
-            ));
+            return Err(InputError::Lengths {
+                times: t.len(),
+                voltages: u.len(),
+            });
         }
         if t.len() < 2 {
-            return Err(format!(
-                "{} samples: a sampled input needs at least 2",
-                t.len()
-            ));
+            return Err(InputError::TooFew(t.len()));
         }
         if let Some(k) = (0..t.len()).find(|&k| !t[k].is_finite()) {
-            return Err(format!("sample {k}: time {} is not finite", t[k]));
+            return Err(InputError::TimeNotFinite { sample: k, t: t[k] });
         }
         if let Some(k) = (1..t.len()).find(|&k| t[k] <= t[k - 1]) {
-            return Err(format!(
-                "sample {k}: time {} does not increase from {}",
-                t[k],
-                t[k - 1]
-            ));
+            return Err(InputError::NotIncreasing {
+                sample: k,
+                t: t[k],
+                previous: t[k - 1],
+            });
         }
         if let Some(k) = (0..u.len()).find(|&k| !u[k].iter().all(|v| v.is_finite())) {
-            return Err(format!("sample {k}: voltages {:?} are not finite", u[k]));
+            return Err(InputError::VoltageNotFinite { sample: k, u: u[k] });
         }
         let slopes = match interpolation {
             Interpolation::Pchip => (0..t.len()).map(|k| pchip_slope(&t, &u, k)).collect(),
@@ -396,11 +403,13 @@ mod tests {
         assert!(
             Input::sampled(vec![0.0], vec![[0.0; 3]], Interpolation::Linear)
                 .unwrap_err()
+                .to_string()
                 .contains("at least 2")
         );
         assert!(
             Input::sampled(vec![0.0, 0.0], vec![[0.0; 3]; 2], Interpolation::Linear)
                 .unwrap_err()
+                .to_string()
                 .contains("does not increase")
         );
         assert!(
@@ -410,6 +419,7 @@ mod tests {
                 Interpolation::Linear
             )
             .unwrap_err()
+            .to_string()
             .contains("not finite")
         );
     }

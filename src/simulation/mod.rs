@@ -7,11 +7,25 @@ use serde::{Deserialize, Serialize};
 
 use crate::model::{ModelError, Platform};
 use crate::solver::{OdeSystem, Radau5, RhsError, SolverError, Stats, Tolerances};
-pub use input::{Input, Interpolation, Piece, Tone};
+pub use input::{Input, InputError, Interpolation, Piece, Tone};
 
 /// Relative tolerance of every way of running the model unless the user picks another
 /// (src/model/model.md, "Accuracy contract"; the FMU's DefaultExperiment declares the same).
 pub const DEFAULT_RTOL: f64 = 1e-6;
+
+/// The tolerance rule, written once for every way of running the model: a relative tolerance
+/// is finite and within (0, 0.1), and the absolute tolerance of state i is rtol · scale_i (the
+/// state's typical size), so that every state is controlled to the same relative accuracy.
+/// Runs that must resolve more than the default (finite differences in the identification,
+/// synthetic data) tighten rtol by a factor and pass it through here like any other.
+pub fn tolerances(rtol: f64, scales: &[f64]) -> Result<Tolerances, SimError> {
+    if !(rtol.is_finite() && rtol > 0.0 && rtol < 0.1) {
+        return Err(SimError::Setting(format!(
+            "relative tolerance rtol = {rtol:e}: must be in (0, 0.1)"
+        )));
+    }
+    Ok(Tolerances::scaled(rtol, scales))
+}
 
 /// Relative length under which the rest of a held step is not worth a segment of its own.
 const SLIVER: f64 = 1e-12;
@@ -144,17 +158,12 @@ impl Simulator {
         x0: &[f64],
         rtol: f64,
     ) -> Result<Simulator, SimError> {
-        if !(rtol.is_finite() && rtol > 0.0 && rtol < 0.1) {
-            return Err(SimError::Setting(format!(
-                "relative tolerance rtol = {rtol:e}: must be in (0, 0.1)"
-            )));
-        }
+        let tol = tolerances(rtol, &model.state_scales())?;
         if !t0.is_finite() {
             return Err(SimError::Setting(format!(
                 "start time t0 = {t0}: must be finite"
             )));
         }
-        let tol = Tolerances::scaled(rtol, &model.state_scales());
         let mut solver = Radau5::new(model.n_states(), tol);
         let sys = Driven {
             model: &model,
@@ -211,11 +220,6 @@ impl Simulator {
 
     pub fn stats(&self) -> Stats {
         self.solver.stats()
-    }
-
-    /// The voltage the model sees now (the command, late by the `delay` effect if it is on).
-    pub fn drive(&self) -> [f64; 3] {
-        self.u_now
     }
 
     fn delay(&self) -> f64 {

@@ -256,10 +256,6 @@ impl Radau5 {
         self.stats
     }
 
-    pub fn tolerances(&self) -> &Tolerances {
-        &self.tol
-    }
-
     fn update_scal(&mut self) {
         for i in 0..self.n {
             self.scal[i] = self.atol_int[i] + self.rtol_int * self.y[i].abs();

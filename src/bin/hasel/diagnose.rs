@@ -4,8 +4,8 @@ use std::path::PathBuf;
 
 use hasel_fmu::diagnose::{self, Options, report};
 
-use crate::identify::read_all;
-use crate::simulate::load_params;
+use crate::common::{load_params, read_all};
+use crate::error::Error;
 
 #[derive(clap::Args)]
 pub struct Args {
@@ -31,14 +31,18 @@ pub struct Args {
     refits: usize,
 }
 
-pub fn run(a: Args) -> Result<(), String> {
+pub fn run(a: Args) -> Result<(), Error> {
     let start = load_params(&a.params)?;
     let experiments = read_all(&a.experiments)?;
     if !(a.base_range.is_finite() && a.base_range > 1.0) {
-        return Err(format!("--base-range {}: must be > 1", a.base_range));
+        return Err(Error::flag("base-range", a.base_range, "must be > 1"));
     }
     if a.refits == 0 {
-        return Err("--refits 0: at least one candidate must be refitted".into());
+        return Err(Error::flag(
+            "refits",
+            a.refits,
+            "at least one candidate must be refitted",
+        ));
     }
     let opts = Options {
         refits: a.refits,
@@ -46,7 +50,7 @@ pub fn run(a: Args) -> Result<(), String> {
         ..Options::default()
     };
     let d = diagnose::diagnose(&start, experiments, &opts)?;
-    report::write(&a.out, &d).map_err(|e| e.to_string())?;
+    report::write(&a.out, &d)?;
     if a.json {
         let json =
             serde_json::to_string_pretty(&report::to_json(&d)).expect("JSON of plain values");

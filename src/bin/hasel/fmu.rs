@@ -3,9 +3,10 @@
 use std::path::PathBuf;
 
 use hasel_fmu::fmu_pack;
-use hasel_fmu::io::csv::write_text_atomic;
+use hasel_fmu::io::file::write_text_atomic;
 
-use crate::simulate::load_params;
+use crate::common::load_params;
+use crate::error::Error;
 
 #[derive(clap::Args)]
 pub struct Args {
@@ -30,15 +31,15 @@ pub struct DescribeArgs {
     out: Option<PathBuf>,
 }
 
-pub fn run(a: Args) -> Result<(), String> {
+pub fn run(a: Args) -> Result<(), Error> {
     let params = load_params(&a.params)?;
     let lib = match a.lib {
         Some(p) => p,
         None => std::env::current_exe()
-            .map_err(|e| format!("cannot locate this executable: {e}"))?
+            .map_err(Error::CurrentExe)?
             .with_file_name("libhasel_fmu.so"),
     };
-    fmu_pack::pack(&lib, &params, &a.out).map_err(|e| e.to_string())?;
+    fmu_pack::pack(&lib, &params, &a.out)?;
     say!(
         "wrote {} (GUID {}, library {})",
         a.out.display(),
@@ -48,10 +49,10 @@ pub fn run(a: Args) -> Result<(), String> {
     Ok(())
 }
 
-pub fn describe(a: DescribeArgs) -> Result<(), String> {
+pub fn describe(a: DescribeArgs) -> Result<(), Error> {
     let xml = fmu_pack::model_description(&load_params(&a.params)?);
     match a.out {
-        Some(path) => write_text_atomic(&path, &xml).map_err(|e| e.to_string()),
+        Some(path) => Ok(write_text_atomic(&path, &xml)?),
         None => {
             say_raw!("{xml}");
             Ok(())

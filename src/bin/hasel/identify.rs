@@ -2,32 +2,32 @@
 
 use std::path::PathBuf;
 
-use hasel_fmu::identify::synth::{self, Columns, Spec};
-use hasel_fmu::identify::{self, Experiment, Options, report};
+use hasel_fmu::identify::synth::{self, DATA_RTOL, Spec};
+use hasel_fmu::identify::{self, Options, report};
 use hasel_fmu::io::csv::write_atomic;
-use hasel_fmu::simulation::DEFAULT_RTOL;
 
 use hasel_fmu::diagnose::hidden::{self, Truth};
 use hasel_fmu::model::Params;
 
-use crate::simulate::{InputArgs, load_params};
+use crate::common::{InputArgs, columns, load_params, read_all};
+use crate::error::Error;
 
 /// A parameter file over the defaults with `--set NAME=VALUE` overrides, validated.
-fn given_params(file: &Option<PathBuf>, set: &[String]) -> Result<Params, String> {
+fn given_params(file: &Option<PathBuf>, set: &[String]) -> Result<Params, Error> {
     let mut params = load_params(file)?;
     for s in set {
         let (name, value) = s
             .split_once('=')
-            .ok_or_else(|| format!("--set {s}: expected NAME=VALUE"))?;
+            .ok_or_else(|| Error::flag("set", s, "expected NAME=VALUE"))?;
         let v: f64 = value
             .trim()
             .parse()
-            .map_err(|_| format!("--set {s}: '{value}' is not a number"))?;
+            .map_err(|_| Error::flag("set", s, format!("'{value}' is not a number")))?;
         params
             .set(name.trim(), v)
-            .map_err(|e| format!("--set {s}: {e}"))?;
+            .map_err(|e| Error::flag("set", s, e.to_string()))?;
     }
-    params.validate().map_err(|e| e.to_string())?;
+    params.validate()?;
     Ok(params)
 }
 
@@ -92,14 +92,7 @@ pub struct SynthArgs {
     out: PathBuf,
 }
 
-pub fn read_all(paths: &[PathBuf]) -> Result<Vec<Experiment>, String> {
-    paths
-        .iter()
-        .map(|p| Experiment::read(p).map_err(|e| e.to_string()))
-        .collect()
-}
-
-pub fn run(a: Args) -> Result<(), String> {
+pub fn run(a: Args) -> Result<(), Error> {
     let start = load_params(&a.params)?;
     let estimation = read_all(&a.experiments)?;
     let validation = read_all(&a.validate)?;
@@ -110,20 +103,20 @@ pub fn run(a: Args) -> Result<(), String> {
     for b in &a.bounds {
         let (name, range) = b
             .split_once('=')
-            .ok_or_else(|| format!("--bound {b}: expected NAME=LO:HI"))?;
+            .ok_or_else(|| Error::flag("bound", b, "expected NAME=LO:HI"))?;
         let (lo, hi) = range
             .split_once(':')
-            .ok_or_else(|| format!("--bound {b}: expected NAME=LO:HI"))?;
+            .ok_or_else(|| Error::flag("bound", b, "expected NAME=LO:HI"))?;
         let num = |s: &str| {
             s.trim()
                 .parse::<f64>()
-                .map_err(|_| format!("--bound {b}: '{s}' is not a number"))
+                .map_err(|_| Error::flag("bound", b, format!("'{s}' is not a number")))
         };
         opts.bounds
             .insert(name.trim().to_string(), (num(lo)?, num(hi)?));
     }
     let id = identify::identify(&start, &estimation, &validation, &opts)?;
-    report::write(&a.out, &id, &estimation, &validation).map_err(|e| e.to_string())?;
+    report::write(&a.out, &id, &estimation, &validation)?;
     say!(
         "identified in {:.2} s: {} iterations, {} simulations",
         id.seconds,
@@ -164,20 +157,20 @@ pub fn run(a: Args) -> Result<(), String> {
     Ok(())
 }
 
-pub fn synth(a: SynthArgs) -> Result<(), String> {
+pub fn synth(a: SynthArgs) -> Result<(), Error> {
     let (input, _) = a.input.input()?;
     if let Some(noise) = a.noise.filter(|n| !(n.is_finite() && *n >= 0.0)) {
-        return Err(format!("--noise {noise}: must be >= 0"));
+        return Err(Error::flag("noise", noise, "must be >= 0"));
     }
-    let columns = if a.columns == "tip" {
-        Columns::TipXy
-    } else {
-        Columns::Heights
-    };
+    let columns = columns(&a.columns);
     let spec = match &a.effect {
         Some(name) => {
             let truth = Truth::from_name(name).ok_or_else(|| {
-                format!("--effect {name}: not an effect of the library, `vibration` or `none`")
+                Error::flag(
+                    "effect",
+                    name,
+                    "not an effect of the library, `vibration` or `none`",
+                )
             })?;
             let mut hidden = hidden::hide(truth, a.case)?;
             if let Some(noise) = a.noise {
@@ -196,12 +189,12 @@ pub fn synth(a: SynthArgs) -> Result<(), String> {
             noise: a.noise.unwrap_or(0.0),
             columns,
             seed: a.seed,
-            rtol: DEFAULT_RTOL * 1e-3,
+            rtol: DATA_RTOL,
         },
     };
-    let (header, rows) = synth::synthesize(&spec).map_err(|e| e.to_string())?;
+    let (header, rows) = synth::synthesize(&spec)?;
     let n = rows.len();
-    write_atomic(&a.out, &header, rows.into_iter()).map_err(|e| e.to_string())?;
+    write_atomic(&a.out, &header, rows.into_iter())?;
     say!(
         "wrote {} ({n} samples, {})",
         a.out.display(),

@@ -18,11 +18,9 @@ macro_rules! say_raw {
 }
 
 mod bench;
-mod bench_diagnose;
-mod bench_identify;
-#[cfg(feature = "compare")]
-mod compare;
+mod common;
 mod diagnose;
+mod error;
 mod fmu;
 mod identify;
 mod simulate;

@@ -3,70 +3,14 @@
 use std::path::PathBuf;
 use std::time::Instant;
 
-use hasel_fmu::io::{input_file, params_file, trajectory};
-use hasel_fmu::model::{Params, Platform};
+use hasel_fmu::io::{params_file, trajectory};
+use hasel_fmu::model::Platform;
 use hasel_fmu::plot::{self, Panel, Series};
-use hasel_fmu::simulation::input::PAPER_PHASES;
-use hasel_fmu::simulation::{DEFAULT_RTOL, Input, Interpolation, Sample, Simulator, Tone};
+use hasel_fmu::simulation::{DEFAULT_RTOL, Sample, Simulator};
 use indicatif::{ProgressBar, ProgressStyle};
 
-/// The input voltages of a run, shared by `simulate` and `synth`.
-#[derive(clap::Args)]
-pub struct InputArgs {
-    /// The paper's excitation U0·sin(ω t + φ_i), φ = 0°, 120°, 240° [V, rad/s] (the default: 60,3π)
-    #[arg(long, value_name = "U0,OMEGA", conflicts_with_all = ["offset_sine", "multisine", "input"])]
-    sine: Option<String>,
-    /// The unipolar excitation U0·(1 + sin(ω t + φ_i))/2 [V, rad/s]
-    #[arg(long, value_name = "U0,OMEGA", conflicts_with_all = ["multisine", "input"])]
-    offset_sine: Option<String>,
-    /// A multisine: tones A:OMEGA[:PHASE] [V, rad/s, rad] separated by commas, each applied to
-    /// the three actuators with the paper's phase offsets 0°, 120°, 240° added
-    #[arg(long, value_name = "A:OMEGA[:PHASE],...", conflicts_with = "input")]
-    multisine: Option<String>,
-    /// Sampled voltages: CSV with columns t,U1,U2,U3 [s, V]
-    #[arg(long, value_name = "FILE.csv")]
-    input: Option<PathBuf>,
-    /// How --input is read between samples: zoh (held, as a co-simulation master does),
-    /// linear, pchip (monotone cubic) or spline (natural cubic, C², fastest for dense smooth data)
-    #[arg(long, default_value = "zoh", value_parser = ["zoh", "linear", "pchip", "spline"])]
-    interp: String,
-}
-
-impl InputArgs {
-    /// The input and its natural end: the last sample of a file, else 10 s.
-    pub fn input(&self) -> Result<(Input, f64), String> {
-        if let Some(path) = &self.input {
-            let interpolation = match self.interp.as_str() {
-                "linear" => Interpolation::Linear,
-                "pchip" => Interpolation::Pchip,
-                "spline" => Interpolation::Spline,
-                _ => Interpolation::ZeroOrderHold,
-            };
-            let input = input_file::read(path, interpolation).map_err(|e| e.to_string())?;
-            let end = input.last_sample().unwrap_or(10.0);
-            return Ok((input, end));
-        }
-        if let Some(s) = &self.offset_sine {
-            let (u0, w) = pair("offset-sine", s)?;
-            return Ok((Input::offset_sine(u0, w), 10.0));
-        }
-        if let Some(s) = &self.multisine {
-            let [t1, t2, t3] = PAPER_PHASES.map(|phi| multisine(s, phi));
-            return Ok((
-                Input::Tones {
-                    offset: [0.0; 3],
-                    tones: [t1?, t2?, t3?],
-                },
-                10.0,
-            ));
-        }
-        let (u0, w) = match &self.sine {
-            Some(s) => pair("sine", s)?,
-            None => (60.0, 3.0 * std::f64::consts::PI),
-        };
-        Ok((Input::sine(u0, w), 10.0))
-    }
-}
+use crate::common::{InputArgs, load_params};
+use crate::error::Error;
 
 #[derive(clap::Args)]
 pub struct Args {
@@ -102,59 +46,10 @@ pub struct ParamsArgs {
     out: Option<PathBuf>,
 }
 
-/// The tones of `--multisine`, shifted by the actuator's phase `phi`.
-fn multisine(text: &str, phi: f64) -> Result<Vec<Tone>, String> {
-    text.split(',')
-        .map(|tone| {
-            let parts: Vec<f64> = tone
-                .split(':')
-                .map(|p| p.trim().parse::<f64>().ok().filter(|v| v.is_finite()))
-                .collect::<Option<_>>()
-                .ok_or_else(|| {
-                    format!("--multisine {text}: '{tone}' is not A:OMEGA[:PHASE] in numbers")
-                })?;
-            match parts.as_slice() {
-                [a, w] => Ok(Tone {
-                    amplitude: *a,
-                    omega: *w,
-                    phase: phi,
-                }),
-                [a, w, p] => Ok(Tone {
-                    amplitude: *a,
-                    omega: *w,
-                    phase: p + phi,
-                }),
-                _ => Err(format!(
-                    "--multisine {text}: '{tone}' is not A:OMEGA[:PHASE]"
-                )),
-            }
-        })
-        .collect()
-}
-
-pub fn pair(flag: &str, text: &str) -> Result<(f64, f64), String> {
-    let parts: Vec<&str> = text.split(',').map(str::trim).collect();
-    let num = |s: &str| s.parse::<f64>().ok().filter(|v| v.is_finite());
-    match parts.as_slice() {
-        [a, b] => match (num(a), num(b)) {
-            (Some(u0), Some(w)) => Ok((u0, w)),
-            _ => Err(format!("--{flag} {text}: expected two numbers U0,OMEGA")),
-        },
-        _ => Err(format!("--{flag} {text}: expected U0,OMEGA")),
-    }
-}
-
-pub fn load_params(path: &Option<PathBuf>) -> Result<Params, String> {
-    match path {
-        Some(p) => params_file::read(p).map_err(|e| e.to_string()),
-        None => Ok(Params::default()),
-    }
-}
-
-pub fn params(a: ParamsArgs) -> Result<(), String> {
+pub fn params(a: ParamsArgs) -> Result<(), Error> {
     let p = load_params(&a.params)?;
     match a.out {
-        Some(path) => params_file::write(&path, &p).map_err(|e| e.to_string()),
+        Some(path) => Ok(params_file::write(&path, &p)?),
         None => {
             say_raw!("{}", params_file::to_toml(&p));
             Ok(())
@@ -162,15 +57,15 @@ pub fn params(a: ParamsArgs) -> Result<(), String> {
     }
 }
 
-pub fn run(a: Args) -> Result<(), String> {
+pub fn run(a: Args) -> Result<(), Error> {
     let params = load_params(&a.params)?;
     let (input, default_end) = a.input.input()?;
     let t_end = a.t_end.unwrap_or(default_end);
     if !(t_end.is_finite() && t_end > 0.0) {
-        return Err(format!("--t-end {t_end}: must be > 0"));
+        return Err(Error::flag("t-end", t_end, "must be > 0"));
     }
-    let model = Platform::new(params).map_err(|e| e.to_string())?;
-    let mut sim = Simulator::new(model, 0.0, a.rtol).map_err(|e| e.to_string())?;
+    let model = Platform::new(params)?;
+    let mut sim = Simulator::new(model, 0.0, a.rtol)?;
 
     let bar = (t_end >= 30.0).then(|| {
         let bar = ProgressBar::new((t_end * 1000.0) as u64);
@@ -187,8 +82,7 @@ pub fn run(a: Args) -> Result<(), String> {
             b.set_position((s.t * 1000.0) as u64);
         }
         samples.push(*s);
-    })
-    .map_err(|e| e.to_string())?;
+    })?;
     let wall = started.elapsed();
     if let Some(b) = bar {
         b.finish_and_clear();
@@ -223,11 +117,11 @@ pub fn run(a: Args) -> Result<(), String> {
         range(&|s| s.tip[1])
     );
     if let Some(path) = &a.out {
-        trajectory::write(path, &samples).map_err(|e| e.to_string())?;
+        trajectory::write(path, &samples)?;
         say!("wrote {}", path.display());
     }
     if let Some(path) = &a.plot {
-        plot::draw(path, &run_panels(&samples), 2, (1400, 560)).map_err(|e| e.to_string())?;
+        plot::draw(path, &run_panels(&samples), 2, (1400, 560))?;
         say!("wrote {}", path.display());
     }
     Ok(())

@@ -305,19 +305,6 @@ impl EffectParams {
             .filter(|e| e.is_active(self))
             .collect()
     }
-
-    /// Are all effects in their library form (what the parameter table can express)?
-    pub fn library_forms(&self) -> bool {
-        let d = EffectParams::default();
-        self.coupling.weights == d.coupling.weights
-            && self.charge_drift.two_stages == d.charge_drift.two_stages
-            && self.creep.two_branches == d.creep.two_branches
-            && self.hysteresis.law == d.hysteresis.law
-            && self.amplifier_lag.order == d.amplifier_lag.order
-            && self.saturation.soft == d.saturation.soft
-            && self.stiffening.exponent == d.stiffening.exponent
-            && self.preload.law == d.preload.law
-    }
 }
 
 #[cfg(test)]

@@ -19,10 +19,12 @@ use diffsol::{
 };
 use hasel_fmu::io::csv::Table;
 use hasel_fmu::model::Platform;
-use hasel_fmu::simulation::{Input, Sample};
+use hasel_fmu::simulation::{Input, Sample, SimError, tolerances};
 use hasel_fmu::solver::Stats;
 
-use super::bench::{best, error_against};
+use super::reference::{error_against, reference};
+use super::timing::best;
+use crate::error::Error;
 
 type M = NalgebraMat<f64>;
 type LS = NalgebraLU<f64>;
@@ -172,7 +174,7 @@ fn run_once(
     method: Method,
     case: Case,
     rtol: f64,
-) -> Result<(Vec<Sample>, Work), String> {
+) -> Result<(Vec<Sample>, Work), Error> {
     let input = Input::sine(60.0, 3.0 * std::f64::consts::PI);
     // the input the closures see: the sine itself, or the value held over the current step
     let held = Cell::new([0.0; 3]);
@@ -181,12 +183,17 @@ fn run_once(
         Case::Held => held.get(),
     };
     let evals = Evals::new(model);
-    let x0 = model.rest_state().map_err(|e| e.to_string())?;
-    let atol: Vec<f64> = model.state_scales().iter().map(|s| rtol * s).collect();
+    let x0 = model.rest_state().map_err(SimError::from)?;
+    let tol = tolerances(rtol, &model.state_scales())?;
+    // diffsol's own errors, before a method runs and while it does
+    let library = |source| Error::Diffsol {
+        method: None,
+        source,
+    };
     let mut problem = OdeBuilder::<M>::new()
         .t0(0.0)
-        .rtol(rtol)
-        .atol(atol)
+        .rtol(tol.rtol)
+        .atol(tol.atol)
         .rhs_implicit(
             |x: &[f64], _p: &[f64], t: f64, y: &mut [f64]| evals.rhs(x, u_at(t), y),
             |x: &[f64], _p: &[f64], t: f64, v: &[f64], y: &mut [f64]| {
@@ -198,7 +205,7 @@ fn run_once(
             x0.len(),
         )
         .build()
-        .map_err(|e| e.to_string())?;
+        .map_err(library)?;
     // diffsol stops a solve after 50 Newton failures in all (not in a row). With that default
     // every method stops on this model (the sine between 3.5 and 8.1 s, the held input within
     // 25 ms): Newton iterates from a reused Jacobian leave the shell's domain (f is NaN there)
@@ -213,11 +220,14 @@ fn run_once(
         evals: &evals,
     };
     let (samples, stats) = match method {
-        Method::Bdf => drive.run(problem.bdf::<LS>().map_err(|e| e.to_string())?),
-        Method::Esdirk34 => drive.run(problem.esdirk34::<LS>().map_err(|e| e.to_string())?),
-        Method::TrBdf2 => drive.run(problem.tr_bdf2::<LS>().map_err(|e| e.to_string())?),
+        Method::Bdf => drive.run(problem.bdf::<LS>().map_err(library)?),
+        Method::Esdirk34 => drive.run(problem.esdirk34::<LS>().map_err(library)?),
+        Method::TrBdf2 => drive.run(problem.tr_bdf2::<LS>().map_err(library)?),
     }
-    .map_err(|e| format!("{}: {e}", method.name()))?;
+    .map_err(|source| Error::Diffsol {
+        method: Some(method.name()),
+        source,
+    })?;
     Ok((
         samples,
         Work {
@@ -324,10 +334,10 @@ pub fn print(
     repeat: usize,
     reference_dir: Option<&Path>,
     ours: Vec<Row>,
-) -> Result<(), String> {
+) -> Result<(), Error> {
     let mut rows = ours;
     for case in [Case::Sine, Case::Held] {
-        let reference = crate::bench::reference(reference_dir, case.reference())?;
+        let reference = reference(reference_dir, case.reference())?;
         for method in Method::ALL {
             let mut failed = None;
             let (wall, out) = best(repeat, || match run_once(model, method, case, rtol) {
@@ -349,7 +359,7 @@ pub fn print(
                     "{} on {}: failed: {}",
                     method.name(),
                     case.name(),
-                    failed.unwrap_or_default()
+                    failed.map(|e| e.to_string()).unwrap_or_default()
                 ),
             }
         }

@@ -6,7 +6,9 @@ use hasel_fmu::identify::synth::{self, Columns, Spec};
 use hasel_fmu::identify::{Experiment, Options, default_free, identify};
 use hasel_fmu::model::Params;
 
-fn experiments(columns: Columns) -> Result<[Experiment; 2], String> {
+use crate::error::Error;
+
+fn experiments(columns: Columns) -> Result<[Experiment; 2], Error> {
     let truth = Params::default();
     Ok([
         synth::experiment(
@@ -17,7 +19,7 @@ fn experiments(columns: Columns) -> Result<[Experiment; 2], String> {
     ])
 }
 
-pub fn run() -> Result<(), String> {
+pub fn run() -> Result<(), Error> {
     let start = synth::offset(&Params::default(), &default_free(), 0.2)?;
     say!(
         "identification from a 20 % offset on Kb, b, gamma1, gamma2 of each actuator; synthetic 10 s experiments at 1 ms with 1 % noise (target <= 10 s)"

@@ -9,6 +9,8 @@ use hasel_fmu::diagnose::{self, Options};
 use hasel_fmu::identify::synth::Columns;
 use hasel_fmu::model::Params;
 
+use crate::error::Error;
+
 /// The answer a case expects.
 fn expected(t: Truth) -> &'static str {
     match t {
@@ -18,7 +20,7 @@ fn expected(t: Truth) -> &'static str {
     }
 }
 
-pub fn run(seeds: u64, columns: Columns, only: Option<String>) -> Result<(), String> {
+pub fn run(seeds: u64, columns: Columns, only: Option<String>) -> Result<(), Error> {
     say!(
         "diagnosis of hidden mechanisms: {seeds} seed(s) per case, {columns:?} data, two 6 s experiments at 1 ms (3pi and 11 rad/s), target <= 60 s per diagnosis"
     );
@@ -90,7 +92,7 @@ pub fn run(seeds: u64, columns: Columns, only: Option<String>) -> Result<(), Str
                             c.effect.name(),
                             c.score,
                             c.refit_error
-                                .as_deref()
+                                .as_ref()
                                 .map(|e| format!(" refit failed: {e}"))
                                 .unwrap_or_default()
                         );

@@ -1,0 +1,52 @@
+//! `hasel bench`: the solver (`solver.rs`, with the library solvers of `compare.rs` beside it
+//! under the `compare` feature), the identification (`identify.rs`) and the missing-effect
+//! diagnosis (`diagnose.rs`). The reference trajectories (`reference.rs`) and the timing
+//! (`timing.rs`) are leaves that the benchmarks use; nothing uses this module's command back.
+
+use std::path::PathBuf;
+
+use crate::error::Error;
+
+#[cfg(feature = "compare")]
+mod compare;
+mod diagnose;
+mod identify;
+mod reference;
+mod solver;
+mod timing;
+
+#[derive(clap::Args)]
+pub struct Args {
+    /// Folder of other reference trajectories (sine60_w3pi.csv, zoh1ms_sine60_w3pi.csv);
+    /// default: the repository's tests/data/reference/, built into this executable
+    #[arg(long)]
+    reference: Option<PathBuf>,
+    /// Repetitions; the best wall time is reported
+    #[arg(long, default_value_t = 5)]
+    repeat: usize,
+    /// Benchmark the identification instead of the solver
+    #[arg(long)]
+    identify: bool,
+    /// Benchmark the missing-effect diagnosis on hidden mechanisms (the confusion matrix)
+    #[arg(long)]
+    diagnose: bool,
+    /// With --diagnose: seeds per hidden mechanism
+    #[arg(long, default_value_t = 2)]
+    seeds: u64,
+    /// With --diagnose: recorded outputs, h or tip
+    #[arg(long, default_value = "h", value_parser = ["h", "tip"])]
+    columns: String,
+    /// With --diagnose: only this hidden mechanism (an effect, `none` or `vibration`)
+    #[arg(long)]
+    only: Option<String>,
+}
+
+pub fn run(a: Args) -> Result<(), Error> {
+    if a.diagnose {
+        return diagnose::run(a.seeds, crate::common::columns(&a.columns), a.only);
+    }
+    if a.identify {
+        return identify::run();
+    }
+    solver::run(a.repeat, a.reference.as_deref())
+}

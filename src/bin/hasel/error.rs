@@ -1,0 +1,52 @@
+//! Why a command failed: the library's errors as they are, and the command line's own. `main`
+//! prints it after `hasel: error: `.
+
+use hasel_fmu::io::file::FileError;
+use hasel_fmu::model::params::ParamError;
+use hasel_fmu::simulation::SimError;
+use hasel_fmu::{diagnose, identify};
+
+#[derive(Debug, thiserror::Error)]
+pub enum Error {
+    /// A file read or written, located.
+    #[error(transparent)]
+    File(#[from] FileError),
+    #[error(transparent)]
+    Param(#[from] ParamError),
+    #[error(transparent)]
+    Simulation(#[from] SimError),
+    #[error(transparent)]
+    Identify(#[from] identify::Error),
+    #[error(transparent)]
+    Diagnose(#[from] diagnose::Error),
+    /// A value given on the command line that is wrong, named with its flag.
+    #[error("--{flag} {value}: {problem}")]
+    Flag {
+        flag: &'static str,
+        value: String,
+        problem: String,
+    },
+    /// The FMU library is looked for beside this executable.
+    #[error("cannot locate this executable: {0}")]
+    CurrentExe(std::io::Error),
+    #[error("no embedded reference trajectory {0}")]
+    NoEmbeddedReference(String),
+    /// The library solver of `hasel bench --features compare`, with the method once it runs.
+    #[cfg(feature = "compare")]
+    #[error("{}{source}", method.map(|m| format!("{m}: ")).unwrap_or_default())]
+    Diffsol {
+        method: Option<&'static str>,
+        source: diffsol::DiffsolError,
+    },
+}
+
+impl Error {
+    /// `--flag value: problem`.
+    pub fn flag(flag: &'static str, value: impl ToString, problem: impl Into<String>) -> Error {
+        Error::Flag {
+            flag,
+            value: value.to_string(),
+            problem: problem.into(),
+        }
+    }
+}

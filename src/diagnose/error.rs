@@ -1,0 +1,23 @@
+//! Why a diagnosis, or data with a hidden mechanism, could not be made.
+
+use crate::identify;
+use crate::model::params::ParamError;
+use crate::simulation::InputError;
+
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum Error {
+    /// An identification, a simulation or a synthetic experiment failed.
+    #[error(transparent)]
+    Identify(#[from] identify::Error),
+    /// A parameter value that breaks its rule, or a name that does not exist.
+    #[error(transparent)]
+    Param(#[from] ParamError),
+    /// The tabulated input of a hidden mechanism.
+    #[error(transparent)]
+    Input(#[from] InputError),
+    #[error("no experiment")]
+    NoExperiment,
+    /// The screening's least-squares projection could not be solved.
+    #[error("{0}")]
+    Projection(&'static str),
+}
