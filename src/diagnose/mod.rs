@@ -6,17 +6,19 @@
 //! Verdicts, decision rule and outputs: [src/diagnose/diagnose.md](diagnose.md).
 //!
 //! The first experiment estimates, the others are held out (with one experiment it does both
-//! and says so). An effect is added when, over the model without it:
+//! and says so). A candidate effect passes when, over the model without it:
 //! - the Bayesian information criterion on the estimation data drops by more than
-//!   [`BIC_MARGIN`], and by that margin more than with the runner-up;
+//!   [`BIC_MARGIN`];
 //! - on held-out data it closes at least [`GAP_CLOSED`] of the gap between the model's fit and
 //!   the fit the measurement noise allows, and gains at least [`MIN_GAIN`] points of fit;
 //! - the 95 % interval of its magnitude excludes the neutral value.
 //!
-//! Effects are added one after another while the next one passes. The verdict is `none` when
-//! the re-identified model is at the noise floor, `ambiguous` when two candidates pass and
-//! neither beats the other by the margin, `unexplained` when the residual is structured but no
-//! candidate passes.
+//! Among the candidates that pass, the one with the lower BIC is added when it beats the
+//! runner-up by [`BIC_MARGIN`]; within that margin the one with [`MIN_GAIN`] points more of
+//! held-out fit is added ([`decide`]). Effects are added one after another while the next one
+//! passes. The verdict is `none` when the re-identified model is at the noise floor,
+//! `ambiguous` when two candidates pass and neither wins by BIC nor by held-out fit,
+//! `unexplained` when the residual is structured but no candidate passes.
 
 pub mod analysis;
 mod error;

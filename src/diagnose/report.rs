@@ -353,10 +353,10 @@ pub fn write(dir: &Path, d: &Diagnosis) -> Result<(), FileError> {
     }
     let _ = writeln!(
         md,
-        "An effect is added when it lowers the BIC on the estimation data by more than {} (and by that margin more than the runner-up), closes at least {:.0} % of the held-out gap to the noise floor, gains at least {} points of held-out fit, and the 95 % interval of its magnitude excludes the neutral value.\n",
-        super::BIC_MARGIN,
+        "An effect passes when it lowers the BIC on the estimation data by more than {margin}, closes at least {:.0} % of the held-out gap to the noise floor, gains at least {gain} points of held-out fit, and the 95 % interval of its magnitude excludes the neutral value. Of two that pass, the one with the lower BIC is added if it beats the other by {margin}, else the one with {gain} points more of held-out fit; otherwise the answer is `ambiguous`.\n",
         100.0 * super::GAP_CLOSED,
-        super::MIN_GAIN
+        margin = super::BIC_MARGIN,
+        gain = super::MIN_GAIN
     );
     if !d.effects.is_empty() {
         let _ = writeln!(
