@@ -8,8 +8,8 @@ use std::sync::OnceLock;
 
 use serde::{Deserialize, Serialize};
 
-use crate::fmi2::core::FmuCore;
-use crate::fmi2::variables::{
+use crate::fmi_common::model_api::FmuCore;
+use crate::fmi_common::variables::{
     Causality, DefaultExperiment, Initial, ModelInfo, Variability, Variable,
 };
 use crate::io::params_file;

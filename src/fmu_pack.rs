@@ -5,8 +5,8 @@
 use std::io::Write;
 use std::path::Path;
 
+use crate::fmi_common::variables::{Causality, Variable};
 use crate::fmi2::model_description::{guid_for, model_description_xml};
-use crate::fmi2::variables::{Causality, Variable};
 use crate::fmu_core::{MODEL_IDENTIFIER, RESOURCE_PARAMS, model_info, variables};
 use crate::io::csv::{FileError, write_bytes_atomic};
 use crate::io::params_file;
@@ -126,7 +126,7 @@ pub fn pack(library: &Path, params: &Params, out: &Path) -> Result<(), FileError
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::fmi2::variables::check_variable_table;
+    use crate::fmi_common::variables::check_variable_table;
 
     #[test]
     fn the_variable_table_follows_the_fmi_rules() {

@@ -3,6 +3,7 @@
 
 pub mod diagnose;
 pub mod fmi2;
+pub mod fmi_common;
 pub mod fmu_core;
 pub mod fmu_pack;
 pub mod identify;

@@ -19,11 +19,11 @@ use std::ffi::{CStr, c_char, c_void};
 use std::panic::{AssertUnwindSafe, catch_unwind};
 use std::ptr::null_mut;
 
-use super::core::FmuCore;
 use super::fmu_state::Snapshot;
 use super::instance::{Instance, panic_message};
 use super::logging::Logger;
 use super::types::*;
+use crate::fmi_common::model_api::FmuCore;
 
 /// A C string argument; `None` for NULL.
 unsafe fn opt_str<'a>(p: fmi2String) -> Option<Cow<'a, str>> {
@@ -450,7 +450,7 @@ pub fn static_c_str(s: &'static CStr) -> *const c_char {
 }
 
 /// Exports the 44 functions of `fmi2Functions.h` for the core type `$core` (an
-/// [`FmuCore`](crate::fmi2::core::FmuCore)). Invoke exactly once per shared library, at
+/// [`FmuCore`](crate::fmi_common::model_api::FmuCore)). Invoke exactly once per shared library, at
 /// item level: `hasel_fmu::export_fmi2!(MyCore);` (inside this crate: `crate::export_fmi2!`).
 #[macro_export]
 macro_rules! export_fmi2 {

@@ -13,7 +13,6 @@
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 
-use super::core::FmuCore;
 use super::fmu_state::Snapshot;
 use super::logging::Logger;
 use super::model_description::{guid_for, log_categories};
@@ -22,7 +21,10 @@ use super::types::{
     Fmi2Status, fmi2CallbackFunctions, fmi2StatusKind,
 };
 use super::uri::path_from_file_uri;
-use super::variables::{Causality, Initial, Variability, Variable, check_variable_table};
+use crate::fmi_common::model_api::FmuCore;
+use crate::fmi_common::variables::{
+    Causality, Initial, Variability, Variable, check_variable_table,
+};
 
 /// The states of the Co-Simulation state machine (section 4.2.4) this FMU can be in.
 /// `stepInProgress` and `stepCanceled` are unreachable: `fmi2DoStep` is synchronous.
