@@ -11,7 +11,6 @@
 //! state, where only `fmi2Reset`, `fmi2SetFMUstate`, `fmi2FreeInstance`, the getters (for
 //! debugging) and the FMU-state functions are allowed.
 
-use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 
 use super::fmu_state::Snapshot;
@@ -38,16 +37,14 @@ pub struct Instance<M: FmuCore> {
     phase: Phase,
     experiment: Option<Experiment>,
     core: M,
+    /// The core's variables, sorted by value reference for lookups.
     variables: Vec<Variable>,
-    /// value reference -> index into `variables`
-    index: HashMap<u32, usize>,
 }
 
-/// A fresh core with its variable table, index and GUID.
+/// A fresh core with its sorted variable table and GUID.
 struct Built<M> {
     core: M,
     variables: Vec<Variable>,
-    index: HashMap<u32, usize>,
     guid: String,
 }
 
@@ -56,17 +53,21 @@ fn build<M: FmuCore>(resource_dir: Option<&Path>) -> Result<Built<M>, String> {
     let variables = core.variables();
     check_variable_table(&variables).map_err(|e| format!("invalid variable table: {e}"))?;
     let guid = guid_for(&M::model_info(), &variables)?;
-    let index = variables
-        .iter()
-        .enumerate()
-        .map(|(i, v)| (v.value_reference, i))
-        .collect();
+    let mut variables = variables;
+    variables.sort_by_key(|v| v.value_reference);
     Ok(Built {
         core,
         variables,
-        index,
         guid,
     })
+}
+
+/// The variable with value reference `vr` in a table sorted by value reference.
+fn find(variables: &[Variable], vr: u32) -> Option<&Variable> {
+    let i = variables
+        .binary_search_by_key(&vr, |v| v.value_reference)
+        .ok()?;
+    Some(&variables[i])
 }
 
 /// The message of a caught panic.
@@ -144,7 +145,6 @@ impl<M: FmuCore> Instance<M> {
             experiment: None,
             core: built.core,
             variables: built.variables,
-            index: built.index,
         };
         instance.trace(|| {
             let resources = instance
@@ -347,18 +347,13 @@ impl<M: FmuCore> Instance<M> {
         }
         self.core = built.core;
         self.variables = built.variables;
-        self.index = built.index;
         self.experiment = None;
         self.phase = Instantiated;
         Fmi2Status::Ok
     }
 
-    /// The variable with value reference `vr`, or an error naming it.
-    fn variable(&self, func: &str, vr: u32) -> Result<&Variable, Fmi2Status> {
-        match self.index.get(&vr) {
-            Some(&i) => Ok(&self.variables[i]),
-            None => Err(self.error(func, format_args!("unknown value reference {vr}"))),
-        }
+    fn unknown_reference(&self, func: &str, vr: u32) -> Fmi2Status {
+        self.error(func, format_args!("unknown value reference {vr}"))
     }
 
     /// `fmi2GetReal` (section 2.1.7).
@@ -368,13 +363,13 @@ impl<M: FmuCore> Instance<M> {
             return s;
         }
         for (&vr, value) in vrs.iter().zip(values.iter_mut()) {
-            let name = match self.variable(F, vr) {
-                Ok(v) => v.name.clone(),
-                Err(s) => return s,
+            let Some(v) = find(&self.variables, vr) else {
+                return self.unknown_reference(F, vr);
             };
             match self.core.get_real(vr) {
                 Ok(x) => *value = x,
                 Err(msg) => {
+                    let name = &v.name;
                     return self.error(F, format_args!("{name} (value reference {vr}): {msg}"));
                 }
             }
@@ -390,9 +385,8 @@ impl<M: FmuCore> Instance<M> {
             return s;
         }
         for &vr in vrs {
-            let v = match self.variable(F, vr) {
-                Ok(v) => v,
-                Err(s) => return s,
+            let Some(v) = find(&self.variables, vr) else {
+                return self.unknown_reference(F, vr);
             };
             if !settable(self.phase, v) {
                 let initial = v.effective_initial().map_or("none", |i| i.as_str());
@@ -409,7 +403,7 @@ impl<M: FmuCore> Instance<M> {
             }
         }
         for (&vr, &value) in vrs.iter().zip(values) {
-            let name = self.variables[self.index[&vr]].name.clone();
+            let name = &find(&self.variables, vr).expect("checked above").name;
             self.trace(|| format!("{F}: {name} = {value:?}"));
             if value.is_nan() {
                 return self.error(
