@@ -4,8 +4,7 @@
 pub mod diagnose;
 pub mod fmi2;
 pub mod fmi_common;
-pub mod fmu_core;
-pub mod fmu_pack;
+pub mod fmu;
 pub mod identify;
 pub mod io;
 pub mod model;

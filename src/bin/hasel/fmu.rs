@@ -2,7 +2,7 @@
 
 use std::path::PathBuf;
 
-use hasel_fmu::fmu_pack;
+use hasel_fmu::fmu::pack;
 use hasel_fmu::io::csv::write_text_atomic;
 
 use crate::simulate::load_params;
@@ -38,18 +38,18 @@ pub fn run(a: Args) -> Result<(), String> {
             .map_err(|e| format!("cannot locate this executable: {e}"))?
             .with_file_name("libhasel_fmu.so"),
     };
-    fmu_pack::pack(&lib, &params, &a.out).map_err(|e| e.to_string())?;
+    pack::pack(&lib, &params, &a.out).map_err(|e| e.to_string())?;
     say!(
         "wrote {} (GUID {}, library {})",
         a.out.display(),
-        fmu_pack::guid(&params),
+        pack::guid(&params),
         lib.display()
     );
     Ok(())
 }
 
 pub fn describe(a: DescribeArgs) -> Result<(), String> {
-    let xml = fmu_pack::model_description(&load_params(&a.params)?);
+    let xml = pack::model_description(&load_params(&a.params)?);
     match a.out {
         Some(path) => write_text_atomic(&path, &xml).map_err(|e| e.to_string()),
         None => {

@@ -1,171 +1,19 @@
-//! The HaselPlatform FMU's per-model core: the variable table (the one source of truth for
-//! `modelDescription.xml`, the value references and the variable documentation) and the mapping
-//! of FMI calls onto a [`Simulator`]. The generic FMI 2.0 shell of [`crate::fmi2`] does every
-//! check of the standard around it.
+//! The HaselPlatform model core: the mapping of FMI calls onto a [`Simulator`], parameters
+//! until initialization ends, then a running simulation. The generic FMI shell does every
+//! check of the standard around it; the variable table says what each value reference is.
 
 use std::path::Path;
-use std::sync::OnceLock;
 
 use serde::{Deserialize, Serialize};
 
+use super::variables::{Slot, rows, variables};
+use super::{RESOURCE_PARAMS, model_info};
 use crate::fmi_common::model_api::FmuCore;
-use crate::fmi_common::variables::{
-    Causality, DefaultExperiment, Initial, ModelInfo, Variability, Variable,
-};
+use crate::fmi_common::variables::{ModelInfo, Variable};
 use crate::io::params_file;
 use crate::model::params::{ParamDef, parameters};
 use crate::model::{Params, Platform};
 use crate::simulation::{DEFAULT_RTOL, Simulator, Snapshot};
-
-/// `modelIdentifier` and the shared library's name in `binaries/linux64/`.
-pub const MODEL_IDENTIFIER: &str = "HaselPlatform";
-
-/// The parameter file inside the FMU's `resources/` that `hasel fmu --params` packs; its values
-/// are the parameters' start values.
-pub const RESOURCE_PARAMS: &str = "parameters.toml";
-
-/// What a value reference stands for.
-#[derive(Clone, Copy)]
-pub enum Slot {
-    Input(usize),
-    Height(usize),
-    Tip(usize),
-    Param(&'static ParamDef),
-    Rtol,
-    /// A state, looked up by the row's name (effect states read 0 while their effect is off).
-    State,
-    Energy,
-    SuppliedPower,
-    DissipatedPower,
-}
-
-/// One row of the variable table; its value reference is its index.
-pub struct Row {
-    pub name: String,
-    pub slot: Slot,
-    pub unit: &'static str,
-    pub description: String,
-}
-
-const STATE_UNITS: [(&str, &str, &str); 9] = [
-    ("theta", "rad", "Film rotation angle theta"),
-    ("l_p", "m", "Top film length l_p"),
-    (
-        "p",
-        "kg.m/s",
-        "Angular momentum p = I dtheta/dt with the paper's I = Lv m/24 [kg.m]",
-    ),
-    ("Q1", "C", "Charge Q1 of the retention capacitor C1"),
-    ("Q2", "C", "Charge Q2 of the electrode capacitor C2"),
-    (
-        "Q3",
-        "C",
-        "charge_drift: charge Q3 of the drift stage's capacitor C3 (0 while off)",
-    ),
-    (
-        "z_v",
-        "rad",
-        "creep: internal angle z of the standard linear solid (0 while off)",
-    ),
-    ("z_h", "rad", "hysteresis: Bouc-Wen state z_h (0 while off)"),
-    (
-        "U_amp",
-        "V",
-        "amplifier_lag: amplifier output voltage (0 while off)",
-    ),
-];
-
-/// The variable table, in value-reference order.
-pub fn rows() -> &'static [Row] {
-    static ROWS: OnceLock<Vec<Row>> = OnceLock::new();
-    ROWS.get_or_init(|| {
-        let mut rows = Vec::new();
-        let mut add = |name: String, slot, unit, description: String| rows.push(Row { name, slot, unit, description });
-        for i in 0..3 {
-            add(format!("U{}", i + 1), Slot::Input(i), "V", format!("Voltage command of actuator {}, held over a communication step", i + 1));
-        }
-        for i in 0..3 {
-            add(format!("h{}", i + 1), Slot::Height(i), "m", format!("Height of actuator {}: h = 1/2 Lv sin(theta)", i + 1));
-        }
-        for (i, axis) in ["x", "y", "z"].iter().enumerate() {
-            add(format!("tip_{axis}"), Slot::Tip(i), "m", format!("Antenna tip {axis} from the forward kinematics"));
-        }
-        for d in parameters() {
-            add(d.name.to_string(), Slot::Param(d), d.unit, d.description.to_string());
-        }
-        add("rtol".into(), Slot::Rtol, "1", "Relative tolerance of the internal Radau IIA solver (a tolerance given to fmi2SetupExperiment takes precedence)".into());
-        for a in 0..3 {
-            for (name, unit, desc) in STATE_UNITS {
-                add(format!("{name}_{}", a + 1), Slot::State, unit, format!("{desc} of actuator {}", a + 1));
-            }
-        }
-        add("H".into(), Slot::Energy, "J", "Stored energy (Hamiltonian) of the three actuators".into());
-        add("P_supplied".into(), Slot::SuppliedPower, "W", "Power supplied through the electrical ports, sum of y_i U_i".into());
-        add("P_dissipated".into(), Slot::DissipatedPower, "W", "Power dissipated in the resistors and the damping".into());
-        rows
-    })
-}
-
-/// The FMI variables with the start values of `params` and `rtol`.
-pub fn variables(params: &Params, rtol: f64) -> Vec<Variable> {
-    rows()
-        .iter()
-        .enumerate()
-        .map(|(vr, row)| {
-            let (causality, variability, initial, start) = match row.slot {
-                Slot::Input(_) => (Causality::Input, Variability::Continuous, None, Some(0.0)),
-                Slot::Height(_) | Slot::Tip(_) => (
-                    Causality::Output,
-                    Variability::Continuous,
-                    Some(Initial::Calculated),
-                    None,
-                ),
-                Slot::Param(d) => (
-                    Causality::Parameter,
-                    Variability::Fixed,
-                    Some(Initial::Exact),
-                    Some((d.get)(params)),
-                ),
-                Slot::Rtol => (
-                    Causality::Parameter,
-                    Variability::Fixed,
-                    Some(Initial::Exact),
-                    Some(rtol),
-                ),
-                Slot::State | Slot::Energy | Slot::SuppliedPower | Slot::DissipatedPower => (
-                    Causality::Local,
-                    Variability::Continuous,
-                    Some(Initial::Calculated),
-                    None,
-                ),
-            };
-            Variable {
-                name: row.name.clone(),
-                value_reference: vr as u32,
-                causality,
-                variability,
-                initial,
-                unit: Some(row.unit.to_string()),
-                description: row.description.clone(),
-                start,
-            }
-        })
-        .collect()
-}
-
-/// The model-level data of `modelDescription.xml`.
-pub fn model_info() -> ModelInfo {
-    ModelInfo {
-        model_name: MODEL_IDENTIFIER.into(),
-        model_identifier: MODEL_IDENTIFIER.into(),
-        description: "3-DOF micro parallel platform (3PS) driven by three HASEL actuators, each a port-Hamiltonian system (Feregrino et al.); inputs U1..U3 [V], outputs actuator heights and antenna tip [m]".into(),
-        author: "hasel-fmu".into(),
-        version: env!("CARGO_PKG_VERSION").into(),
-        generation_tool: concat!("hasel-fmu ", env!("CARGO_PKG_VERSION")).into(),
-        default_experiment: DefaultExperiment { start_time: 0.0, stop_time: 10.0, step_size: 1e-3, tolerance: DEFAULT_RTOL },
-        log_categories: vec![],
-    }
-}
 
 /// Reads the packed start values from `resources/parameters.toml`, if the FMU has one.
 pub fn resource_params(resource_dir: Option<&Path>) -> Result<Params, String> {
@@ -212,8 +60,7 @@ impl HaselCore {
         self.tolerance.unwrap_or(self.rtol)
     }
 
-    fn value(&self, row: &Row, sim: &Simulator) -> Result<f64, String> {
-        let slot = row.slot;
+    fn value(&self, slot: Slot, sim: &Simulator) -> Result<f64, String> {
         let x = sim.state();
         let model = sim.model();
         let ok = |r: Result<f64, crate::model::ModelError>| r.map_err(|e| e.to_string());
@@ -223,7 +70,9 @@ impl HaselCore {
             Slot::Tip(i) => model.tip(x)[i],
             Slot::Param(d) => (d.get)(&self.params),
             Slot::Rtol => self.rtol,
-            Slot::State => model.state_index(&row.name).map_or(0.0, |k| x[k]),
+            Slot::State { actuator, state } => {
+                model.state_position(actuator, state).map_or(0.0, |k| x[k])
+            }
             Slot::Energy => ok(model.energy(x))?,
             Slot::SuppliedPower => ok(model.supplied_power(x, self.u))?,
             Slot::DissipatedPower => ok(model.dissipated_power(x))?,
@@ -260,10 +109,10 @@ impl FmuCore for HaselCore {
             _ => {}
         }
         match &self.sim {
-            Some(sim) => self.value(row, sim),
+            Some(sim) => self.value(row.slot, sim),
             None => {
                 let sim = self.preview()?;
-                self.value(row, &sim)
+                self.value(row.slot, &sim)
             }
         }
     }
@@ -373,4 +222,57 @@ impl FmuCore for HaselCore {
     }
 }
 
-crate::export_fmi2!(HaselCore);
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The value reference of the variable `name`.
+    fn vr(name: &str) -> u32 {
+        rows().iter().position(|r| r.name == name).unwrap() as u32
+    }
+
+    #[test]
+    fn state_variables_read_the_model_state_of_their_name() {
+        let mut core = HaselCore::instantiate(None).unwrap();
+        // the effects with states on, two stages each where an effect has a choice
+        let effects = [
+            ("R3", 2e4),
+            ("tau3", 0.5),
+            ("k_v", 0.05),
+            ("tau_v", 0.3),
+            ("k_h", 0.04),
+            ("theta_h", 2e-3),
+            ("tau_a", 0.02),
+        ];
+        for (name, value) in effects {
+            core.set_real(vr(name), value).unwrap();
+        }
+        core.params.effects.charge_drift.two_stages = true;
+        core.params.effects.amplifier_lag.order = 2;
+        core.set_real(vr("U2"), 80.0).unwrap();
+        core.enter_initialization(0.0, None, None).unwrap();
+        core.exit_initialization().unwrap();
+        core.do_step(0.01).unwrap();
+        let sim = core.sim.clone().unwrap();
+        let mut states = 0;
+        for (k, row) in rows().iter().enumerate() {
+            if let Slot::State { .. } = row.slot {
+                let x = sim.model().state_index(&row.name).map(|i| sim.state()[i]);
+                let got = core.get_real(k as u32).unwrap();
+                assert_eq!(Some(got), x, "{}", row.name);
+                states += 1;
+            }
+        }
+        assert_eq!(states, 3 * 9);
+    }
+
+    #[test]
+    fn states_of_effects_that_are_off_read_zero() {
+        let mut core = HaselCore::instantiate(None).unwrap();
+        core.enter_initialization(0.0, None, None).unwrap();
+        for name in ["Q3_1", "z_v_2", "z_h_3", "U_amp_1"] {
+            assert_eq!(core.get_real(vr(name)), Ok(0.0), "{name}");
+        }
+        assert_ne!(core.get_real(vr("theta_1")), Ok(0.0), "the rest angle");
+    }
+}
