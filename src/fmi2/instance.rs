@@ -517,12 +517,13 @@ impl<M: FmuCore> Instance<M> {
         )
     }
 
-    /// `fmi2GetStatus` (section 4.2.3): only `fmi2DoStepStatus`, which needs a pending step.
-    pub fn get_status(&self, kind: fmi2StatusKind) -> Fmi2Status {
-        const F: &str = "fmi2GetStatus";
-        self.require(F, allowed::GET_STATUS)
+    /// `fmi2GetStatus`, `fmi2GetIntegerStatus` and `fmi2GetStringStatus` (`func`, section
+    /// 4.2.3): never a value, since their kinds need a pending step (`fmi2DoStepStatus`,
+    /// `fmi2PendingStatus`) and FMI 2.0 defines no Integer status.
+    pub fn get_valueless_status(&self, func: &str, kind: fmi2StatusKind) -> Fmi2Status {
+        self.require(func, allowed::GET_STATUS)
             .err()
-            .unwrap_or_else(|| self.unsupported_kind(F, kind))
+            .unwrap_or_else(|| self.unsupported_kind(func, kind))
     }
 
     /// `fmi2GetRealStatus` (section 4.2.3): `fmi2LastSuccessfulTime` is the core's time,
@@ -539,14 +540,6 @@ impl<M: FmuCore> Instance<M> {
         Fmi2Status::Ok
     }
 
-    /// `fmi2GetIntegerStatus` (section 4.2.3): FMI 2.0 defines no Integer status.
-    pub fn get_integer_status(&self, kind: fmi2StatusKind) -> Fmi2Status {
-        const F: &str = "fmi2GetIntegerStatus";
-        self.require(F, allowed::GET_STATUS)
-            .err()
-            .unwrap_or_else(|| self.unsupported_kind(F, kind))
-    }
-
     /// `fmi2GetBooleanStatus` (section 4.2.3): `fmi2Terminated` is always false — a
     /// discarded step can be retried from a restored state.
     pub fn get_boolean_status(&self, kind: fmi2StatusKind, value: &mut bool) -> Fmi2Status {
@@ -559,14 +552,6 @@ impl<M: FmuCore> Instance<M> {
         }
         *value = false;
         Fmi2Status::Ok
-    }
-
-    /// `fmi2GetStringStatus` (section 4.2.3): only `fmi2PendingStatus`, which needs a pending step.
-    pub fn get_string_status(&self, kind: fmi2StatusKind) -> Fmi2Status {
-        const F: &str = "fmi2GetStringStatus";
-        self.require(F, allowed::GET_STATUS)
-            .err()
-            .unwrap_or_else(|| self.unsupported_kind(F, kind))
     }
 
     /// `fmi2GetFMUstate` (section 2.1.8): allowed in every state of this FMU.

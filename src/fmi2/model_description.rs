@@ -258,9 +258,9 @@ fn write_variables(w: &mut Writer<Vec<u8>>, vars: &[Variable]) -> io::Result<()>
 /// `<ModelStructure>` (section 2.2.8), with 1-based ScalarVariable indices.
 ///
 /// * `<Outputs>`: every output, in index order, with `dependencies=""`: the core contract
-///   ([`crate::fmi_common::model_api::FmuCore`]) is that outputs are functions of the internal state only,
-///   i.e. no direct feedthrough from inputs, and a Co-Simulation FMU without `<Derivatives>`
-///   exposes no states that could be listed.
+///   ([`crate::fmi_common::model_api::FmuCore`]) is that outputs are functions of the
+///   internal state only, i.e. no direct feedthrough from inputs, and a Co-Simulation FMU
+///   without `<Derivatives>` exposes no states that could be listed.
 /// * `<InitialUnknowns>`: exactly the list section 2.2.8 prescribes — outputs with initial
 ///   approx or calculated, and all calculated parameters (continuous-time states and their
 ///   derivatives would belong here too, but a Co-Simulation FMU without `<Derivatives>`

@@ -41,4 +41,8 @@ pub fn model_info() -> ModelInfo {
     }
 }
 
-crate::export_fmi2!(HaselCore);
+/// The 44 C functions of the FMU binary, around [`HaselCore`]; in a module of their own, as
+/// the macro imports the C types where it is invoked.
+mod fmi2_functions {
+    crate::export_fmi2!(super::HaselCore);
+}
