@@ -126,7 +126,7 @@ impl FmuCore for HaselCore {
                 }
                 self.u[i] = value;
             }
-            Slot::Param(d) => self.params.set(d.name, value).map_err(|e| e.to_string())?,
+            Slot::Param(d) => self.params.set_param(d, value).map_err(|e| e.to_string())?,
             Slot::Rtol => {
                 if !(value.is_finite() && value > 0.0 && value < 0.1) {
                     return Err(format!("rtol = {value}: must be in (0, 0.1)"));
@@ -202,7 +202,7 @@ impl FmuCore for HaselCore {
         }
         let mut params = Params::default();
         for (d, v) in defs.iter().zip(&state.params) {
-            params.set(d.name, *v).map_err(|e| format!("state: {e}"))?;
+            params.set_param(d, *v).map_err(|e| format!("state: {e}"))?;
         }
         let sim = match state.sim {
             Some(snapshot) => {
