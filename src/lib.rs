@@ -3,8 +3,8 @@
 
 pub mod diagnose;
 pub mod fmi2;
-pub mod fmu_core;
-pub mod fmu_pack;
+pub mod fmi_common;
+pub mod fmu;
 pub mod identify;
 pub mod io;
 pub mod model;

@@ -19,11 +19,11 @@ use std::ffi::{CStr, c_char, c_void};
 use std::panic::{AssertUnwindSafe, catch_unwind};
 use std::ptr::null_mut;
 
-use super::core::FmuCore;
 use super::fmu_state::Snapshot;
 use super::instance::{Instance, panic_message};
 use super::logging::Logger;
 use super::types::*;
+use crate::fmi_common::model_api::FmuCore;
 
 /// A C string argument; `None` for NULL.
 unsafe fn opt_str<'a>(p: fmi2String) -> Option<Cow<'a, str>> {
@@ -75,7 +75,6 @@ pub unsafe fn instantiate<M: FmuCore>(
     guid: fmi2String,
     resource_location: fmi2String,
     functions: *const fmi2CallbackFunctions,
-    _visible: fmi2Boolean,
     logging_on: fmi2Boolean,
 ) -> fmi2Component {
     if functions.is_null() {
@@ -96,13 +95,13 @@ pub unsafe fn instantiate<M: FmuCore>(
     };
     if fmu_type != FMI2_CO_SIMULATION {
         return fail(&format!(
-            "fmuType = {fmu_type} is not fmi2CoSimulation; the Model Exchange interface is not offered by this FMU"
+            "fmuType = {fmu_type} is not fmi2CoSimulation; the Model Exchange interface is not \
+             offered by this FMU"
         ));
     }
     let (Some(name), Some(guid)) = (name.as_deref(), guid.as_deref()) else {
         return fail("instanceName or fmuGUID is NULL");
     };
-    // `visible` needs no handling: the FMU has no user interface (section 2.1.6).
     match catch_unwind(|| {
         Instance::<M>::instantiate(
             name,
@@ -230,16 +229,17 @@ pub unsafe fn set_real<M: FmuCore>(
     }
 }
 
-/// `fmi2Get/Set{Integer,Boolean,String}`; `value` is the value array, of whichever type.
-pub unsafe fn no_variables_of_type<M: FmuCore>(
+/// `fmi2Get/Set{Integer,Boolean,String}` (`func`, whose name ends in the type); `value` is the
+/// value array, of whichever type.
+pub unsafe fn no_variables<M: FmuCore>(
     c: fmi2Component,
     func: &'static str,
-    type_name: &str,
-    setter: bool,
     vr: *const fmi2ValueReference,
     nvr: usize,
     value: *const c_void,
 ) -> Fmi2Status {
+    let setter = func.starts_with("fmi2Set");
+    let type_name = func.get("fmi2Get".len()..).unwrap_or(func);
     unsafe {
         with_instance::<M>(c, func, |inst| match in_slice(vr, nvr) {
             None => inst.null_argument(func, "vr"),
@@ -325,7 +325,14 @@ pub unsafe fn serialize_fmu_state<M: FmuCore>(
             };
             let data = snapshot.to_bytes();
             if size < data.len() {
-                return inst.argument_error(F, format_args!("buffer of {size} bytes is too small, the state needs {} (fmi2SerializedFMUstateSize)", data.len()));
+                let needs = data.len();
+                return inst.argument_error(
+                    F,
+                    format_args!(
+                        "buffer of {size} bytes is too small, the state needs {needs} \
+                         (fmi2SerializedFMUstateSize)"
+                    ),
+                );
             }
             let Some(out) = out_slice(bytes.cast::<u8>(), data.len()) else {
                 return inst.null_argument(F, "serializedState");
@@ -362,13 +369,18 @@ pub unsafe fn deserialize_fmu_state<M: FmuCore>(
     }
 }
 
-/// Functions of interfaces or capabilities this FMU does not offer.
+/// Functions of interfaces or capabilities (`what`) this FMU does not offer.
 pub unsafe fn not_offered<M: FmuCore>(
     c: fmi2Component,
     func: &'static str,
     what: &str,
 ) -> Fmi2Status {
     unsafe { with_instance::<M>(c, func, |inst| inst.not_offered(func, what)) }
+}
+
+/// The functions of the Model Exchange interface, which this FMU does not offer.
+pub unsafe fn model_exchange_only<M: FmuCore>(c: fmi2Component, func: &'static str) -> Fmi2Status {
+    unsafe { not_offered::<M>(c, func, "the Model Exchange interface") }
 }
 
 pub unsafe fn do_step<M: FmuCore>(
@@ -388,7 +400,8 @@ pub unsafe fn cancel_step<M: FmuCore>(c: fmi2Component) -> Fmi2Status {
     unsafe { with_instance::<M>(c, "fmi2CancelStep", |inst| inst.cancel_step()) }
 }
 
-/// `fmi2GetStatus`, `fmi2GetIntegerStatus`, `fmi2GetStringStatus`: no value is ever delivered.
+/// `fmi2GetStatus`, `fmi2GetIntegerStatus`, `fmi2GetStringStatus` (`func`): no value is ever
+/// delivered, so `value` may point to any type.
 pub unsafe fn get_valueless_status<M: FmuCore>(
     c: fmi2Component,
     func: &'static str,
@@ -400,11 +413,7 @@ pub unsafe fn get_valueless_status<M: FmuCore>(
             if value.is_null() {
                 return inst.null_argument(func, "value");
             }
-            match func {
-                "fmi2GetStatus" => inst.get_status(kind),
-                "fmi2GetIntegerStatus" => inst.get_integer_status(kind),
-                _ => inst.get_string_status(kind),
-            }
+            inst.get_valueless_status(func, kind)
         })
     }
 }
@@ -450,8 +459,10 @@ pub fn static_c_str(s: &'static CStr) -> *const c_char {
 }
 
 /// Exports the 44 functions of `fmi2Functions.h` for the core type `$core` (an
-/// [`FmuCore`](crate::fmi2::core::FmuCore)). Invoke exactly once per shared library, at
-/// item level: `hasel_fmu::export_fmi2!(MyCore);` (inside this crate: `crate::export_fmi2!`).
+/// [`FmuCore`](crate::fmi_common::model_api::FmuCore)). Invoke exactly once per shared
+/// library, at item level of a module of its own (it imports the C types there):
+/// `mod fmi2_functions { hasel_fmu::export_fmi2!(super::MyCore); }` (inside this crate:
+/// `crate::export_fmi2!`).
 #[macro_export]
 macro_rules! export_fmi2 {
     ($core:ty) => {
@@ -460,100 +471,418 @@ macro_rules! export_fmi2 {
 }
 
 /// The functions of [`export_fmi2!`]; the bracketed attributes go on each function (tests
-/// pass none, to get the C-ABI functions without exported symbol names).
+/// pass none, to get the C-ABI functions without exported symbol names). Each function hands
+/// its arguments to the function of [`exports`](crate::fmi2::exports) of the same name.
 #[doc(hidden)]
 #[macro_export]
 macro_rules! __fmi2_functions {
     ([$($attr:tt)*] $core:ty) => {
-        $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)] pub extern "C" fn fmi2GetTypesPlatform() -> *const ::std::ffi::c_char { $crate::fmi2::exports::static_c_str($crate::fmi2::types::TYPES_PLATFORM) }
-        $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)] pub extern "C" fn fmi2GetVersion() -> *const ::std::ffi::c_char { $crate::fmi2::exports::static_c_str($crate::fmi2::types::VERSION) }
-        $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)] pub unsafe extern "C" fn fmi2SetDebugLogging(c: $crate::fmi2::types::fmi2Component, logging_on: $crate::fmi2::types::fmi2Boolean, n_categories: usize, categories: *const $crate::fmi2::types::fmi2String) -> $crate::fmi2::types::fmi2Status {
-            unsafe { $crate::fmi2::exports::set_debug_logging::<$core>(c, logging_on, n_categories, categories) }
+        use $crate::fmi2::exports as shell;
+        use $crate::fmi2::types::*;
+
+        // Inquire platform and version number of the header files (section 2.1.4)
+
+        $($attr)* #[allow(non_snake_case)]
+        pub extern "C" fn fmi2GetTypesPlatform() -> *const ::std::ffi::c_char {
+            shell::static_c_str(TYPES_PLATFORM)
         }
-        $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)] pub unsafe extern "C" fn fmi2Instantiate(instance_name: $crate::fmi2::types::fmi2String, fmu_type: $crate::fmi2::types::fmi2Type, fmu_guid: $crate::fmi2::types::fmi2String, fmu_resource_location: $crate::fmi2::types::fmi2String, functions: *const $crate::fmi2::types::fmi2CallbackFunctions, visible: $crate::fmi2::types::fmi2Boolean, logging_on: $crate::fmi2::types::fmi2Boolean) -> $crate::fmi2::types::fmi2Component {
-            unsafe { $crate::fmi2::exports::instantiate::<$core>(instance_name, fmu_type, fmu_guid, fmu_resource_location, functions, visible, logging_on) }
+
+        $($attr)* #[allow(non_snake_case)]
+        pub extern "C" fn fmi2GetVersion() -> *const ::std::ffi::c_char {
+            shell::static_c_str(VERSION)
         }
-        $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)] pub unsafe extern "C" fn fmi2FreeInstance(c: $crate::fmi2::types::fmi2Component) { unsafe { $crate::fmi2::exports::free_instance::<$core>(c) } }
-        $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)] pub unsafe extern "C" fn fmi2SetupExperiment(c: $crate::fmi2::types::fmi2Component, tolerance_defined: $crate::fmi2::types::fmi2Boolean, tolerance: $crate::fmi2::types::fmi2Real, start_time: $crate::fmi2::types::fmi2Real, stop_time_defined: $crate::fmi2::types::fmi2Boolean, stop_time: $crate::fmi2::types::fmi2Real) -> $crate::fmi2::types::fmi2Status {
-            unsafe { $crate::fmi2::exports::setup_experiment::<$core>(c, tolerance_defined, tolerance, start_time, stop_time_defined, stop_time) }
+
+        // Creation and destruction of instances, debug logging (sections 2.1.5, 2.1.6)
+
+        $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)]
+        pub unsafe extern "C" fn fmi2SetDebugLogging(
+            c: fmi2Component,
+            logging_on: fmi2Boolean,
+            n_categories: usize,
+            categories: *const fmi2String,
+        ) -> fmi2Status {
+            unsafe { shell::set_debug_logging::<$core>(c, logging_on, n_categories, categories) }
         }
-        $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)] pub unsafe extern "C" fn fmi2EnterInitializationMode(c: $crate::fmi2::types::fmi2Component) -> $crate::fmi2::types::fmi2Status { unsafe { $crate::fmi2::exports::enter_initialization_mode::<$core>(c) } }
-        $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)] pub unsafe extern "C" fn fmi2ExitInitializationMode(c: $crate::fmi2::types::fmi2Component) -> $crate::fmi2::types::fmi2Status { unsafe { $crate::fmi2::exports::exit_initialization_mode::<$core>(c) } }
-        $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)] pub unsafe extern "C" fn fmi2Terminate(c: $crate::fmi2::types::fmi2Component) -> $crate::fmi2::types::fmi2Status { unsafe { $crate::fmi2::exports::terminate::<$core>(c) } }
-        $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)] pub unsafe extern "C" fn fmi2Reset(c: $crate::fmi2::types::fmi2Component) -> $crate::fmi2::types::fmi2Status { unsafe { $crate::fmi2::exports::reset::<$core>(c) } }
-        $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)] pub unsafe extern "C" fn fmi2GetReal(c: $crate::fmi2::types::fmi2Component, vr: *const $crate::fmi2::types::fmi2ValueReference, nvr: usize, value: *mut $crate::fmi2::types::fmi2Real) -> $crate::fmi2::types::fmi2Status {
-            unsafe { $crate::fmi2::exports::get_real::<$core>(c, vr, nvr, value) }
+
+        $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)]
+        pub unsafe extern "C" fn fmi2Instantiate(
+            name: fmi2String,
+            fmu_type: fmi2Type,
+            guid: fmi2String,
+            resources: fmi2String,
+            functions: *const fmi2CallbackFunctions,
+            _visible: fmi2Boolean, // no user interface to show (section 2.1.6)
+            logging_on: fmi2Boolean,
+        ) -> fmi2Component {
+            unsafe {
+                shell::instantiate::<$core>(name, fmu_type, guid, resources, functions, logging_on)
+            }
         }
-        $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)] pub unsafe extern "C" fn fmi2GetInteger(c: $crate::fmi2::types::fmi2Component, vr: *const $crate::fmi2::types::fmi2ValueReference, nvr: usize, value: *mut $crate::fmi2::types::fmi2Integer) -> $crate::fmi2::types::fmi2Status {
-            unsafe { $crate::fmi2::exports::no_variables_of_type::<$core>(c, "fmi2GetInteger", "Integer", false, vr, nvr, value as *const ::std::ffi::c_void) }
+
+        $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)]
+        pub unsafe extern "C" fn fmi2FreeInstance(c: fmi2Component) {
+            unsafe { shell::free_instance::<$core>(c) }
         }
-        $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)] pub unsafe extern "C" fn fmi2GetBoolean(c: $crate::fmi2::types::fmi2Component, vr: *const $crate::fmi2::types::fmi2ValueReference, nvr: usize, value: *mut $crate::fmi2::types::fmi2Boolean) -> $crate::fmi2::types::fmi2Status {
-            unsafe { $crate::fmi2::exports::no_variables_of_type::<$core>(c, "fmi2GetBoolean", "Boolean", false, vr, nvr, value as *const ::std::ffi::c_void) }
+
+        // Initialization, termination and reset (section 2.1.6)
+
+        $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)]
+        pub unsafe extern "C" fn fmi2SetupExperiment(
+            c: fmi2Component,
+            tol_defined: fmi2Boolean,
+            tol: fmi2Real,
+            start: fmi2Real,
+            stop_defined: fmi2Boolean,
+            stop: fmi2Real,
+        ) -> fmi2Status {
+            unsafe {
+                shell::setup_experiment::<$core>(c, tol_defined, tol, start, stop_defined, stop)
+            }
         }
-        $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)] pub unsafe extern "C" fn fmi2GetString(c: $crate::fmi2::types::fmi2Component, vr: *const $crate::fmi2::types::fmi2ValueReference, nvr: usize, value: *mut $crate::fmi2::types::fmi2String) -> $crate::fmi2::types::fmi2Status {
-            unsafe { $crate::fmi2::exports::no_variables_of_type::<$core>(c, "fmi2GetString", "String", false, vr, nvr, value as *const ::std::ffi::c_void) }
+
+        $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)]
+        pub unsafe extern "C" fn fmi2EnterInitializationMode(c: fmi2Component) -> fmi2Status {
+            unsafe { shell::enter_initialization_mode::<$core>(c) }
         }
-        $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)] pub unsafe extern "C" fn fmi2SetReal(c: $crate::fmi2::types::fmi2Component, vr: *const $crate::fmi2::types::fmi2ValueReference, nvr: usize, value: *const $crate::fmi2::types::fmi2Real) -> $crate::fmi2::types::fmi2Status {
-            unsafe { $crate::fmi2::exports::set_real::<$core>(c, vr, nvr, value) }
+
+        $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)]
+        pub unsafe extern "C" fn fmi2ExitInitializationMode(c: fmi2Component) -> fmi2Status {
+            unsafe { shell::exit_initialization_mode::<$core>(c) }
         }
-        $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)] pub unsafe extern "C" fn fmi2SetInteger(c: $crate::fmi2::types::fmi2Component, vr: *const $crate::fmi2::types::fmi2ValueReference, nvr: usize, value: *const $crate::fmi2::types::fmi2Integer) -> $crate::fmi2::types::fmi2Status {
-            unsafe { $crate::fmi2::exports::no_variables_of_type::<$core>(c, "fmi2SetInteger", "Integer", true, vr, nvr, value as *const ::std::ffi::c_void) }
+
+        $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)]
+        pub unsafe extern "C" fn fmi2Terminate(c: fmi2Component) -> fmi2Status {
+            unsafe { shell::terminate::<$core>(c) }
         }
-        $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)] pub unsafe extern "C" fn fmi2SetBoolean(c: $crate::fmi2::types::fmi2Component, vr: *const $crate::fmi2::types::fmi2ValueReference, nvr: usize, value: *const $crate::fmi2::types::fmi2Boolean) -> $crate::fmi2::types::fmi2Status {
-            unsafe { $crate::fmi2::exports::no_variables_of_type::<$core>(c, "fmi2SetBoolean", "Boolean", true, vr, nvr, value as *const ::std::ffi::c_void) }
+
+        $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)]
+        pub unsafe extern "C" fn fmi2Reset(c: fmi2Component) -> fmi2Status {
+            unsafe { shell::reset::<$core>(c) }
         }
-        $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)] pub unsafe extern "C" fn fmi2SetString(c: $crate::fmi2::types::fmi2Component, vr: *const $crate::fmi2::types::fmi2ValueReference, nvr: usize, value: *const $crate::fmi2::types::fmi2String) -> $crate::fmi2::types::fmi2Status {
-            unsafe { $crate::fmi2::exports::no_variables_of_type::<$core>(c, "fmi2SetString", "String", true, vr, nvr, value as *const ::std::ffi::c_void) }
+
+        // Getting and setting variable values (section 2.1.7); Real variables only
+
+        $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)]
+        pub unsafe extern "C" fn fmi2GetReal(
+            c: fmi2Component,
+            vr: *const fmi2ValueReference,
+            nvr: usize,
+            value: *mut fmi2Real,
+        ) -> fmi2Status {
+            unsafe { shell::get_real::<$core>(c, vr, nvr, value) }
         }
-        $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)] pub unsafe extern "C" fn fmi2GetFMUstate(c: $crate::fmi2::types::fmi2Component, state: *mut $crate::fmi2::types::fmi2FMUstate) -> $crate::fmi2::types::fmi2Status { unsafe { $crate::fmi2::exports::get_fmu_state::<$core>(c, state) } }
-        $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)] pub unsafe extern "C" fn fmi2SetFMUstate(c: $crate::fmi2::types::fmi2Component, state: $crate::fmi2::types::fmi2FMUstate) -> $crate::fmi2::types::fmi2Status { unsafe { $crate::fmi2::exports::set_fmu_state::<$core>(c, state) } }
-        $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)] pub unsafe extern "C" fn fmi2FreeFMUstate(c: $crate::fmi2::types::fmi2Component, state: *mut $crate::fmi2::types::fmi2FMUstate) -> $crate::fmi2::types::fmi2Status { unsafe { $crate::fmi2::exports::free_fmu_state::<$core>(c, state) } }
-        $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)] pub unsafe extern "C" fn fmi2SerializedFMUstateSize(c: $crate::fmi2::types::fmi2Component, state: $crate::fmi2::types::fmi2FMUstate, size: *mut usize) -> $crate::fmi2::types::fmi2Status {
-            unsafe { $crate::fmi2::exports::serialized_fmu_state_size::<$core>(c, state, size) }
+
+        $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)]
+        pub unsafe extern "C" fn fmi2GetInteger(
+            c: fmi2Component,
+            vr: *const fmi2ValueReference,
+            nvr: usize,
+            value: *mut fmi2Integer,
+        ) -> fmi2Status {
+            unsafe { shell::no_variables::<$core>(c, "fmi2GetInteger", vr, nvr, value.cast()) }
         }
-        $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)] pub unsafe extern "C" fn fmi2SerializeFMUstate(c: $crate::fmi2::types::fmi2Component, state: $crate::fmi2::types::fmi2FMUstate, serialized_state: *mut $crate::fmi2::types::fmi2Byte, size: usize) -> $crate::fmi2::types::fmi2Status {
-            unsafe { $crate::fmi2::exports::serialize_fmu_state::<$core>(c, state, serialized_state, size) }
+
+        $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)]
+        pub unsafe extern "C" fn fmi2GetBoolean(
+            c: fmi2Component,
+            vr: *const fmi2ValueReference,
+            nvr: usize,
+            value: *mut fmi2Boolean,
+        ) -> fmi2Status {
+            unsafe { shell::no_variables::<$core>(c, "fmi2GetBoolean", vr, nvr, value.cast()) }
         }
-        $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)] pub unsafe extern "C" fn fmi2DeSerializeFMUstate(c: $crate::fmi2::types::fmi2Component, serialized_state: *const $crate::fmi2::types::fmi2Byte, size: usize, state: *mut $crate::fmi2::types::fmi2FMUstate) -> $crate::fmi2::types::fmi2Status {
-            unsafe { $crate::fmi2::exports::deserialize_fmu_state::<$core>(c, serialized_state, size, state) }
+
+        $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)]
+        pub unsafe extern "C" fn fmi2GetString(
+            c: fmi2Component,
+            vr: *const fmi2ValueReference,
+            nvr: usize,
+            value: *mut fmi2String,
+        ) -> fmi2Status {
+            unsafe { shell::no_variables::<$core>(c, "fmi2GetString", vr, nvr, value.cast()) }
         }
-        $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)] pub unsafe extern "C" fn fmi2GetDirectionalDerivative(c: $crate::fmi2::types::fmi2Component, _v_unknown_ref: *const $crate::fmi2::types::fmi2ValueReference, _n_unknown: usize, _v_known_ref: *const $crate::fmi2::types::fmi2ValueReference, _n_known: usize, _dv_known: *const $crate::fmi2::types::fmi2Real, _dv_unknown: *mut $crate::fmi2::types::fmi2Real) -> $crate::fmi2::types::fmi2Status {
-            unsafe { $crate::fmi2::exports::not_offered::<$core>(c, "fmi2GetDirectionalDerivative", "providesDirectionalDerivative") }
+
+        $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)]
+        pub unsafe extern "C" fn fmi2SetReal(
+            c: fmi2Component,
+            vr: *const fmi2ValueReference,
+            nvr: usize,
+            value: *const fmi2Real,
+        ) -> fmi2Status {
+            unsafe { shell::set_real::<$core>(c, vr, nvr, value) }
         }
-        $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)] pub unsafe extern "C" fn fmi2EnterEventMode(c: $crate::fmi2::types::fmi2Component) -> $crate::fmi2::types::fmi2Status { unsafe { $crate::fmi2::exports::not_offered::<$core>(c, "fmi2EnterEventMode", "the Model Exchange interface") } }
-        $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)] pub unsafe extern "C" fn fmi2NewDiscreteStates(c: $crate::fmi2::types::fmi2Component, _event_info: *mut $crate::fmi2::types::fmi2EventInfo) -> $crate::fmi2::types::fmi2Status { unsafe { $crate::fmi2::exports::not_offered::<$core>(c, "fmi2NewDiscreteStates", "the Model Exchange interface") } }
-        $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)] pub unsafe extern "C" fn fmi2EnterContinuousTimeMode(c: $crate::fmi2::types::fmi2Component) -> $crate::fmi2::types::fmi2Status { unsafe { $crate::fmi2::exports::not_offered::<$core>(c, "fmi2EnterContinuousTimeMode", "the Model Exchange interface") } }
-        $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)] pub unsafe extern "C" fn fmi2CompletedIntegratorStep(c: $crate::fmi2::types::fmi2Component, _no_set_fmu_state_prior_to_current_point: $crate::fmi2::types::fmi2Boolean, _enter_event_mode: *mut $crate::fmi2::types::fmi2Boolean, _terminate_simulation: *mut $crate::fmi2::types::fmi2Boolean) -> $crate::fmi2::types::fmi2Status {
-            unsafe { $crate::fmi2::exports::not_offered::<$core>(c, "fmi2CompletedIntegratorStep", "the Model Exchange interface") }
+
+        $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)]
+        pub unsafe extern "C" fn fmi2SetInteger(
+            c: fmi2Component,
+            vr: *const fmi2ValueReference,
+            nvr: usize,
+            value: *const fmi2Integer,
+        ) -> fmi2Status {
+            unsafe { shell::no_variables::<$core>(c, "fmi2SetInteger", vr, nvr, value.cast()) }
         }
-        $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)] pub unsafe extern "C" fn fmi2SetTime(c: $crate::fmi2::types::fmi2Component, _time: $crate::fmi2::types::fmi2Real) -> $crate::fmi2::types::fmi2Status { unsafe { $crate::fmi2::exports::not_offered::<$core>(c, "fmi2SetTime", "the Model Exchange interface") } }
-        $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)] pub unsafe extern "C" fn fmi2SetContinuousStates(c: $crate::fmi2::types::fmi2Component, _x: *const $crate::fmi2::types::fmi2Real, _nx: usize) -> $crate::fmi2::types::fmi2Status { unsafe { $crate::fmi2::exports::not_offered::<$core>(c, "fmi2SetContinuousStates", "the Model Exchange interface") } }
-        $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)] pub unsafe extern "C" fn fmi2GetDerivatives(c: $crate::fmi2::types::fmi2Component, _derivatives: *mut $crate::fmi2::types::fmi2Real, _nx: usize) -> $crate::fmi2::types::fmi2Status { unsafe { $crate::fmi2::exports::not_offered::<$core>(c, "fmi2GetDerivatives", "the Model Exchange interface") } }
-        $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)] pub unsafe extern "C" fn fmi2GetEventIndicators(c: $crate::fmi2::types::fmi2Component, _event_indicators: *mut $crate::fmi2::types::fmi2Real, _ni: usize) -> $crate::fmi2::types::fmi2Status { unsafe { $crate::fmi2::exports::not_offered::<$core>(c, "fmi2GetEventIndicators", "the Model Exchange interface") } }
-        $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)] pub unsafe extern "C" fn fmi2GetContinuousStates(c: $crate::fmi2::types::fmi2Component, _x: *mut $crate::fmi2::types::fmi2Real, _nx: usize) -> $crate::fmi2::types::fmi2Status { unsafe { $crate::fmi2::exports::not_offered::<$core>(c, "fmi2GetContinuousStates", "the Model Exchange interface") } }
-        $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)] pub unsafe extern "C" fn fmi2GetNominalsOfContinuousStates(c: $crate::fmi2::types::fmi2Component, _x_nominal: *mut $crate::fmi2::types::fmi2Real, _nx: usize) -> $crate::fmi2::types::fmi2Status {
-            unsafe { $crate::fmi2::exports::not_offered::<$core>(c, "fmi2GetNominalsOfContinuousStates", "the Model Exchange interface") }
+
+        $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)]
+        pub unsafe extern "C" fn fmi2SetBoolean(
+            c: fmi2Component,
+            vr: *const fmi2ValueReference,
+            nvr: usize,
+            value: *const fmi2Boolean,
+        ) -> fmi2Status {
+            unsafe { shell::no_variables::<$core>(c, "fmi2SetBoolean", vr, nvr, value.cast()) }
         }
-        $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)] pub unsafe extern "C" fn fmi2SetRealInputDerivatives(c: $crate::fmi2::types::fmi2Component, _vr: *const $crate::fmi2::types::fmi2ValueReference, _nvr: usize, _order: *const $crate::fmi2::types::fmi2Integer, _value: *const $crate::fmi2::types::fmi2Real) -> $crate::fmi2::types::fmi2Status {
-            unsafe { $crate::fmi2::exports::not_offered::<$core>(c, "fmi2SetRealInputDerivatives", "canInterpolateInputs (input derivatives)") }
+
+        $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)]
+        pub unsafe extern "C" fn fmi2SetString(
+            c: fmi2Component,
+            vr: *const fmi2ValueReference,
+            nvr: usize,
+            value: *const fmi2String,
+        ) -> fmi2Status {
+            unsafe { shell::no_variables::<$core>(c, "fmi2SetString", vr, nvr, value.cast()) }
         }
-        $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)] pub unsafe extern "C" fn fmi2GetRealOutputDerivatives(c: $crate::fmi2::types::fmi2Component, _vr: *const $crate::fmi2::types::fmi2ValueReference, _nvr: usize, _order: *const $crate::fmi2::types::fmi2Integer, _value: *mut $crate::fmi2::types::fmi2Real) -> $crate::fmi2::types::fmi2Status {
-            unsafe { $crate::fmi2::exports::not_offered::<$core>(c, "fmi2GetRealOutputDerivatives", "maxOutputDerivativeOrder > 0 (output derivatives)") }
+
+        // FMU states (section 2.1.8)
+
+        $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)]
+        pub unsafe extern "C" fn fmi2GetFMUstate(
+            c: fmi2Component,
+            state: *mut fmi2FMUstate,
+        ) -> fmi2Status {
+            unsafe { shell::get_fmu_state::<$core>(c, state) }
         }
-        $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)] pub unsafe extern "C" fn fmi2DoStep(c: $crate::fmi2::types::fmi2Component, current_communication_point: $crate::fmi2::types::fmi2Real, communication_step_size: $crate::fmi2::types::fmi2Real, no_set_fmu_state_prior_to_current_point: $crate::fmi2::types::fmi2Boolean) -> $crate::fmi2::types::fmi2Status {
-            unsafe { $crate::fmi2::exports::do_step::<$core>(c, current_communication_point, communication_step_size, no_set_fmu_state_prior_to_current_point) }
+
+        $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)]
+        pub unsafe extern "C" fn fmi2SetFMUstate(
+            c: fmi2Component,
+            state: fmi2FMUstate,
+        ) -> fmi2Status {
+            unsafe { shell::set_fmu_state::<$core>(c, state) }
         }
-        $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)] pub unsafe extern "C" fn fmi2CancelStep(c: $crate::fmi2::types::fmi2Component) -> $crate::fmi2::types::fmi2Status { unsafe { $crate::fmi2::exports::cancel_step::<$core>(c) } }
-        $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)] pub unsafe extern "C" fn fmi2GetStatus(c: $crate::fmi2::types::fmi2Component, s: $crate::fmi2::types::fmi2StatusKind, value: *mut $crate::fmi2::types::fmi2Status) -> $crate::fmi2::types::fmi2Status {
-            unsafe { $crate::fmi2::exports::get_valueless_status::<$core>(c, "fmi2GetStatus", s, value as *mut ::std::ffi::c_void) }
+
+        $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)]
+        pub unsafe extern "C" fn fmi2FreeFMUstate(
+            c: fmi2Component,
+            state: *mut fmi2FMUstate,
+        ) -> fmi2Status {
+            unsafe { shell::free_fmu_state::<$core>(c, state) }
         }
-        $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)] pub unsafe extern "C" fn fmi2GetRealStatus(c: $crate::fmi2::types::fmi2Component, s: $crate::fmi2::types::fmi2StatusKind, value: *mut $crate::fmi2::types::fmi2Real) -> $crate::fmi2::types::fmi2Status { unsafe { $crate::fmi2::exports::get_real_status::<$core>(c, s, value) } }
-        $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)] pub unsafe extern "C" fn fmi2GetIntegerStatus(c: $crate::fmi2::types::fmi2Component, s: $crate::fmi2::types::fmi2StatusKind, value: *mut $crate::fmi2::types::fmi2Integer) -> $crate::fmi2::types::fmi2Status {
-            unsafe { $crate::fmi2::exports::get_valueless_status::<$core>(c, "fmi2GetIntegerStatus", s, value as *mut ::std::ffi::c_void) }
+
+        $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)]
+        pub unsafe extern "C" fn fmi2SerializedFMUstateSize(
+            c: fmi2Component,
+            state: fmi2FMUstate,
+            size: *mut usize,
+        ) -> fmi2Status {
+            unsafe { shell::serialized_fmu_state_size::<$core>(c, state, size) }
         }
-        $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)] pub unsafe extern "C" fn fmi2GetBooleanStatus(c: $crate::fmi2::types::fmi2Component, s: $crate::fmi2::types::fmi2StatusKind, value: *mut $crate::fmi2::types::fmi2Boolean) -> $crate::fmi2::types::fmi2Status { unsafe { $crate::fmi2::exports::get_boolean_status::<$core>(c, s, value) } }
-        $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)] pub unsafe extern "C" fn fmi2GetStringStatus(c: $crate::fmi2::types::fmi2Component, s: $crate::fmi2::types::fmi2StatusKind, value: *mut $crate::fmi2::types::fmi2String) -> $crate::fmi2::types::fmi2Status {
-            unsafe { $crate::fmi2::exports::get_valueless_status::<$core>(c, "fmi2GetStringStatus", s, value as *mut ::std::ffi::c_void) }
+
+        $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)]
+        pub unsafe extern "C" fn fmi2SerializeFMUstate(
+            c: fmi2Component,
+            state: fmi2FMUstate,
+            bytes: *mut fmi2Byte,
+            size: usize,
+        ) -> fmi2Status {
+            unsafe { shell::serialize_fmu_state::<$core>(c, state, bytes, size) }
+        }
+
+        $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)]
+        pub unsafe extern "C" fn fmi2DeSerializeFMUstate(
+            c: fmi2Component,
+            bytes: *const fmi2Byte,
+            size: usize,
+            state: *mut fmi2FMUstate,
+        ) -> fmi2Status {
+            unsafe { shell::deserialize_fmu_state::<$core>(c, bytes, size, state) }
+        }
+
+        // Directional derivatives (section 2.1.9): not offered
+
+        $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)]
+        pub unsafe extern "C" fn fmi2GetDirectionalDerivative(
+            c: fmi2Component,
+            _v_unknown_ref: *const fmi2ValueReference,
+            _n_unknown: usize,
+            _v_known_ref: *const fmi2ValueReference,
+            _n_known: usize,
+            _dv_known: *const fmi2Real,
+            _dv_unknown: *mut fmi2Real,
+        ) -> fmi2Status {
+            let what = "providesDirectionalDerivative";
+            unsafe { shell::not_offered::<$core>(c, "fmi2GetDirectionalDerivative", what) }
+        }
+
+        // Model Exchange (section 3.2): not offered
+
+        $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)]
+        pub unsafe extern "C" fn fmi2EnterEventMode(c: fmi2Component) -> fmi2Status {
+            unsafe { shell::model_exchange_only::<$core>(c, "fmi2EnterEventMode") }
+        }
+
+        $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)]
+        pub unsafe extern "C" fn fmi2NewDiscreteStates(
+            c: fmi2Component,
+            _event_info: *mut fmi2EventInfo,
+        ) -> fmi2Status {
+            unsafe { shell::model_exchange_only::<$core>(c, "fmi2NewDiscreteStates") }
+        }
+
+        $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)]
+        pub unsafe extern "C" fn fmi2EnterContinuousTimeMode(c: fmi2Component) -> fmi2Status {
+            unsafe { shell::model_exchange_only::<$core>(c, "fmi2EnterContinuousTimeMode") }
+        }
+
+        $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)]
+        pub unsafe extern "C" fn fmi2CompletedIntegratorStep(
+            c: fmi2Component,
+            _no_set_fmu_state_prior_to_current_point: fmi2Boolean,
+            _enter_event_mode: *mut fmi2Boolean,
+            _terminate_simulation: *mut fmi2Boolean,
+        ) -> fmi2Status {
+            unsafe { shell::model_exchange_only::<$core>(c, "fmi2CompletedIntegratorStep") }
+        }
+
+        $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)]
+        pub unsafe extern "C" fn fmi2SetTime(c: fmi2Component, _time: fmi2Real) -> fmi2Status {
+            unsafe { shell::model_exchange_only::<$core>(c, "fmi2SetTime") }
+        }
+
+        $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)]
+        pub unsafe extern "C" fn fmi2SetContinuousStates(
+            c: fmi2Component,
+            _x: *const fmi2Real,
+            _nx: usize,
+        ) -> fmi2Status {
+            unsafe { shell::model_exchange_only::<$core>(c, "fmi2SetContinuousStates") }
+        }
+
+        $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)]
+        pub unsafe extern "C" fn fmi2GetDerivatives(
+            c: fmi2Component,
+            _derivatives: *mut fmi2Real,
+            _nx: usize,
+        ) -> fmi2Status {
+            unsafe { shell::model_exchange_only::<$core>(c, "fmi2GetDerivatives") }
+        }
+
+        $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)]
+        pub unsafe extern "C" fn fmi2GetEventIndicators(
+            c: fmi2Component,
+            _event_indicators: *mut fmi2Real,
+            _ni: usize,
+        ) -> fmi2Status {
+            unsafe { shell::model_exchange_only::<$core>(c, "fmi2GetEventIndicators") }
+        }
+
+        $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)]
+        pub unsafe extern "C" fn fmi2GetContinuousStates(
+            c: fmi2Component,
+            _x: *mut fmi2Real,
+            _nx: usize,
+        ) -> fmi2Status {
+            unsafe { shell::model_exchange_only::<$core>(c, "fmi2GetContinuousStates") }
+        }
+
+        $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)]
+        pub unsafe extern "C" fn fmi2GetNominalsOfContinuousStates(
+            c: fmi2Component,
+            _x_nominal: *mut fmi2Real,
+            _nx: usize,
+        ) -> fmi2Status {
+            unsafe {
+                shell::model_exchange_only::<$core>(c, "fmi2GetNominalsOfContinuousStates")
+            }
+        }
+
+        // Co-Simulation (section 4.2)
+
+        $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)]
+        pub unsafe extern "C" fn fmi2SetRealInputDerivatives(
+            c: fmi2Component,
+            _vr: *const fmi2ValueReference,
+            _nvr: usize,
+            _order: *const fmi2Integer,
+            _value: *const fmi2Real,
+        ) -> fmi2Status {
+            let what = "canInterpolateInputs (input derivatives)";
+            unsafe { shell::not_offered::<$core>(c, "fmi2SetRealInputDerivatives", what) }
+        }
+
+        $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)]
+        pub unsafe extern "C" fn fmi2GetRealOutputDerivatives(
+            c: fmi2Component,
+            _vr: *const fmi2ValueReference,
+            _nvr: usize,
+            _order: *const fmi2Integer,
+            _value: *mut fmi2Real,
+        ) -> fmi2Status {
+            let what = "maxOutputDerivativeOrder > 0 (output derivatives)";
+            unsafe { shell::not_offered::<$core>(c, "fmi2GetRealOutputDerivatives", what) }
+        }
+
+        $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)]
+        pub unsafe extern "C" fn fmi2DoStep(
+            c: fmi2Component,
+            tc: fmi2Real,
+            h: fmi2Real,
+            no_set_prior: fmi2Boolean,
+        ) -> fmi2Status {
+            unsafe { shell::do_step::<$core>(c, tc, h, no_set_prior) }
+        }
+
+        $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)]
+        pub unsafe extern "C" fn fmi2CancelStep(c: fmi2Component) -> fmi2Status {
+            unsafe { shell::cancel_step::<$core>(c) }
+        }
+
+        $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)]
+        pub unsafe extern "C" fn fmi2GetStatus(
+            c: fmi2Component,
+            kind: fmi2StatusKind,
+            value: *mut fmi2Status,
+        ) -> fmi2Status {
+            unsafe { shell::get_valueless_status::<$core>(c, "fmi2GetStatus", kind, value.cast()) }
+        }
+
+        $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)]
+        pub unsafe extern "C" fn fmi2GetRealStatus(
+            c: fmi2Component,
+            kind: fmi2StatusKind,
+            value: *mut fmi2Real,
+        ) -> fmi2Status {
+            unsafe { shell::get_real_status::<$core>(c, kind, value) }
+        }
+
+        $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)]
+        pub unsafe extern "C" fn fmi2GetIntegerStatus(
+            c: fmi2Component,
+            kind: fmi2StatusKind,
+            value: *mut fmi2Integer,
+        ) -> fmi2Status {
+            unsafe {
+                shell::get_valueless_status::<$core>(c, "fmi2GetIntegerStatus", kind, value.cast())
+            }
+        }
+
+        $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)]
+        pub unsafe extern "C" fn fmi2GetBooleanStatus(
+            c: fmi2Component,
+            kind: fmi2StatusKind,
+            value: *mut fmi2Boolean,
+        ) -> fmi2Status {
+            unsafe { shell::get_boolean_status::<$core>(c, kind, value) }
+        }
+
+        $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)]
+        pub unsafe extern "C" fn fmi2GetStringStatus(
+            c: fmi2Component,
+            kind: fmi2StatusKind,
+            value: *mut fmi2String,
+        ) -> fmi2Status {
+            unsafe {
+                shell::get_valueless_status::<$core>(c, "fmi2GetStringStatus", kind, value.cast())
+            }
         }
     };
 }

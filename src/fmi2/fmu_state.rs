@@ -9,8 +9,8 @@
 
 use sha2::{Digest, Sha256};
 
-use super::core::FmuCore;
-use super::instance::{Experiment, Phase};
+use super::state_machine::{Experiment, Phase};
+use crate::fmi_common::model_api::FmuCore;
 
 const MAGIC: &[u8; 8] = b"FMI2RSST";
 const FORMAT_VERSION: u32 = 1;

@@ -1,6 +1,7 @@
-//! The generic FMU instance: the Co-Simulation state machine, argument checks and logging of
-//! FMI 2.0 (standard sections 2.1 and 4.2) around one [`FmuCore`], in safe Rust. The
-//! `extern "C"` layer in [`super::exports`] only converts pointers and catches panics.
+//! The generic FMU instance: the state transitions, argument checks and logging of FMI 2.0
+//! (standard sections 2.1 and 4.2) around one [`FmuCore`], in safe Rust; which call is allowed
+//! in which state is the table of [`super::state_machine`]. The `extern "C"` layer in
+//! [`super::exports`] only converts pointers and catches panics.
 //!
 //! Error policy: a call in a state where the table of section 4.2.4 does not allow it, or
 //! with invalid arguments, returns `fmi2Error` with a log message naming the function and
@@ -10,85 +11,21 @@
 //! state, where only `fmi2Reset`, `fmi2SetFMUstate`, `fmi2FreeInstance`, the getters (for
 //! debugging) and the FMU-state functions are allowed.
 
-use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 
-use super::core::FmuCore;
 use super::fmu_state::Snapshot;
 use super::logging::Logger;
 use super::model_description::{guid_for, log_categories};
+use super::state_machine::{self, Experiment, Mask, Phase, allowed, settable};
 use super::types::{
     FMI2_DO_STEP_STATUS, FMI2_LAST_SUCCESSFUL_TIME, FMI2_PENDING_STATUS, FMI2_TERMINATED,
     Fmi2Status, fmi2CallbackFunctions, fmi2StatusKind,
 };
 use super::uri::path_from_file_uri;
-use super::variables::{Causality, Initial, Variability, Variable, check_variable_table};
-
-/// The states of the Co-Simulation state machine (section 4.2.4) this FMU can be in.
-/// `stepInProgress` and `stepCanceled` are unreachable: `fmi2DoStep` is synchronous.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-#[repr(u8)]
-pub enum Phase {
-    Instantiated = 0,
-    InitializationMode = 1,
-    /// slaveInitialized / stepComplete
-    StepComplete = 2,
-    /// after `fmi2DoStep` returned `fmi2Discard`
-    StepFailed = 3,
-    Terminated = 4,
-    Error = 5,
-}
-
-impl Phase {
-    const ALL: [Phase; 6] = [
-        Phase::Instantiated,
-        Phase::InitializationMode,
-        Phase::StepComplete,
-        Phase::StepFailed,
-        Phase::Terminated,
-        Phase::Error,
-    ];
-
-    pub fn from_u8(b: u8) -> Option<Phase> {
-        Phase::ALL.get(usize::from(b)).copied()
-    }
-
-    /// The state's name in the standard.
-    pub fn name(self) -> &'static str {
-        match self {
-            Phase::Instantiated => "instantiated",
-            Phase::InitializationMode => "initializationMode",
-            Phase::StepComplete => "stepComplete",
-            Phase::StepFailed => "stepFailed",
-            Phase::Terminated => "terminated",
-            Phase::Error => "error",
-        }
-    }
-}
+use crate::fmi_common::model_api::FmuCore;
+use crate::fmi_common::variables::{Variable, check_variable_table};
 
 use Phase::*;
-
-/// States in which `fmi2Get{Real,Integer,Boolean,String}` are allowed (section 4.2.4; in
-/// stepFailed and error for debugging only).
-const GET_PHASES: &[Phase] = &[
-    InitializationMode,
-    StepComplete,
-    StepFailed,
-    Terminated,
-    Error,
-];
-/// States in which `fmi2Set{Real,...}` may be called at all; which variables depends on the state.
-const SET_PHASES: &[Phase] = &[Instantiated, InitializationMode, StepComplete];
-/// States in which `fmi2Get*Status` are allowed.
-const STATUS_PHASES: &[Phase] = &[StepComplete, StepFailed, Terminated];
-
-/// The experiment of `fmi2SetupExperiment` (section 2.1.6).
-#[derive(Debug, Clone, Copy, Default, PartialEq)]
-pub struct Experiment {
-    pub start_time: f64,
-    pub stop_time: Option<f64>,
-    pub tolerance: Option<f64>,
-}
 
 /// One FMU instance: the wrapper state around a core `M`.
 pub struct Instance<M: FmuCore> {
@@ -100,16 +37,14 @@ pub struct Instance<M: FmuCore> {
     phase: Phase,
     experiment: Option<Experiment>,
     core: M,
+    /// The core's variables, sorted by value reference for lookups.
     variables: Vec<Variable>,
-    /// value reference -> index into `variables`
-    index: HashMap<u32, usize>,
 }
 
-/// A fresh core with its variable table, index and GUID.
+/// A fresh core with its sorted variable table and GUID.
 struct Built<M> {
     core: M,
     variables: Vec<Variable>,
-    index: HashMap<u32, usize>,
     guid: String,
 }
 
@@ -118,17 +53,21 @@ fn build<M: FmuCore>(resource_dir: Option<&Path>) -> Result<Built<M>, String> {
     let variables = core.variables();
     check_variable_table(&variables).map_err(|e| format!("invalid variable table: {e}"))?;
     let guid = guid_for(&M::model_info(), &variables)?;
-    let index = variables
-        .iter()
-        .enumerate()
-        .map(|(i, v)| (v.value_reference, i))
-        .collect();
+    let mut variables = variables;
+    variables.sort_by_key(|v| v.value_reference);
     Ok(Built {
         core,
         variables,
-        index,
         guid,
     })
+}
+
+/// The variable with value reference `vr` in a table sorted by value reference.
+fn find(variables: &[Variable], vr: u32) -> Option<&Variable> {
+    let i = variables
+        .binary_search_by_key(&vr, |v| v.value_reference)
+        .ok()?;
+    Some(&variables[i])
 }
 
 /// The message of a caught panic.
@@ -206,7 +145,6 @@ impl<M: FmuCore> Instance<M> {
             experiment: None,
             core: built.core,
             variables: built.variables,
-            index: built.index,
         };
         instance.trace(|| {
             let resources = instance
@@ -237,18 +175,17 @@ impl<M: FmuCore> Instance<M> {
         }
     }
 
-    /// Checks the state table of section 4.2.4.
-    fn require(&self, func: &str, allowed: &[Phase]) -> Result<(), Fmi2Status> {
-        if allowed.contains(&self.phase) {
+    /// Checks the state table of section 4.2.4: `func` may be called in the states of `mask`.
+    fn require(&self, func: &str, mask: Mask) -> Result<(), Fmi2Status> {
+        if self.phase.is_in(mask) {
             return Ok(());
         }
-        let names: Vec<&str> = allowed.iter().map(|p| p.name()).collect();
         Err(self.error(
             func,
             format_args!(
                 "not allowed in state {} (allowed in: {})",
                 self.phase.name(),
-                names.join(", ")
+                state_machine::names(mask)
             ),
         ))
     }
@@ -305,7 +242,7 @@ impl<M: FmuCore> Instance<M> {
                 optional(stop_time)
             )
         });
-        if let Err(s) = self.require(F, &[Instantiated]) {
+        if let Err(s) = self.require(F, allowed::SETUP_EXPERIMENT) {
             return s;
         }
         if !start_time.is_finite() {
@@ -337,7 +274,7 @@ impl<M: FmuCore> Instance<M> {
     pub fn enter_initialization_mode(&mut self) -> Fmi2Status {
         const F: &str = "fmi2EnterInitializationMode";
         self.trace(|| F.into());
-        if let Err(s) = self.require(F, &[Instantiated]) {
+        if let Err(s) = self.require(F, allowed::ENTER_INITIALIZATION_MODE) {
             return s;
         }
         let Some(e) = self.experiment else {
@@ -362,7 +299,7 @@ impl<M: FmuCore> Instance<M> {
     pub fn exit_initialization_mode(&mut self) -> Fmi2Status {
         const F: &str = "fmi2ExitInitializationMode";
         self.trace(|| F.into());
-        if let Err(s) = self.require(F, &[InitializationMode]) {
+        if let Err(s) = self.require(F, allowed::EXIT_INITIALIZATION_MODE) {
             return s;
         }
         match self.core.exit_initialization() {
@@ -379,7 +316,7 @@ impl<M: FmuCore> Instance<M> {
     pub fn terminate(&mut self) -> Fmi2Status {
         const F: &str = "fmi2Terminate";
         self.trace(|| F.into());
-        if let Err(s) = self.require(F, &[StepComplete, StepFailed]) {
+        if let Err(s) = self.require(F, allowed::TERMINATE) {
             return s;
         }
         self.phase = Terminated;
@@ -410,34 +347,29 @@ impl<M: FmuCore> Instance<M> {
         }
         self.core = built.core;
         self.variables = built.variables;
-        self.index = built.index;
         self.experiment = None;
         self.phase = Instantiated;
         Fmi2Status::Ok
     }
 
-    /// The variable with value reference `vr`, or an error naming it.
-    fn variable(&self, func: &str, vr: u32) -> Result<&Variable, Fmi2Status> {
-        match self.index.get(&vr) {
-            Some(&i) => Ok(&self.variables[i]),
-            None => Err(self.error(func, format_args!("unknown value reference {vr}"))),
-        }
+    fn unknown_reference(&self, func: &str, vr: u32) -> Fmi2Status {
+        self.error(func, format_args!("unknown value reference {vr}"))
     }
 
     /// `fmi2GetReal` (section 2.1.7).
     pub fn get_real(&mut self, vrs: &[u32], values: &mut [f64]) -> Fmi2Status {
         const F: &str = "fmi2GetReal";
-        if let Err(s) = self.require(F, GET_PHASES) {
+        if let Err(s) = self.require(F, allowed::GET_VALUES) {
             return s;
         }
         for (&vr, value) in vrs.iter().zip(values.iter_mut()) {
-            let name = match self.variable(F, vr) {
-                Ok(v) => v.name.clone(),
-                Err(s) => return s,
+            let Some(v) = find(&self.variables, vr) else {
+                return self.unknown_reference(F, vr);
             };
             match self.core.get_real(vr) {
                 Ok(x) => *value = x,
                 Err(msg) => {
+                    let name = &v.name;
                     return self.error(F, format_args!("{name} (value reference {vr}): {msg}"));
                 }
             }
@@ -445,37 +377,18 @@ impl<M: FmuCore> Instance<M> {
         Fmi2Status::Ok
     }
 
-    /// Whether the state table of section 4.2.4 (footnotes on `fmi2SetReal`) lets `v` be set
-    /// in the current state.
-    fn settable(&self, v: &Variable) -> bool {
-        let input = v.causality == Causality::Input;
-        let initial = v.effective_initial();
-        v.variability != Variability::Constant
-            && match self.phase {
-                Instantiated => input || matches!(initial, Some(Initial::Exact | Initial::Approx)),
-                InitializationMode => input || initial == Some(Initial::Exact),
-                StepComplete => {
-                    input
-                        || (v.causality == Causality::Parameter
-                            && v.variability == Variability::Tunable)
-                }
-                _ => false,
-            }
-    }
-
     /// `fmi2SetReal` (section 2.1.7). All references are checked before any value is set;
     /// values are then set in order, and a value the core rejects stops there.
     pub fn set_real(&mut self, vrs: &[u32], values: &[f64]) -> Fmi2Status {
         const F: &str = "fmi2SetReal";
-        if let Err(s) = self.require(F, SET_PHASES) {
+        if let Err(s) = self.require(F, allowed::SET_VALUES) {
             return s;
         }
         for &vr in vrs {
-            let v = match self.variable(F, vr) {
-                Ok(v) => v,
-                Err(s) => return s,
+            let Some(v) = find(&self.variables, vr) else {
+                return self.unknown_reference(F, vr);
             };
-            if !self.settable(v) {
+            if !settable(self.phase, v) {
                 let initial = v.effective_initial().map_or("none", |i| i.as_str());
                 return self.error(
                     F,
@@ -490,7 +403,7 @@ impl<M: FmuCore> Instance<M> {
             }
         }
         for (&vr, &value) in vrs.iter().zip(values) {
-            let name = self.variables[self.index[&vr]].name.clone();
+            let name = &find(&self.variables, vr).expect("checked above").name;
             self.trace(|| format!("{F}: {name} = {value:?}"));
             if value.is_nan() {
                 return self.error(
@@ -517,7 +430,14 @@ impl<M: FmuCore> Instance<M> {
         setter: bool,
         vrs: &[u32],
     ) -> Fmi2Status {
-        if let Err(s) = self.require(func, if setter { SET_PHASES } else { GET_PHASES }) {
+        if let Err(s) = self.require(
+            func,
+            if setter {
+                allowed::SET_VALUES
+            } else {
+                allowed::GET_VALUES
+            },
+        ) {
             return s;
         }
         match vrs.first() {
@@ -534,7 +454,7 @@ impl<M: FmuCore> Instance<M> {
     pub fn do_step(&mut self, tc: f64, h: f64, no_set_fmu_state_prior: bool) -> Fmi2Status {
         const F: &str = "fmi2DoStep";
         self.trace(|| format!("{F}(currentCommunicationPoint={tc:?}, communicationStepSize={h:?}, noSetFMUStatePriorToCurrentPoint={no_set_fmu_state_prior})"));
-        if let Err(s) = self.require(F, &[StepComplete]) {
+        if let Err(s) = self.require(F, allowed::DO_STEP) {
             return s;
         }
         if !(h.is_finite() && h > 0.0) {
@@ -597,19 +517,20 @@ impl<M: FmuCore> Instance<M> {
         )
     }
 
-    /// `fmi2GetStatus` (section 4.2.3): only `fmi2DoStepStatus`, which needs a pending step.
-    pub fn get_status(&self, kind: fmi2StatusKind) -> Fmi2Status {
-        const F: &str = "fmi2GetStatus";
-        self.require(F, STATUS_PHASES)
+    /// `fmi2GetStatus`, `fmi2GetIntegerStatus` and `fmi2GetStringStatus` (`func`, section
+    /// 4.2.3): never a value, since their kinds need a pending step (`fmi2DoStepStatus`,
+    /// `fmi2PendingStatus`) and FMI 2.0 defines no Integer status.
+    pub fn get_valueless_status(&self, func: &str, kind: fmi2StatusKind) -> Fmi2Status {
+        self.require(func, allowed::GET_STATUS)
             .err()
-            .unwrap_or_else(|| self.unsupported_kind(F, kind))
+            .unwrap_or_else(|| self.unsupported_kind(func, kind))
     }
 
     /// `fmi2GetRealStatus` (section 4.2.3): `fmi2LastSuccessfulTime` is the core's time,
     /// since a failed step leaves the core at its start.
     pub fn get_real_status(&self, kind: fmi2StatusKind, value: &mut f64) -> Fmi2Status {
         const F: &str = "fmi2GetRealStatus";
-        if let Err(s) = self.require(F, STATUS_PHASES) {
+        if let Err(s) = self.require(F, allowed::GET_STATUS) {
             return s;
         }
         if kind != FMI2_LAST_SUCCESSFUL_TIME {
@@ -619,19 +540,11 @@ impl<M: FmuCore> Instance<M> {
         Fmi2Status::Ok
     }
 
-    /// `fmi2GetIntegerStatus` (section 4.2.3): FMI 2.0 defines no Integer status.
-    pub fn get_integer_status(&self, kind: fmi2StatusKind) -> Fmi2Status {
-        const F: &str = "fmi2GetIntegerStatus";
-        self.require(F, STATUS_PHASES)
-            .err()
-            .unwrap_or_else(|| self.unsupported_kind(F, kind))
-    }
-
     /// `fmi2GetBooleanStatus` (section 4.2.3): `fmi2Terminated` is always false — a
     /// discarded step can be retried from a restored state.
     pub fn get_boolean_status(&self, kind: fmi2StatusKind, value: &mut bool) -> Fmi2Status {
         const F: &str = "fmi2GetBooleanStatus";
-        if let Err(s) = self.require(F, STATUS_PHASES) {
+        if let Err(s) = self.require(F, allowed::GET_STATUS) {
             return s;
         }
         if kind != FMI2_TERMINATED {
@@ -639,14 +552,6 @@ impl<M: FmuCore> Instance<M> {
         }
         *value = false;
         Fmi2Status::Ok
-    }
-
-    /// `fmi2GetStringStatus` (section 4.2.3): only `fmi2PendingStatus`, which needs a pending step.
-    pub fn get_string_status(&self, kind: fmi2StatusKind) -> Fmi2Status {
-        const F: &str = "fmi2GetStringStatus";
-        self.require(F, STATUS_PHASES)
-            .err()
-            .unwrap_or_else(|| self.unsupported_kind(F, kind))
     }
 
     /// `fmi2GetFMUstate` (section 2.1.8): allowed in every state of this FMU.

@@ -9,8 +9,8 @@ use quick_xml::events::{BytesDecl, Event};
 use sha2::{Digest, Sha256};
 
 use super::logging::WRAPPER_CATEGORIES;
-use super::units::{self, BASE_UNIT_NAMES};
-use super::variables::{Causality, Initial, ModelInfo, Variable, check_variable_table};
+use crate::fmi_common::units::{self, BASE_UNIT_NAMES};
+use crate::fmi_common::variables::{Causality, Initial, ModelInfo, Variable, check_variable_table};
 
 /// The complete `modelDescription.xml`, with the GUID of [`guid_for`].
 pub fn model_description_xml(info: &ModelInfo, vars: &[Variable]) -> Result<String, String> {
@@ -258,9 +258,9 @@ fn write_variables(w: &mut Writer<Vec<u8>>, vars: &[Variable]) -> io::Result<()>
 /// `<ModelStructure>` (section 2.2.8), with 1-based ScalarVariable indices.
 ///
 /// * `<Outputs>`: every output, in index order, with `dependencies=""`: the core contract
-///   ([`crate::fmi2::core::FmuCore`]) is that outputs are functions of the internal state only,
-///   i.e. no direct feedthrough from inputs, and a Co-Simulation FMU without `<Derivatives>`
-///   exposes no states that could be listed.
+///   ([`crate::fmi_common::model_api::FmuCore`]) is that outputs are functions of the
+///   internal state only, i.e. no direct feedthrough from inputs, and a Co-Simulation FMU
+///   without `<Derivatives>` exposes no states that could be listed.
 /// * `<InitialUnknowns>`: exactly the list section 2.2.8 prescribes — outputs with initial
 ///   approx or calculated, and all calculated parameters (continuous-time states and their
 ///   derivatives would belong here too, but a Co-Simulation FMU without `<Derivatives>`

@@ -25,6 +25,44 @@ pub const Q2: usize = 4;
 /// States per actuator.
 pub const N: usize = 5;
 
+/// What the model says of one of its states: name (without the actuator's suffix), unit and
+/// meaning, for every table and output that names states.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct StateInfo {
+    pub name: &'static str,
+    pub unit: &'static str,
+    pub description: &'static str,
+}
+
+/// The five states of an actuator, in block order ([`THETA`] … [`Q2`]).
+pub const STATES: [StateInfo; N] = [
+    StateInfo {
+        name: "theta",
+        unit: "rad",
+        description: "Film rotation angle theta",
+    },
+    StateInfo {
+        name: "l_p",
+        unit: "m",
+        description: "Top film length l_p",
+    },
+    StateInfo {
+        name: "p",
+        unit: "kg.m/s",
+        description: "Angular momentum p = I dtheta/dt with the paper's I = Lv m/24 [kg.m]",
+    },
+    StateInfo {
+        name: "Q1",
+        unit: "C",
+        description: "Charge Q1 of the retention capacitor C1",
+    },
+    StateInfo {
+        name: "Q2",
+        unit: "C",
+        description: "Charge Q2 of the electrode capacitor C2",
+    },
+];
+
 /// One actuator's constants, derived once from the parameters.
 #[derive(Clone, Debug)]
 pub struct Actuator {

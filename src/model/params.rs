@@ -291,6 +291,11 @@ impl Params {
     /// by [`Params::validate`]).
     pub fn set(&mut self, name: &str, value: f64) -> Result<(), ParamError> {
         let d = parameter(name).ok_or_else(|| ParamError::Unknown { name: name.into() })?;
+        self.set_param(d, value)
+    }
+
+    /// [`Params::set`] for a row of the table already in hand (no lookup by name).
+    pub fn set_param(&mut self, d: &ParamDef, value: f64) -> Result<(), ParamError> {
         check(d, value)?;
         (d.set)(self, value);
         Ok(())

@@ -4,8 +4,8 @@
 
 use std::fmt;
 
-use super::actuator::{self, Actuator};
-use super::effects::terms::Terms;
+use super::actuator::{self, Actuator, StateInfo};
+use super::effects::terms::{Extra, Terms};
 use super::kinematics::Kinematics;
 use super::params::{ParamError, Params};
 use super::shell::DomainError;
@@ -40,6 +40,33 @@ pub struct Platform {
 
 /// Number of states of the paper's model.
 pub const N_STATES: usize = 3 * actuator::N;
+
+/// One state of an actuator's block, whichever effects are on.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum BlockState {
+    /// One of the paper's five, by its index in [`actuator::STATES`].
+    Paper(usize),
+    /// An effect's state, present while the effect is on.
+    Extra(Extra),
+}
+
+impl BlockState {
+    /// Name, unit and meaning (for an effect state: of its first stage).
+    pub fn info(self) -> StateInfo {
+        match self {
+            BlockState::Paper(k) => actuator::STATES[k],
+            BlockState::Extra(e) => e.info(),
+        }
+    }
+
+    /// Name without the actuator suffix.
+    pub fn name(self) -> String {
+        match self {
+            BlockState::Paper(k) => actuator::STATES[k].name.into(),
+            BlockState::Extra(e) => e.name(),
+        }
+    }
+}
 
 impl Platform {
     /// Validates the parameters and derives the constants.
@@ -76,15 +103,20 @@ impl Platform {
         [0, 1, 2].map(|i| &self.actuators[i])
     }
 
+    /// The states of each actuator's block, in block order: the paper's five, then the
+    /// effect states of this configuration.
+    pub fn block_states(&self) -> impl Iterator<Item = BlockState> + '_ {
+        (0..actuator::N)
+            .map(BlockState::Paper)
+            .chain(self.terms.extras.iter().map(|&e| BlockState::Extra(e)))
+    }
+
     /// Names of the states, `theta_1, l_p_1, p_1, Q1_1, Q2_1, <effect states>_1, theta_2, …`.
     pub fn state_names(&self) -> Vec<String> {
         (1..=3)
             .flat_map(|i| {
-                ["theta", "l_p", "p", "Q1", "Q2"]
-                    .map(String::from)
-                    .into_iter()
-                    .chain(self.terms.extras.iter().map(|e| e.name()))
-                    .map(move |s| format!("{s}_{i}"))
+                self.block_states()
+                    .map(move |s| format!("{}_{i}", s.name()))
             })
             .collect()
     }
@@ -92,6 +124,13 @@ impl Platform {
     /// Index of the state called `name` (see [`Platform::state_names`]).
     pub fn state_index(&self, name: &str) -> Option<usize> {
         self.state_names().iter().position(|n| n == name)
+    }
+
+    /// Index in x of actuator `i`'s (0-based) state `s`; `None` while `s` is the state of an
+    /// effect that is off. No allocation: for per-call lookups such as the FMU's.
+    pub fn state_position(&self, i: usize, s: BlockState) -> Option<usize> {
+        let k = self.block_states().position(|b| b == s)?;
+        Some(self.nb * i + k)
     }
 
     fn each<T>(

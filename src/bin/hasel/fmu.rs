@@ -2,7 +2,7 @@
 
 use std::path::PathBuf;
 
-use hasel_fmu::fmu_pack;
+use hasel_fmu::fmu::pack;
 use hasel_fmu::io::file::write_text_atomic;
 
 use crate::common::load_params;
@@ -39,18 +39,18 @@ pub fn run(a: Args) -> Result<(), Error> {
             .map_err(Error::CurrentExe)?
             .with_file_name("libhasel_fmu.so"),
     };
-    fmu_pack::pack(&lib, &params, &a.out)?;
+    pack::pack(&lib, &params, &a.out)?;
     say!(
         "wrote {} (GUID {}, library {})",
         a.out.display(),
-        fmu_pack::guid(&params),
+        pack::guid(&params),
         lib.display()
     );
     Ok(())
 }
 
 pub fn describe(a: DescribeArgs) -> Result<(), Error> {
-    let xml = fmu_pack::model_description(&load_params(&a.params)?);
+    let xml = pack::model_description(&load_params(&a.params)?);
     match a.out {
         Some(path) => Ok(write_text_atomic(&path, &xml)?),
         None => {

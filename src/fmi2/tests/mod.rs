@@ -13,10 +13,12 @@ use std::path::Path;
 use std::ptr::{null, null_mut};
 use std::sync::Mutex;
 
-use super::core::FmuCore;
 use super::model_description::guid_for;
 use super::types::*;
-use super::variables::{Causality, DefaultExperiment, Initial, ModelInfo, Variability, Variable};
+use crate::fmi_common::model_api::FmuCore;
+use crate::fmi_common::variables::{
+    Causality, DefaultExperiment, Initial, ModelInfo, Variability, Variable,
+};
 
 /// y' = (u - y) / tau, solved exactly over each step with u held.
 #[derive(Clone, Debug)]

@@ -5,8 +5,8 @@
 //! Each actuator's block of states is its five (θ, l_p, p, Q1, Q2) followed by the extra
 //! states of the active effects, in the order of [`Extra`]. Only `coupling` links the blocks.
 
-use super::{EffectParams, HysteresisLaw, PreloadLaw};
-use crate::model::actuator::{self, Actuator, P, Q1, Q2, THETA};
+use super::{Effect, EffectParams, HysteresisLaw, PreloadLaw};
+use crate::model::actuator::{self, Actuator, P, Q1, Q2, StateInfo, THETA};
 use crate::model::shell::DomainError;
 
 /// Width of the soft saturation's knee, as a fraction of U_max.
@@ -26,16 +26,52 @@ pub enum Extra {
 }
 
 impl Extra {
-    /// Name without the actuator suffix, as the FMU's variables use it.
-    pub fn name(self) -> String {
+    /// The first (or only) state of each effect that has states, in block order: the effect
+    /// states every configuration can name.
+    pub const FIRST_STAGES: [Extra; 4] = [
+        Extra::Q3(0),
+        Extra::Creep(0),
+        Extra::Hysteresis,
+        Extra::Amplifier(0),
+    ];
+
+    /// The effect that adds the state.
+    pub fn effect(self) -> Effect {
         match self {
-            Extra::Q3(0) => "Q3".into(),
-            Extra::Q3(k) => format!("Q3{}", k + 1),
-            Extra::Creep(0) => "z_v".into(),
-            Extra::Creep(k) => format!("z_v{}", k + 1),
-            Extra::Hysteresis => "z_h".into(),
-            Extra::Amplifier(0) => "U_amp".into(),
-            Extra::Amplifier(k) => format!("U_amp{}", k + 1),
+            Extra::Q3(_) => Effect::ChargeDrift,
+            Extra::Creep(_) => Effect::Creep,
+            Extra::Hysteresis => Effect::Hysteresis,
+            Extra::Amplifier(_) => Effect::AmplifierLag,
+        }
+    }
+
+    /// Name of the first stage, unit and meaning; every stage shares unit and meaning.
+    pub fn info(self) -> StateInfo {
+        let (name, unit, description) = match self {
+            Extra::Q3(_) => ("Q3", "C", "charge Q3 of the drift stage's capacitor C3"),
+            Extra::Creep(_) => (
+                "z_v",
+                "rad",
+                "internal angle z of the standard linear solid",
+            ),
+            Extra::Hysteresis => ("z_h", "rad", "Bouc-Wen state z_h"),
+            Extra::Amplifier(_) => ("U_amp", "V", "amplifier output voltage"),
+        };
+        StateInfo {
+            name,
+            unit,
+            description,
+        }
+    }
+
+    /// Name without the actuator suffix: the first stage's name, numbered from the second.
+    pub fn name(self) -> String {
+        let name = self.info().name;
+        match self {
+            Extra::Q3(k) | Extra::Creep(k) | Extra::Amplifier(k) if k > 0 => {
+                format!("{name}{}", k + 1)
+            }
+            _ => name.into(),
         }
     }
 }

@@ -1,4 +1,5 @@
 use super::*;
+use crate::model::platform::BlockState;
 use crate::model::platform::tests::assert_jacobian_matches;
 use crate::model::{Params, Platform};
 
@@ -146,5 +147,23 @@ fn effects_have_parameters_in_the_table() {
         }
         assert_eq!(Effect::from_name(e.name()), Some(e));
         assert!(!e.is_active(&EffectParams::default()));
+    }
+}
+
+#[test]
+fn state_positions_agree_with_the_names() {
+    for other in [false, true] {
+        let m = Platform::new(all_on(other)).unwrap();
+        for i in 0..3 {
+            for s in m.block_states() {
+                let name = format!("{}_{}", s.name(), i + 1);
+                assert_eq!(m.state_position(i, s), m.state_index(&name), "{name}");
+                assert!(name.starts_with(s.info().name), "{name}");
+            }
+        }
+    }
+    let paper = Platform::new(Params::default()).unwrap();
+    for e in terms::Extra::FIRST_STAGES {
+        assert_eq!(paper.state_position(0, BlockState::Extra(e)), None, "{e:?}");
     }
 }

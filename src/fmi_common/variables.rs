@@ -1,6 +1,6 @@
-//! The variable table and model information a core declares, and the FMI 2.0 rules on
-//! causality, variability, initial and start (FMI 2.0 standard, section 2.2.7).
-//! Every variable of this FMU is of type Real.
+//! The variable table and model information a core declares, and the rules on causality,
+//! variability, initial and start (FMI 2.0 standard, section 2.2.7). Every variable of this
+//! FMU is of type Real.
 
 use super::units;
 

@@ -1,6 +1,7 @@
-//! The interface between the generic FMI 2.0 wrapper and one model ("core"). The core knows
-//! nothing of FMI: no C types, no state machine, no logging. Errors are plain messages that
-//! the wrapper logs together with the function name.
+//! The interface between a generic FMI wrapper (the FMI 2.0 one: [`crate::fmi2`]) and one
+//! model ("core"). The core knows nothing of FMI: no C types, no state machine, no logging.
+//! Errors are plain messages that the wrapper logs together with the function name. The FMI
+//! functions named below are the FMI 2.0 ones the wrapper maps onto each method.
 
 use std::path::Path;
 

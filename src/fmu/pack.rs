@@ -1,13 +1,14 @@
 //! Packs the FMU archive: `modelDescription.xml`, `binaries/linux64/HaselPlatform.so`,
 //! `documentation/index.html` and `resources/parameters.toml`, all generated from the one
-//! variable table of [`crate::fmu_core`] and one parameter set.
+//! variable table of [`super::variables`] and one parameter set.
 
 use std::io::Write;
 use std::path::Path;
 
+use super::variables::variables;
+use super::{MODEL_IDENTIFIER, RESOURCE_PARAMS, model_info};
+use crate::fmi_common::variables::{Causality, Variable};
 use crate::fmi2::model_description::{guid_for, model_description_xml};
-use crate::fmi2::variables::{Causality, Variable};
-use crate::fmu_core::{MODEL_IDENTIFIER, RESOURCE_PARAMS, model_info, variables};
 use crate::io::file::{FileError, write_bytes_atomic};
 use crate::io::params_file;
 use crate::model::Params;
@@ -126,7 +127,7 @@ pub fn pack(library: &Path, params: &Params, out: &Path) -> Result<(), FileError
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::fmi2::variables::check_variable_table;
+    use crate::fmi_common::variables::check_variable_table;
 
     #[test]
     fn the_variable_table_follows_the_fmi_rules() {

@@ -1,0 +1,149 @@
+//! The Co-Simulation state machine of FMI 2.0 (standard section 4.2.4) as one table, laid out
+//! like the Modelica Reference FMUs' `MASK_fmi2…`: one bit per state ([`Phase::bit`]), and for
+//! each function the mask of the states it may be called in ([`allowed`]). The instance checks
+//! every call against it; which variables `fmi2SetReal` may set in a state is [`settable`].
+
+use crate::fmi_common::variables::{Causality, Initial, Variability, Variable};
+
+/// The states of the Co-Simulation state machine this FMU can be in.
+/// `stepInProgress` and `stepCanceled` are unreachable: `fmi2DoStep` is synchronous.
+/// The discriminant is the state's byte in a serialized FMU state.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[repr(u8)]
+pub enum Phase {
+    Instantiated = 0,
+    InitializationMode = 1,
+    /// slaveInitialized / stepComplete
+    StepComplete = 2,
+    /// after `fmi2DoStep` returned `fmi2Discard`
+    StepFailed = 3,
+    Terminated = 4,
+    Error = 5,
+}
+
+/// A set of states, one bit per [`Phase`].
+pub type Mask = u8;
+
+impl Phase {
+    const ALL: [Phase; 6] = [
+        Phase::Instantiated,
+        Phase::InitializationMode,
+        Phase::StepComplete,
+        Phase::StepFailed,
+        Phase::Terminated,
+        Phase::Error,
+    ];
+
+    pub fn from_u8(b: u8) -> Option<Phase> {
+        Phase::ALL.get(usize::from(b)).copied()
+    }
+
+    /// The state's name in the standard.
+    pub fn name(self) -> &'static str {
+        match self {
+            Phase::Instantiated => "instantiated",
+            Phase::InitializationMode => "initializationMode",
+            Phase::StepComplete => "stepComplete",
+            Phase::StepFailed => "stepFailed",
+            Phase::Terminated => "terminated",
+            Phase::Error => "error",
+        }
+    }
+
+    /// The state's bit in a [`Mask`].
+    pub const fn bit(self) -> Mask {
+        1 << self as u8
+    }
+
+    /// Whether the state is in `mask`.
+    pub fn is_in(self, mask: Mask) -> bool {
+        self.bit() & mask != 0
+    }
+}
+
+/// The names of the states in `mask`, in the order of the standard, for messages.
+pub fn names(mask: Mask) -> String {
+    let names: Vec<&str> = Phase::ALL
+        .iter()
+        .filter(|p| p.is_in(mask))
+        .map(|p| p.name())
+        .collect();
+    names.join(", ")
+}
+
+/// The states each function may be called in (section 4.2.4). Allowed in every state, and so
+/// not checked: `fmi2SetDebugLogging`, `fmi2Reset`, `fmi2FreeInstance` and the FMU-state
+/// functions (`fmi2GetFMUstate` … `fmi2DeSerializeFMUstate`). Functions this FMU does not
+/// offer (Model Exchange, derivatives) fail in every state.
+pub mod allowed {
+    use super::Mask;
+    use super::Phase::*;
+
+    const INSTANTIATED: Mask = Instantiated.bit();
+    const INITIALIZATION_MODE: Mask = InitializationMode.bit();
+    const STEP_COMPLETE: Mask = StepComplete.bit();
+    const STEP_FAILED: Mask = StepFailed.bit();
+    const TERMINATED: Mask = Terminated.bit();
+    const ERROR: Mask = Error.bit();
+
+    pub const SETUP_EXPERIMENT: Mask = INSTANTIATED;
+    pub const ENTER_INITIALIZATION_MODE: Mask = INSTANTIATED;
+    pub const EXIT_INITIALIZATION_MODE: Mask = INITIALIZATION_MODE;
+    pub const TERMINATE: Mask = STEP_COMPLETE | STEP_FAILED;
+    /// `fmi2Get{Real,Integer,Boolean,String}`; in stepFailed and error for debugging only.
+    pub const GET_VALUES: Mask =
+        INITIALIZATION_MODE | STEP_COMPLETE | STEP_FAILED | TERMINATED | ERROR;
+    /// `fmi2Set{Real,Integer,Boolean,String}`; which variables depends on the state
+    /// ([`settable`](super::settable)).
+    pub const SET_VALUES: Mask = INSTANTIATED | INITIALIZATION_MODE | STEP_COMPLETE;
+    pub const DO_STEP: Mask = STEP_COMPLETE;
+    /// `fmi2CancelStep`: only while a step is in progress, which never happens here.
+    pub const CANCEL_STEP: Mask = 0;
+    /// `fmi2Get{,Real,Integer,Boolean,String}Status`.
+    pub const GET_STATUS: Mask = STEP_COMPLETE | STEP_FAILED | TERMINATED;
+}
+
+/// Whether `fmi2SetReal` may set `v` in state `phase` (footnotes of the table in section 4.2.4).
+pub fn settable(phase: Phase, v: &Variable) -> bool {
+    let input = v.causality == Causality::Input;
+    let initial = v.effective_initial();
+    v.variability != Variability::Constant
+        && match phase {
+            Phase::Instantiated => {
+                input || matches!(initial, Some(Initial::Exact | Initial::Approx))
+            }
+            Phase::InitializationMode => input || initial == Some(Initial::Exact),
+            Phase::StepComplete => {
+                input
+                    || (v.causality == Causality::Parameter
+                        && v.variability == Variability::Tunable)
+            }
+            _ => false,
+        }
+}
+
+/// The experiment of `fmi2SetupExperiment` (section 2.1.6).
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct Experiment {
+    pub start_time: f64,
+    pub stop_time: Option<f64>,
+    pub tolerance: Option<f64>,
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn phases_round_trip_through_their_byte_and_bit() {
+        for (i, p) in Phase::ALL.into_iter().enumerate() {
+            assert_eq!(Phase::from_u8(p as u8), Some(p));
+            assert_eq!(p.bit(), 1 << i);
+        }
+        assert_eq!(Phase::from_u8(6), None);
+        assert_eq!(
+            names(allowed::TERMINATE | Phase::Instantiated.bit()),
+            "instantiated, stepComplete, stepFailed"
+        );
+    }
+}

@@ -1,0 +1,170 @@
+//! The FMU's variable table: one row per variable, its value reference being its index. The
+//! one source of truth for `modelDescription.xml`, `documentation/index.html` and what each
+//! value reference reads or sets ([`Slot`], resolved here once, so a get or set is an index
+//! and a match). State names, units and meanings come from the model.
+
+use std::sync::OnceLock;
+
+use crate::fmi_common::variables::{Causality, Initial, Variability, Variable};
+use crate::model::Params;
+use crate::model::actuator;
+use crate::model::effects::terms::Extra;
+use crate::model::params::{ParamDef, parameters};
+use crate::model::platform::BlockState;
+
+/// What a value reference stands for.
+#[derive(Clone, Copy)]
+pub enum Slot {
+    Input(usize),
+    Height(usize),
+    Tip(usize),
+    Param(&'static ParamDef),
+    Rtol,
+    /// A state of actuator `actuator` (0-based); an effect's state reads 0 while it is off.
+    State {
+        actuator: usize,
+        state: BlockState,
+    },
+    Energy,
+    SuppliedPower,
+    DissipatedPower,
+}
+
+/// One row of the variable table.
+pub struct Row {
+    pub name: String,
+    pub slot: Slot,
+    pub unit: &'static str,
+    pub description: String,
+}
+
+/// The states every actuator shows: the paper's five and the first state of each effect
+/// that has states (the effect's further stages are not variables).
+fn fmu_states() -> impl Iterator<Item = BlockState> {
+    (0..actuator::N)
+        .map(BlockState::Paper)
+        .chain(Extra::FIRST_STAGES.map(BlockState::Extra))
+}
+
+/// A state's description: the model's, with the effect and what it reads while off.
+fn state_description(state: BlockState, actuator: usize) -> String {
+    let info = state.info();
+    match state {
+        BlockState::Paper(_) => format!("{} of actuator {actuator}", info.description),
+        BlockState::Extra(e) => format!(
+            "{}: {} (0 while off) of actuator {actuator}",
+            e.effect().name(),
+            info.description
+        ),
+    }
+}
+
+/// The variable table, in value-reference order; built once.
+pub fn rows() -> &'static [Row] {
+    static ROWS: OnceLock<Vec<Row>> = OnceLock::new();
+    ROWS.get_or_init(|| {
+        let mut rows = Vec::new();
+        let mut add = |name: String, slot, unit, description: String| {
+            rows.push(Row {
+                name,
+                slot,
+                unit,
+                description,
+            })
+        };
+        for i in 0..3 {
+            let n = i + 1;
+            let desc = format!("Voltage command of actuator {n}, held over a communication step");
+            add(format!("U{n}"), Slot::Input(i), "V", desc);
+        }
+        for i in 0..3 {
+            let n = i + 1;
+            let desc = format!("Height of actuator {n}: h = 1/2 Lv sin(theta)");
+            add(format!("h{n}"), Slot::Height(i), "m", desc);
+        }
+        for (i, axis) in ["x", "y", "z"].iter().enumerate() {
+            let desc = format!("Antenna tip {axis} from the forward kinematics");
+            add(format!("tip_{axis}"), Slot::Tip(i), "m", desc);
+        }
+        for d in parameters() {
+            let desc = d.description.to_string();
+            add(d.name.to_string(), Slot::Param(d), d.unit, desc);
+        }
+        let desc = "Relative tolerance of the internal Radau IIA solver (a tolerance given to \
+                    fmi2SetupExperiment takes precedence)";
+        add("rtol".into(), Slot::Rtol, "1", desc.into());
+        for actuator in 0..3 {
+            for state in fmu_states() {
+                let name = format!("{}_{}", state.name(), actuator + 1);
+                let desc = state_description(state, actuator + 1);
+                add(
+                    name,
+                    Slot::State { actuator, state },
+                    state.info().unit,
+                    desc,
+                );
+            }
+        }
+        let desc = "Stored energy (Hamiltonian) of the three actuators";
+        add("H".into(), Slot::Energy, "J", desc.into());
+        let desc = "Power supplied through the electrical ports, sum of y_i U_i";
+        add("P_supplied".into(), Slot::SuppliedPower, "W", desc.into());
+        let desc = "Power dissipated in the resistors and the damping";
+        add(
+            "P_dissipated".into(),
+            Slot::DissipatedPower,
+            "W",
+            desc.into(),
+        );
+        rows
+    })
+}
+
+/// The FMI variables with the start values of `params` and `rtol`.
+pub fn variables(params: &Params, rtol: f64) -> Vec<Variable> {
+    rows()
+        .iter()
+        .enumerate()
+        .map(|(vr, row)| {
+            let (causality, variability, initial, start) = match row.slot {
+                Slot::Input(_) => (Causality::Input, Variability::Continuous, None, Some(0.0)),
+                Slot::Height(_) | Slot::Tip(_) => (
+                    Causality::Output,
+                    Variability::Continuous,
+                    Some(Initial::Calculated),
+                    None,
+                ),
+                Slot::Param(d) => (
+                    Causality::Parameter,
+                    Variability::Fixed,
+                    Some(Initial::Exact),
+                    Some((d.get)(params)),
+                ),
+                Slot::Rtol => (
+                    Causality::Parameter,
+                    Variability::Fixed,
+                    Some(Initial::Exact),
+                    Some(rtol),
+                ),
+                Slot::State { .. } | Slot::Energy | Slot::SuppliedPower | Slot::DissipatedPower => {
+                    (
+                        Causality::Local,
+                        Variability::Continuous,
+                        Some(Initial::Calculated),
+                        None,
+                    )
+                }
+            };
+            Variable {
+                name: row.name.clone(),
+                value_reference: vr as u32,
+                causality,
+                variability,
+                initial,
+                unit: Some(row.unit.to_string()),
+                description: row.description.clone(),
+                start,
+            }
+        })
+        .collect()
+}
