@@ -13,7 +13,7 @@ use crate::fmi_common::variables::{ModelInfo, Variable};
 use crate::io::params_file;
 use crate::model::params::{ParamDef, parameters};
 use crate::model::{Params, Platform};
-use crate::simulation::{DEFAULT_RTOL, Simulator, Snapshot};
+use crate::simulation::{DEFAULT_RTOL, Simulator, Snapshot, check_rtol};
 
 /// Reads the packed start values from `resources/parameters.toml`, if the FMU has one.
 pub fn resource_params(resource_dir: Option<&Path>) -> Result<Params, String> {
@@ -128,9 +128,7 @@ impl FmuCore for HaselCore {
             }
             Slot::Param(d) => self.params.set_param(d, value).map_err(|e| e.to_string())?,
             Slot::Rtol => {
-                if !(value.is_finite() && value > 0.0 && value < 0.1) {
-                    return Err(format!("rtol = {value}: must be in (0, 0.1)"));
-                }
+                check_rtol("rtol", value).map_err(|e| e.to_string())?;
                 self.rtol = value;
             }
             _ => {
@@ -149,10 +147,8 @@ impl FmuCore for HaselCore {
         _stop: Option<f64>,
         tolerance: Option<f64>,
     ) -> Result<(), String> {
-        if let Some(tol) = tolerance
-            && !(tol.is_finite() && tol > 0.0 && tol < 0.1)
-        {
-            return Err(format!("tolerance = {tol}: must be in (0, 0.1)"));
+        if let Some(tol) = tolerance {
+            check_rtol("tolerance", tol).map_err(|e| e.to_string())?;
         }
         self.t_start = start_time;
         self.tolerance = tolerance;

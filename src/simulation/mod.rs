@@ -19,12 +19,19 @@ pub const DEFAULT_RTOL: f64 = 1e-6;
 /// Runs that must resolve more than the default (finite differences in the identification,
 /// synthetic data) tighten rtol by a factor and pass it through here like any other.
 pub fn tolerances(rtol: f64, scales: &[f64]) -> Result<Tolerances, SimError> {
-    if !(rtol.is_finite() && rtol > 0.0 && rtol < 0.1) {
-        return Err(SimError::Setting(format!(
-            "relative tolerance rtol = {rtol:e}: must be in (0, 0.1)"
-        )));
-    }
+    check_rtol("relative tolerance rtol", rtol)?;
     Ok(Tolerances::scaled(rtol, scales))
+}
+
+/// Checks a relative tolerance against the rule above; the message names it as `what`.
+pub fn check_rtol(what: &str, rtol: f64) -> Result<(), SimError> {
+    if rtol.is_finite() && rtol > 0.0 && rtol < 0.1 {
+        Ok(())
+    } else {
+        Err(SimError::Setting(format!(
+            "{what} = {rtol:e}: must be in (0, 0.1)"
+        )))
+    }
 }
 
 /// Relative length under which the rest of a held step is not worth a segment of its own.
