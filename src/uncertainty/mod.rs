@@ -314,11 +314,14 @@ impl Posterior {
     }
 }
 
+/// A covariance as read: parameter names, per name drawn in `ln p`, the matrix.
+type Block = (Vec<String>, Vec<bool>, DMatrix<f64>);
+
 /// The `covariance` block: names, coordinates, and a symmetric matrix of finite numbers.
 fn read_covariance(
     c: &Value,
     fail: &dyn Fn(String) -> UncertaintyError,
-) -> Result<(Vec<String>, Vec<bool>, DMatrix<f64>), UncertaintyError> {
+) -> Result<Block, UncertaintyError> {
     let names: Vec<String> = c
         .get("parameters")
         .and_then(Value::as_array)
@@ -397,7 +400,7 @@ fn covariance_from_errors(
     json: &Value,
     estimated: &[String],
     fail: &dyn Fn(String) -> UncertaintyError,
-) -> Result<(Vec<String>, Vec<bool>, DMatrix<f64>), UncertaintyError> {
+) -> Result<Block, UncertaintyError> {
     let corr = json.get("correlation").ok_or_else(|| {
         fail("neither \"covariance\" nor \"correlation\": nothing to draw from".into())
     })?;
