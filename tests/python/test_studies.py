@@ -159,3 +159,13 @@ def test_a_bad_identification_file_is_named(tmp_path):
     bad.write_text("{}")
     with pytest.raises(ValueError, match='no "parameters" object'):
         hs.read_posterior(str(bad))
+
+
+def test_the_command_runs_on_an_existing_scheduler(fmu_path, client, tmp_path):
+    out = tmp_path / "remote"
+    result = hs.main(["grid", "--fmu", fmu_path, "--scheduler", client.scheduler.address, "--t-end", "0.2",
+                      "--param", "Kb_1=0.25,0.35", "--out", str(out)])
+    assert result.ok.all() and {d["pid"] for d in result.details}.isdisjoint({os.getpid()})
+    serial = hs.run_study(fmu_path, result.params, hs.sine(t_end=0.2, dt=1e-3), "serial")
+    assert same_bits(result.outputs, serial.outputs)
+    assert (out / "grid.png").exists()
