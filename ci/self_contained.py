@@ -41,9 +41,11 @@ def inside(repo, path):
 
 def findings(repo):
     me = os.path.relpath(os.path.realpath(__file__), os.path.realpath(repo))
+    # this file and its test name, on purpose, the patterns it looks for
+    own = {me, os.path.join("tests", "python", "test_self_contained.py")}
     for rel in tracked_files(repo):
-        if rel == me:
-            continue  # this file names the patterns it looks for
+        if rel in own:
+            continue
         path = os.path.join(repo, rel)
         try:
             with open(path, encoding="utf-8") as f:
