@@ -11,6 +11,7 @@ from a small synthetic identification: runs per second of
     python examples/studies/bench.py [--fmu fmu/HaselPlatform.fmu] [--hasel target/release/hasel]
 """
 import argparse
+import os
 import pathlib
 import subprocess
 import sys
@@ -45,7 +46,8 @@ def main():
     posterior = hs.read_posterior(str(identification))
     inputs = hs.sine(t_end=10.0, dt=1e-3)
     print(f"10 s of the paper's sine at 1 ms ({inputs.steps} steps), parameter sets drawn from a synthetic "
-          f"identification of {len(posterior.names)} parameters")
+          f"identification of {len(posterior.names)} parameters; {os.cpu_count()} cores, load average "
+          f"{os.getloadavg()[0]:.1f} (other processes share the cores)")
 
     def report(label, runs, seconds, extra=""):
         print(f"  {label:<52} {runs:>5} runs in {seconds:7.2f} s: {runs / seconds:7.2f} runs/s{extra}")
@@ -93,6 +95,7 @@ def main():
     finally:
         client.close()
         cluster.close()
+    print(f"  load average at the end: {os.getloadavg()[0]:.1f}")
 
 
 if __name__ == "__main__":
