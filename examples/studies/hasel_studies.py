@@ -485,6 +485,13 @@ def read_posterior(path: str) -> Posterior:
     for name, entry in params.items():
         v = entry.get("value") if isinstance(entry, dict) else None
         center[name] = math.inf if v is None else float(v)  # JSON writes infinity as null
+    try:
+        return _posterior(doc, params, center)
+    except (KeyError, TypeError, ValueError, IndexError) as e:
+        raise fail(f"not the identification.json of `hasel identify`: {type(e).__name__} {e}") from None
+
+
+def _posterior(doc: dict, params: dict, center: dict) -> Posterior:
     held = doc.get("held_combinations") or []
     if "covariance" in doc:
         c = doc["covariance"]
@@ -500,7 +507,7 @@ def read_posterior(path: str) -> Posterior:
         exact = False
     for n in names:
         if n not in center:
-            raise fail(f"covariance: {n} is not among the parameters")
+            raise ValueError(f"covariance: {n} is not among the parameters")
     mean = np.array([math.log(center[n]) if lg else center[n] for n, lg in zip(names, log)])
     lam, vec = np.linalg.eigh((cov + cov.T) / 2)
     keep = lam > 1e-12 * lam.max()

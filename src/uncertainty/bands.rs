@@ -64,14 +64,9 @@ fn one(
     s: &Settings,
     index: usize,
 ) -> (Vec<f64>, Result<Vec<[f64; 6]>, String>) {
-    let x = posterior.draw_coordinates(s.seed, index as u64);
-    let values: Vec<f64> = x
-        .iter()
-        .zip(&posterior.log)
-        .map(|(&xi, &l)| if l { xi.exp() } else { xi })
-        .collect();
+    let values = posterior.values_at(&posterior.draw_coordinates(s.seed, index as u64));
     let run = || -> Result<Vec<[f64; 6]>, String> {
-        let params = posterior.draw(s.seed, index as u64)?;
+        let params = posterior.params_at(&values)?;
         let model = Platform::new(params).map_err(|e| e.to_string())?;
         let mut sim = Simulator::new(model, 0.0, s.rtol).map_err(|e| e.to_string())?;
         let mut out = Vec::new();
@@ -81,7 +76,8 @@ fn one(
         .map_err(|e| e.to_string())?;
         Ok(out)
     };
-    (values, run())
+    let outcome = run();
+    (values, outcome)
 }
 
 /// Runs `settings.samples` draws of `posterior` through `input` on `settings.threads` threads,
@@ -231,7 +227,7 @@ impl Bands {
         for (k, values) in self.draws.iter().enumerate() {
             let mut p = posterior.center.clone();
             for (name, v) in posterior.names.iter().zip(values) {
-                // a draw that violates a parameter's rule is among the failed ones
+                // a value a parameter's rule refuses stays at the center: its sample failed
                 let _ = p.set(name, *v);
             }
             let failed = self.failed.iter().any(|(i, _)| *i == k);

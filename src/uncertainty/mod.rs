@@ -303,11 +303,22 @@ impl Posterior {
 
     /// Sample `index` of the study seeded `seed`: every parameter, the estimated ones drawn.
     pub fn draw(&self, seed: u64, index: u64) -> Result<Params, String> {
-        let x = self.draw_coordinates(seed, index);
+        self.params_at(&self.values_at(&self.draw_coordinates(seed, index)))
+    }
+
+    /// The estimated parameters' values at fit coordinates `x`.
+    pub fn values_at(&self, x: &[f64]) -> Vec<f64> {
+        x.iter()
+            .zip(&self.log)
+            .map(|(&xi, &l)| if l { xi.exp() } else { xi })
+            .collect()
+    }
+
+    /// Every parameter, the estimated ones at `values` (checked).
+    pub fn params_at(&self, values: &[f64]) -> Result<Params, String> {
         let mut p = self.center.clone();
-        for ((name, &l), xi) in self.names.iter().zip(&self.log).zip(x) {
-            p.set(name, if l { xi.exp() } else { xi })
-                .map_err(|e| e.to_string())?;
+        for (name, &v) in self.names.iter().zip(values) {
+            p.set(name, v).map_err(|e| e.to_string())?;
         }
         p.validate().map_err(|e| e.to_string())?;
         Ok(p)
