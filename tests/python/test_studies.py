@@ -159,6 +159,9 @@ def test_a_bad_identification_file_is_named(tmp_path):
     bad.write_text("{}")
     with pytest.raises(ValueError, match='no "parameters" object'):
         hs.read_posterior(str(bad))
+    bad.write_text('{"parameters": {"Kb_1": {"value": 0.3}}, "covariance": {"parameters": ["Kb_1"]}}')
+    with pytest.raises(ValueError, match=f"{bad}: not the identification.json"):
+        hs.read_posterior(str(bad))
 
 
 def test_the_command_runs_on_an_existing_scheduler(fmu_path, client, tmp_path):
@@ -169,6 +172,3 @@ def test_the_command_runs_on_an_existing_scheduler(fmu_path, client, tmp_path):
     serial = hs.run_study(fmu_path, result.params, hs.sine(t_end=0.2, dt=1e-3), "serial")
     assert same_bits(result.outputs, serial.outputs)
     assert (out / "grid.png").exists()
-    bad.write_text('{"parameters": {"Kb_1": {"value": 0.3}}, "covariance": {"parameters": ["Kb_1"]}}')
-    with pytest.raises(ValueError, match=f"{bad}: not the identification.json"):
-        hs.read_posterior(str(bad))
