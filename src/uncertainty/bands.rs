@@ -19,6 +19,9 @@ pub const LOWER: f64 = 0.025;
 pub const MEDIAN: f64 = 0.5;
 pub const UPPER: f64 = 0.975;
 
+/// The most memory the kept outputs of a study may take [bytes].
+const MAX_BYTES: f64 = 8e9;
+
 /// How a study runs.
 #[derive(Clone, Debug)]
 pub struct Settings {
@@ -109,8 +112,20 @@ pub fn run(
             s.dt
         )));
     }
+    // every sample's outputs are kept for the quantiles: refuse what memory cannot hold
+    let times = (s.t_end / s.dt * (1.0 + 1e-12)).floor() + 1.0;
+    let bytes = times * s.samples as f64 * (OUTPUTS.len() * 8) as f64;
+    if bytes > MAX_BYTES {
+        return Err(UncertaintyError::Setting(format!(
+            "{} samples of {times} output times would keep {:.1} GB of outputs (at most {:.0} GB): \
+             fewer samples, a shorter --t-end or a coarser --dt",
+            s.samples,
+            bytes / 1e9,
+            MAX_BYTES / 1e9
+        )));
+    }
     // the time grid and inputs, as every sample's run has them
-    let last = (s.t_end / s.dt * (1.0 + 1e-12)).floor() as usize;
+    let last = times as usize - 1;
     let t: Vec<f64> = (0..=last).map(|k| (k as f64 * s.dt).min(s.t_end)).collect();
     let u: Vec<[f64; 3]> = t.iter().map(|&ti| input.value(ti)).collect();
 

@@ -199,4 +199,15 @@ fn bands_do_not_depend_on_the_number_of_threads() {
     )
     .unwrap_err();
     assert!(matches!(e, UncertaintyError::Setting(_)));
+    let e = bands::run(
+        &p,
+        &input,
+        &Settings {
+            dt: 1e-12,
+            ..settings(1)
+        },
+        &|| {},
+    )
+    .unwrap_err();
+    assert!(e.to_string().contains("GB of outputs"), "{e}");
 }
