@@ -38,6 +38,7 @@ its parameters and the FMU's message; the other runs complete.
 from __future__ import annotations
 
 import argparse
+import atexit
 import ctypes
 import hashlib
 import itertools
@@ -45,6 +46,7 @@ import json
 import math
 import os
 import pathlib
+import shutil
 import sys
 import tempfile
 import threading
@@ -188,6 +190,7 @@ class _Unit:
         from fmpy import extract, read_model_description
 
         self.dir = tempfile.mkdtemp(prefix="hasel_study_")
+        atexit.register(shutil.rmtree, self.dir, True)  # when the worker process ends
         source = ref.path
         if data is not None or not os.path.exists(source):
             if data is None:
@@ -302,10 +305,18 @@ def run_batch(ref: FmuRef, batch: list, inputs: Inputs, data: bytes | None = Non
 def run_serial(path: str, params_list: list[dict], inputs: Inputs) -> list[dict]:
     """The reference: a plain loop, a new instance for every run, nothing reused but the file."""
     from fmpy import extract, read_model_description
-    from fmpy.fmi2 import FMU2Slave
 
     md = read_model_description(path)
     unzipdir = extract(path)
+    try:
+        return _serial_loop(md, unzipdir, params_list, inputs)
+    finally:
+        shutil.rmtree(unzipdir, ignore_errors=True)
+
+
+def _serial_loop(md, unzipdir, params_list, inputs):
+    from fmpy.fmi2 import FMU2Slave
+
     vr = {v.name: v.valueReference for v in md.modelVariables}
     names = {v.name for v in md.modelVariables if v.causality == "parameter"}
     results = []
