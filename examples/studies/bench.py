@@ -80,18 +80,29 @@ def main():
         assert r.ok.all()
         report("FMU, fmpy, LocalCluster of 2 workers, 1 run per task", a.cluster_runs, r.seconds)
         per_run = np.mean([d["seconds"] for d in r.details])
-        print(f"  time of one run inside a worker: {per_run * 1e3:.0f} ms")
+        cpu_run = np.mean([d["cpu"] for d in r.details])
+        print(f"  one run inside a worker: {per_run * 1e3:.0f} ms wall, {cpu_run * 1e3:.0f} ms CPU")
 
+        def cpu_of(times):
+            return times.user + times.system
+
+        here, workers = cpu_of(os.times()), client.run(os.times)
         started = time.perf_counter()
         client.gather(client.map(noop, range(a.noop_tasks), pure=False))
         seconds = time.perf_counter() - started
+        here = cpu_of(os.times()) - here
+        worker_cpu = sum(cpu_of(os.times_result(t)) - cpu_of(os.times_result(workers[w]))
+                         for w, t in client.run(os.times).items())
         print(f"  per-task overhead of the cluster: {a.noop_tasks} tasks that do nothing in {seconds:.2f} s: "
-              f"{seconds / a.noop_tasks * 1e3:.2f} ms per task ({a.noop_tasks / seconds:.0f} tasks/s)")
+              f"{seconds / a.noop_tasks * 1e3:.2f} ms per task ({a.noop_tasks / seconds:.0f} tasks/s); CPU per task "
+              f"{here / a.noop_tasks * 1e3:.2f} ms in the client and scheduler, "
+              f"{worker_cpu / a.noop_tasks * 1e3:.2f} ms in the workers")
         empty = hs.sine(t_end=1e-3, dt=1e-3)
         r = hs.run_study(a.fmu, sets[:40], empty, "dask", client)
         per_run = np.mean([d["seconds"] for d in r.details])
+        cpu_run = np.mean([d["cpu"] for d in r.details])
         print(f"  per-run overhead in a worker (reset, parameters, initialisation, one step, terminate): "
-              f"{per_run * 1e3:.2f} ms")
+              f"{per_run * 1e3:.2f} ms wall, {cpu_run * 1e3:.2f} ms CPU")
     finally:
         client.close()
         cluster.close()

@@ -281,7 +281,7 @@ def run_batch(ref: FmuRef, batch: list, inputs: Inputs, data: bytes | None = Non
     for index, params in batch:
         inst = unit.acquire()
         inst.messages.clear()
-        started = time.perf_counter()
+        started, cpu = time.perf_counter(), time.thread_time()
         try:
             if inst.runs:
                 inst.fmu.reset()  # fmi2Reset: back to the start values, not a reload
@@ -297,7 +297,8 @@ def run_batch(ref: FmuRef, batch: list, inputs: Inputs, data: bytes | None = Non
             continue
         unit.release(inst)
         results.append({"index": index, "params": params, "ok": True, "error": "", "outputs": out,
-                        "seconds": time.perf_counter() - started, "pid": os.getpid(),
+                        "seconds": time.perf_counter() - started, "cpu": time.thread_time() - cpu,
+                        "pid": os.getpid(),
                         "instance": inst.number, "extractions": EXTRACTIONS["count"]})
     return results
 
