@@ -428,10 +428,12 @@ def run_study(fmu_path: str, params_list: list[dict], inputs: Inputs, backend: s
         if client is None:
             raise ValueError("backend 'dask' needs a client")
         batches = [pairs[i:i + batch] for i in range(0, len(pairs), max(1, batch))]
-        # the inputs and the FMU's bytes travel once to every worker, not with every task
-        shared_inputs = client.scatter(inputs, broadcast=True)
+        # the inputs and the FMU's bytes travel once to every worker, not with every task; under
+        # keys of their own (hash=False): a content key would be shared with an earlier study's
+        # data, which the scheduler may be releasing just then
+        shared_inputs = client.scatter(inputs, broadcast=True, hash=False)
         data = pathlib.Path(fmu_path).read_bytes()
-        shared_data = client.scatter(data, broadcast=True)
+        shared_data = client.scatter(data, broadcast=True, hash=False)
         futures = [client.submit(run_batch, ref, b, shared_inputs, shared_data, pure=False) for b in batches]
         if progress if progress is not None else (sys.stderr.isatty() and len(futures) > 1):
             from distributed import progress as show

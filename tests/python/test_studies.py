@@ -172,3 +172,12 @@ def test_the_command_runs_on_an_existing_scheduler(fmu_path, client, tmp_path):
     serial = hs.run_study(fmu_path, result.params, hs.sine(t_end=0.2, dt=1e-3), "serial")
     assert same_bits(result.outputs, serial.outputs)
     assert (out / "grid.png").exists()
+
+
+def test_studies_in_a_row_on_one_client(fmu_path, client):
+    # each study scatters the FMU and the inputs anew while the previous one's are released
+    sets = [{"Kb_1": 0.3}, {"Kb_1": 0.31}]
+    first = hs.run_study(fmu_path, sets, INPUTS, "dask", client)
+    for _ in range(5):
+        again = hs.run_study(fmu_path, sets, INPUTS, "dask", client)
+        assert again.ok.all() and same_bits(again.outputs, first.outputs)
