@@ -13,6 +13,7 @@ from a small synthetic identification: runs per second of
 import argparse
 import os
 import pathlib
+import resource
 import subprocess
 import sys
 import tempfile
@@ -61,12 +62,14 @@ def main():
     report("FMU, fmpy, one process, instance reused (fmi2Reset)", a.serial_runs, r.seconds)
 
     for threads in (1, 2):
-        started = time.perf_counter()
-        out = subprocess.run([a.hasel, "simulate", "--samples", str(a.rust_runs), "--uncertainty", str(identification),
-                              "--threads", str(threads), "--t-end", "10"], check=True, capture_output=True, text=True)
+        started, cpu = time.perf_counter(), resource.getrusage(resource.RUSAGE_CHILDREN)
+        subprocess.run([a.hasel, "simulate", "--samples", str(a.rust_runs), "--uncertainty", str(identification),
+                        "--threads", str(threads), "--t-end", "10"], check=True, capture_output=True, text=True)
         seconds = time.perf_counter() - started
+        after = resource.getrusage(resource.RUSAGE_CHILDREN)
+        cpu = (after.ru_utime + after.ru_stime - cpu.ru_utime - cpu.ru_stime) / a.rust_runs
         report(f"hasel simulate --samples (Rust, no FMU), {threads} thread{'s' if threads > 1 else ''}",
-               a.rust_runs, seconds, " (process included)")
+               a.rust_runs, seconds, f" ({cpu * 1e3:.1f} ms CPU per run, process included)")
 
     from distributed import Client, LocalCluster
 
