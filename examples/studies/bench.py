@@ -54,12 +54,16 @@ def main():
         print(f"  {label:<52} {runs:>5} runs in {seconds:7.2f} s: {runs / seconds:7.2f} runs/s{extra}")
 
     sets = posterior.draw(max(a.serial_runs, a.cluster_runs), seed=1)
+    cpu = time.process_time()
     r = hs.run_study(a.fmu, sets[:a.serial_runs], inputs, "serial")
+    cpu = (time.process_time() - cpu) / a.serial_runs
     assert r.ok.all()
-    report("FMU, fmpy, serial loop (new instance per run)", a.serial_runs, r.seconds)
+    report("FMU, fmpy, serial loop (new instance per run)", a.serial_runs, r.seconds, f" ({cpu * 1e3:.0f} ms CPU per run)")
     hs.run_study(a.fmu, sets[:1], inputs, "local")  # unpack once, as a worker does
+    cpu = time.process_time()
     r = hs.run_study(a.fmu, sets[:a.serial_runs], inputs, "local")
-    report("FMU, fmpy, one process, instance reused (fmi2Reset)", a.serial_runs, r.seconds)
+    cpu = (time.process_time() - cpu) / a.serial_runs
+    report("FMU, fmpy, one process, instance reused (fmi2Reset)", a.serial_runs, r.seconds, f" ({cpu * 1e3:.0f} ms CPU per run)")
 
     for threads in (1, 2):
         started, cpu = time.perf_counter(), resource.getrusage(resource.RUSAGE_CHILDREN)
