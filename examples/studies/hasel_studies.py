@@ -583,8 +583,8 @@ def plot_bands(result: StudyResult, path: pathlib.Path, data: dict | None = None
             bottom.plot(data["t"], (data[o] - med[k]) * um, ".", ms=2, color="0.3", label="measured - median")
         top.set(title=f"{o}: median and 95 % band", xlabel="t [s]", ylabel=f"{o} [um]")
         bottom.set(title=f"{o} less the median", xlabel="t [s]", ylabel=f"{o} - median [um]")
-        top.legend(fontsize=7)
-        bottom.legend(fontsize=7)
+        top.legend(fontsize=7, loc="upper right")
+        bottom.legend(fontsize=7, loc="upper right")
     if title:
         fig.suptitle(title)
     fig.tight_layout()
@@ -609,7 +609,7 @@ def plot_grid(result: StudyResult, axes_values: dict[str, list], path: pathlib.P
                 ax.plot(result.t, result.outputs[i, :, j] * um, lw=0.8, label=label)
         ax.set(title=f"h{j + 1}, every run", xlabel="t [s]", ylabel=f"h{j + 1} [um]")
         if len(result.params) <= 12:
-            ax.legend(fontsize=6)
+            ax.legend(fontsize=6, loc="upper right")
         if two:
             a, b = axes_values[names[0]], axes_values[names[1]]
             stroke = np.full((len(a), len(b)), np.nan)
