@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
-# Benchmarks that print their figures: the solver (hasel bench), and the packed FMU through a
-# Rust importer (the fmi crate) and through fmpy.
+# Benchmarks that print their figures: the solver (hasel bench), the packed FMU through a
+# Rust importer (the fmi crate) and through fmpy, and uncertainty studies (examples/studies/bench.py).
 source "$(dirname "${BASH_SOURCE[0]}")/lib.sh"
 ensure_apt
 build_fmu
@@ -12,3 +12,5 @@ step "FMU through the Rust fmi crate"
 cargo run -q --release --example bench_fmu -- fmu/HaselPlatform.fmu
 step "FMU through fmpy (Python's per-call overhead dominates)"
 python ci/demo.py --fmu fmu/HaselPlatform.fmu --out out/fmu_demo.png
+step "uncertainty studies: serial, hasel simulate --samples, LocalCluster of 2 workers, per-task overhead"
+python examples/studies/bench.py --fmu fmu/HaselPlatform.fmu --hasel target/release/hasel

@@ -11,3 +11,4 @@ pub mod model;
 pub mod plot;
 pub mod simulation;
 pub mod solver;
+pub mod uncertainty;

@@ -28,6 +28,15 @@ pub struct Panel {
     pub equal_axes: bool,
 }
 
+/// A shaded band between two curves on the same abscissae (an uncertainty band).
+pub struct Band {
+    pub label: String,
+    /// (x, lower, upper) per point.
+    pub points: Vec<(f64, f64, f64)>,
+    /// Index into the palette.
+    pub color: usize,
+}
+
 const PALETTE: [RGBColor; 6] = [
     RGBColor(214, 39, 40),
     RGBColor(31, 119, 180),
@@ -49,18 +58,24 @@ fn register_font() {
     });
 }
 
-fn bounds(panel: &Panel) -> ((f64, f64), (f64, f64)) {
+fn bounds(panel: &Panel, bands: &[Band]) -> ((f64, f64), (f64, f64)) {
     let (mut x0, mut x1, mut y0, mut y1) = (
         f64::INFINITY,
         f64::NEG_INFINITY,
         f64::INFINITY,
         f64::NEG_INFINITY,
     );
-    for s in &panel.series {
-        for &(x, y) in &s.points {
-            if x.is_finite() && y.is_finite() {
-                (x0, x1, y0, y1) = (x0.min(x), x1.max(x), y0.min(y), y1.max(y));
-            }
+    let band_points = bands
+        .iter()
+        .flat_map(|b| b.points.iter().flat_map(|&(x, lo, hi)| [(x, lo), (x, hi)]));
+    for (x, y) in panel
+        .series
+        .iter()
+        .flat_map(|s| s.points.iter().copied())
+        .chain(band_points)
+    {
+        if x.is_finite() && y.is_finite() {
+            (x0, x1, y0, y1) = (x0.min(x), x1.max(x), y0.min(y), y1.max(y));
         }
     }
     if !x0.is_finite() {
@@ -85,6 +100,18 @@ pub fn draw(
     path: &Path,
     panels: &[Panel],
     columns: usize,
+    size: (u32, u32),
+) -> Result<(), FileError> {
+    draw_with_bands(path, panels, &[], columns, size)
+}
+
+/// [`draw`] with shaded bands under the curves: `bands[i]` belongs to `panels[i]` (missing
+/// entries: none).
+pub fn draw_with_bands(
+    path: &Path,
+    panels: &[Panel],
+    bands: &[Vec<Band>],
+    columns: usize,
     (width, height): (u32, u32),
 ) -> Result<(), FileError> {
     register_font();
@@ -95,8 +122,9 @@ pub fn draw(
         root.fill(&WHITE).map_err(|e| fail(e.to_string()))?;
         let rows = panels.len().div_ceil(columns);
         let areas = root.split_evenly((rows, columns));
-        for (panel, area) in panels.iter().zip(areas.iter()) {
-            let ((x0, x1), (y0, y1)) = bounds(panel);
+        for (k, (panel, area)) in panels.iter().zip(areas.iter()).enumerate() {
+            let panel_bands = bands.get(k).map_or(&[][..], |b| b.as_slice());
+            let ((x0, x1), (y0, y1)) = bounds(panel, panel_bands);
             let mut chart = ChartBuilder::on(area)
                 .caption(&panel.title, ("sans-serif", 20))
                 .margin(12)
@@ -113,6 +141,35 @@ pub fn draw(
                 .light_line_style(RGBColor(235, 235, 235))
                 .draw()
                 .map_err(|e| fail(e.to_string()))?;
+            for b in panel_bands {
+                let color = PALETTE[b.color % PALETTE.len()];
+                let finite = |&&(x, lo, hi): &&(f64, f64, f64)| {
+                    x.is_finite() && lo.is_finite() && hi.is_finite()
+                };
+                let outline: Vec<(f64, f64)> = b
+                    .points
+                    .iter()
+                    .filter(finite)
+                    .map(|&(x, _, hi)| (x, hi))
+                    .chain(
+                        b.points
+                            .iter()
+                            .rev()
+                            .filter(finite)
+                            .map(|&(x, lo, _)| (x, lo)),
+                    )
+                    .collect();
+                chart
+                    .draw_series(std::iter::once(Polygon::new(
+                        outline,
+                        color.mix(0.25).filled(),
+                    )))
+                    .map_err(|e| fail(e.to_string()))?
+                    .label(b.label.as_str())
+                    .legend(move |(x, y)| {
+                        Rectangle::new([(x, y - 5), (x + 18, y + 5)], color.mix(0.25).filled())
+                    });
+            }
             for s in &panel.series {
                 let color = PALETTE[s.color % PALETTE.len()];
                 let pts = s

@@ -22,6 +22,10 @@ const ROOMS: &[(&str, &[&str])] = &[
         "diagnose",
         &["identify", "io", "model", "plot", "simulation"],
     ),
+    (
+        "uncertainty",
+        &["identify", "io", "model", "plot", "simulation"],
+    ),
 ];
 
 fn src() -> PathBuf {

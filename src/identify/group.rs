@@ -11,14 +11,14 @@ use crate::model::params::{ParamDef, Rule};
 
 /// How a parameter is moved by the optimiser: in log space when it must be positive.
 #[derive(Clone, Copy)]
-struct Coordinate {
+pub(super) struct Coordinate {
     def: &'static ParamDef,
-    log: bool,
-    scale: f64,
+    pub(super) log: bool,
+    pub(super) scale: f64,
 }
 
 impl Coordinate {
-    fn new(def: &'static ParamDef, prior: f64) -> Coordinate {
+    pub(super) fn new(def: &'static ParamDef, prior: f64) -> Coordinate {
         Coordinate {
             def,
             log: def.rule != Rule::Finite && prior > 0.0,

@@ -86,6 +86,17 @@ pub struct ExperimentFit {
     pub fits: Vec<(String, f64)>,
 }
 
+/// The covariance of the estimates in the coordinates the fit moved them in: `ln p` for a
+/// parameter that must be positive, `p` itself otherwise (the fit's `p/|prior|`, scaled back).
+/// Block-diagonal over separately fitted groups; singular along held combinations.
+#[derive(Clone, Debug)]
+pub struct Covariance {
+    pub names: Vec<String>,
+    /// Per parameter: true for `ln p`, false for `p`.
+    pub log: Vec<bool>,
+    pub matrix: DMatrix<f64>,
+}
+
 /// The outcome of an identification.
 #[derive(Clone, Debug)]
 pub struct Identification {
@@ -98,6 +109,8 @@ pub struct Identification {
     pub held_combinations: Vec<Vec<(String, f64)>>,
     /// Correlation of the estimated parameters (names, matrix).
     pub correlation: (Vec<String>, DMatrix<f64>),
+    /// Covariance of the estimated parameters, in the fit's coordinates.
+    pub covariance: Covariance,
     pub estimation: Vec<ExperimentFit>,
     pub validation: Vec<ExperimentFit>,
     /// Fits of the starting parameters on the estimation data, for comparison.
@@ -200,13 +213,30 @@ pub fn identify(
     // correlation over all estimated parameters (zero between separately fitted groups)
     let names: Vec<String> = blocks.iter().flat_map(|(n, _)| n.clone()).collect();
     let mut corr = DMatrix::zeros(names.len(), names.len());
+    let mut covariance = Covariance {
+        names: names.clone(),
+        log: Vec::with_capacity(names.len()),
+        matrix: DMatrix::zeros(names.len(), names.len()),
+    };
     let mut o = 0;
     for (n, cov) in &blocks {
+        // the fit's coordinate of each parameter: ln p, or p/|prior| (scaled back to p here)
+        let coords: Vec<group::Coordinate> = n
+            .iter()
+            .map(|name| {
+                let d = parameter(name).expect("a fitted parameter is in the table");
+                group::Coordinate::new(d, (d.get)(start))
+            })
+            .collect();
+        let unit = |c: &group::Coordinate| if c.log { 1.0 } else { c.scale };
         for a in 0..n.len() {
             for b in 0..n.len() {
                 corr[(o + a, o + b)] = cov[(a, b)] / (cov[(a, a)] * cov[(b, b)]).sqrt();
+                covariance.matrix[(o + a, o + b)] =
+                    cov[(a, b)] * unit(&coords[a]) * unit(&coords[b]);
             }
         }
+        covariance.log.extend(coords.iter().map(|c| c.log));
         o += n.len();
     }
 
@@ -244,6 +274,7 @@ pub fn identify(
         not_identifiable,
         held_combinations,
         correlation: (names, corr),
+        covariance,
         estimation: estimation_fits,
         validation: validation_fits,
         estimation_before,

@@ -69,6 +69,12 @@ pub fn to_json(id: &Identification) -> Value {
             "parameters": names,
             "matrix": (0..names.len()).map(|r| (0..names.len()).map(|c| round(corr[(r, c)], 4)).collect::<Vec<_>>()).collect::<Vec<_>>(),
         },
+        // full precision, for drawing parameter sets (`hasel simulate --uncertainty`)
+        "covariance": {
+            "parameters": id.covariance.names,
+            "coordinates": id.covariance.log.iter().map(|&l| if l { "ln" } else { "linear" }).collect::<Vec<_>>(),
+            "matrix": (0..id.covariance.names.len()).map(|r| (0..id.covariance.names.len()).map(|c| id.covariance.matrix[(r, c)]).collect::<Vec<_>>()).collect::<Vec<_>>(),
+        },
         "iterations": id.iterations,
         "simulations": id.simulations,
         "seconds": round(id.seconds, 3),

@@ -49,7 +49,7 @@ pub struct InputArgs {
     multisine: Option<String>,
     /// Sampled voltages: CSV with columns t,U1,U2,U3 [s, V]
     #[arg(long, value_name = "FILE.csv")]
-    input: Option<PathBuf>,
+    pub input: Option<PathBuf>,
     /// How --input is read between samples: zoh (held, as a co-simulation master does),
     /// linear, pchip (monotone cubic) or spline (natural cubic, C², fastest for dense smooth data)
     #[arg(long, default_value = "zoh", value_parser = ["zoh", "linear", "pchip", "spline"])]

@@ -4,6 +4,7 @@
 use hasel_fmu::io::file::FileError;
 use hasel_fmu::model::params::ParamError;
 use hasel_fmu::simulation::SimError;
+use hasel_fmu::uncertainty::UncertaintyError;
 use hasel_fmu::{diagnose, identify};
 
 #[derive(Debug, thiserror::Error)]
@@ -19,6 +20,8 @@ pub enum Error {
     Identify(#[from] identify::Error),
     #[error(transparent)]
     Diagnose(#[from] diagnose::Error),
+    #[error(transparent)]
+    Uncertainty(#[from] UncertaintyError),
     /// A value given on the command line that is wrong, named with its flag.
     #[error("--{flag} {value}: {problem}")]
     Flag {

@@ -1,8 +1,9 @@
 //! `hasel simulate` and `hasel params`.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::time::Instant;
 
+use hasel_fmu::io::csv::Table;
 use hasel_fmu::io::{params_file, trajectory};
 use hasel_fmu::model::Platform;
 use hasel_fmu::plot::{self, Panel, Series};
@@ -34,6 +35,28 @@ pub struct Args {
     /// Draw h_i(t) and the tip's XY path here
     #[arg(long, value_name = "FILE.png")]
     plot: Option<PathBuf>,
+    /// Prediction bands: run this many parameter sets drawn from --uncertainty on all cores;
+    /// --out then gets the median and 2.5/97.5 % bands of every output, --plot their figure
+    #[arg(long, value_name = "N", requires = "uncertainty")]
+    samples: Option<usize>,
+    /// The identification.json of `hasel identify` whose covariance the parameter sets are
+    /// drawn from (in the fit's coordinates: ln p for positive parameters)
+    #[arg(
+        long,
+        value_name = "DIR/identification.json",
+        requires = "samples",
+        conflicts_with = "params"
+    )]
+    uncertainty: Option<PathBuf>,
+    /// Seed of the draw (default 1): sample k is seeded from (seed, k) alone
+    #[arg(long, requires = "samples")]
+    seed: Option<u64>,
+    /// Threads for --samples (default: every core); the numbers do not depend on it
+    #[arg(long, requires = "samples")]
+    threads: Option<usize>,
+    /// With --samples: write the drawn parameter sets here (sample, failed, every parameter)
+    #[arg(long, value_name = "FILE.csv", requires = "samples")]
+    draws: Option<PathBuf>,
 }
 
 #[derive(clap::Args)]
@@ -58,6 +81,9 @@ pub fn params(a: ParamsArgs) -> Result<(), Error> {
 }
 
 pub fn run(a: Args) -> Result<(), Error> {
+    if let (Some(n), Some(id)) = (a.samples, &a.uncertainty) {
+        return run_samples(&a, n, id);
+    }
     let params = load_params(&a.params)?;
     let (input, default_end) = a.input.input()?;
     let t_end = a.t_end.unwrap_or(default_end);
@@ -162,4 +188,76 @@ pub fn run_panels(samples: &[Sample]) -> Vec<Panel> {
             equal_axes: true,
         },
     ]
+}
+
+/// `hasel simulate --samples N --uncertainty DIR/identification.json`: prediction bands.
+fn run_samples(a: &Args, samples: usize, identification: &Path) -> Result<(), Error> {
+    use hasel_fmu::uncertainty::{Posterior, bands};
+    let posterior = Posterior::read(identification)?;
+    let (input, default_end) = a.input.input()?;
+    // a measured experiment given as --input is drawn under the bands
+    let data = match &a.input.input {
+        Some(path) => Some(Table::read(path)?),
+        None => None,
+    };
+    let threads = a
+        .threads
+        .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
+    if threads == 0 {
+        return Err(Error::flag("threads", 0, "need at least 1"));
+    }
+    let settings = bands::Settings {
+        samples,
+        seed: a.seed.unwrap_or(1),
+        threads,
+        t_end: a.t_end.unwrap_or(default_end),
+        dt: a.dt,
+        rtol: a.rtol,
+    };
+    let bar = ProgressBar::new(samples as u64);
+    bar.set_style(
+        ProgressStyle::with_template("{bar:40} {pos}/{len} samples, eta {eta}")
+            .expect("valid template"),
+    );
+    let started = Instant::now();
+    let result = bands::run(&posterior, &input, &settings, &|| bar.inc(1));
+    bar.finish_and_clear();
+    let b = result?;
+    let wall = started.elapsed().as_secs_f64();
+    say!(
+        "{samples} samples of {} parameters (covariance of rank {}) from {}, seed {}, {threads} threads: {wall:.2} s, {:.1} runs/s",
+        posterior.names.len(),
+        posterior.rank(),
+        identification.display(),
+        settings.seed,
+        samples as f64 / wall
+    );
+    if !b.failed.is_empty() {
+        say!(
+            "{} samples failed and are left out of the bands (sample {}: {})",
+            b.failed.len(),
+            b.failed[0].0,
+            b.failed[0].1
+        );
+    }
+    for (j, name) in bands::OUTPUTS.iter().enumerate() {
+        let widest = (0..b.t.len())
+            .map(|k| b.upper[k][j] - b.lower[k][j])
+            .fold(0.0, f64::max);
+        say!("  {name:<6} widest 95 % band {:.3} um", widest * 1e6);
+    }
+    // everything computed: now the files, each written whole or not at all
+    if let Some(path) = &a.out {
+        b.write_csv(path)?;
+        say!("wrote {}", path.display());
+    }
+    if let Some(path) = &a.draws {
+        b.write_draws(path, &posterior)?;
+        say!("wrote {}", path.display());
+    }
+    if let Some(path) = &a.plot {
+        b.draw(path, data.as_ref())?;
+        say!("wrote {}", path.display());
+    }
+    Ok(())
 }
