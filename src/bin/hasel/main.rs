@@ -25,6 +25,7 @@ mod compare;
 mod diagnose;
 mod fmu;
 mod identify;
+mod linearize;
 mod simulate;
 
 use std::process::ExitCode;
@@ -61,6 +62,9 @@ enum Command {
     Diagnose(diagnose::Args),
     /// Measure the solver: wall time, work counters and error against the reference data
     Bench(bench::Args),
+    /// Linearize at an equilibrium (or a simulated state): A, B, C, D, the port-Hamiltonian
+    /// structure, Bode and step figures, a reduced model
+    Linearize(linearize::Args),
 }
 
 fn main() -> ExitCode {
@@ -74,6 +78,7 @@ fn main() -> ExitCode {
         Command::Synth(a) => identify::synth(a),
         Command::Diagnose(a) => diagnose::run(a),
         Command::Describe(a) => fmu::describe(a),
+        Command::Linearize(a) => linearize::run(a).map_err(|e| e.to_string()),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
