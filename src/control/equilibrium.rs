@@ -51,7 +51,7 @@ pub struct Equilibrium {
 /// Largest number of Newton iterations per solve.
 const NEWTON_ITERATIONS: usize = 40;
 /// Smallest continuation step, as a fraction of U.
-const MIN_STEP: f64 = 1e-7;
+const MIN_STEP: f64 = 1e-12;
 /// Largest move of the corrector away from the predictor in one continuation step, as a
 /// fraction of θ* = π/(2γ2) (where the input gain ga vanishes).
 const MAX_CORRECTION: f64 = 0.05;
@@ -360,6 +360,7 @@ impl<'m> Reduced<'m> {
     /// Newton on ṗ(θ) = 0 from `theta`.
     fn newton(&self, mut theta: [f64; 3], u: [f64; 3]) -> Result<Solution, Failure> {
         let theta_star = self.theta_star;
+        let (mut last_size, mut polish) = (f64::INFINITY, 3);
         for it in 1..=NEWTON_ITERATIONS {
             let Residual { p_dot, dp, .. } = self.residual(theta, u)?;
             let jr = Matrix3::from_fn(|r, c| dp[r][c]);
@@ -367,14 +368,17 @@ impl<'m> Reduced<'m> {
                 return Err(Failure::NotConverged(it));
             };
             let mut converged = true;
+            let mut size: f64 = 0.0;
             for i in 0..3 {
                 theta[i] -= step[i];
                 converged &= step[i].abs() <= 1e-13 * theta_star[i];
+                size = size.max(step[i].abs() / theta_star[i]);
             }
             if !theta.iter().all(|t| t.is_finite()) {
                 return Err(Failure::NotConverged(it));
             }
-            if converged {
+            // once converged, polish while the steps still shrink (to the rounding of θ)
+            if converged && (size == 0.0 || size >= last_size || polish == 0) {
                 // the state and stiffness at the final angles
                 let Residual { x, dp, .. } = self.residual(theta, u)?;
                 return Ok(Solution {
@@ -384,6 +388,10 @@ impl<'m> Reduced<'m> {
                     iterations: it,
                 });
             }
+            if converged {
+                polish -= 1;
+            }
+            last_size = size;
         }
         Err(Failure::NotConverged(NEWTON_ITERATIONS))
     }

@@ -10,8 +10,43 @@ use nalgebra::{Complex, DMatrix, DVector};
 use super::linearize::{Linearization, StateSpace};
 use super::{ControlError, linalg};
 use crate::model::Platform;
+use crate::simulation::Sample;
 use crate::simulation::{Input, SimError, Simulator, Tone};
-use crate::solver::{OdeSystem, Radau5, RhsError, Tolerances};
+use crate::solver::{OdeSystem, Radau5, RhsError, SolverError, Tolerances};
+
+/// Steps a check's nonlinear simulation may take: a few thousand suffice at any sensible
+/// voltage; extreme voltages (1e12 V) make the electrical transients so stiff that a run
+/// would grind on for minutes, and the check is reported as failed instead.
+const STEP_BUDGET: usize = 200_000;
+
+/// An eigenvalue of the minimal model on or right of the imaginary axis, if there is one:
+/// then there is no steady state to compare, and the runs would only chase the instability.
+fn unstable(lin: &Linearization) -> Option<Complex<f64>> {
+    lin.minimal_eigenvalues
+        .iter()
+        .copied()
+        .find(|e| e.re >= 0.0)
+}
+
+/// `sim.run_at(input, times, …)` in chunks, giving up past [`STEP_BUDGET`] steps.
+fn run_budgeted(
+    sim: &mut Simulator,
+    input: &Input,
+    times: &[f64],
+    mut on_sample: impl FnMut(&Sample),
+) -> Result<(), SimError> {
+    for chunk in times.chunks(4) {
+        sim.run_at(input, chunk, &mut on_sample)?;
+        let st = sim.stats();
+        if st.accepted + st.rejected > STEP_BUDGET {
+            return Err(SimError::Solver(SolverError::TooManySteps {
+                t: sim.t(),
+                limit: STEP_BUDGET,
+            }));
+        }
+    }
+    Ok(())
+}
 
 /// A state-space model prepared for evaluating G(jω): scaled and balanced.
 #[derive(Clone, Debug)]
@@ -134,6 +169,11 @@ pub fn sine_check(
     freqs: &[f64],
     rtol: f64,
 ) -> Result<Vec<SineCheck>, ControlError> {
+    if let Some(e) = unstable(lin) {
+        return Err(ControlError::NotStable {
+            eigenvalue: (e.re, e.im),
+        });
+    }
     let minimal = lin.minimal();
     let full = Evaluator::new(&lin.system);
     let ev = Evaluator::new(&minimal);
@@ -165,7 +205,7 @@ pub fn sine_check(
             .collect();
         let mut sim = Simulator::from_state(model.clone(), 0.0, &x_start, rtol)?;
         let mut sums = [(0.0, 0.0); 6];
-        sim.run_at(&input, &times, |s| {
+        run_budgeted(&mut sim, &input, &times, |s| {
             let y = [s.h[0], s.h[1], s.h[2], s.tip[0], s.tip[1], s.tip[2]];
             let (sin, cos) = (omega * s.t).sin_cos();
             for r in 0..6 {
@@ -221,29 +261,28 @@ impl OdeSystem for LinearOde<'_> {
 pub struct StepComparison {
     pub du: [f64; 3],
     pub t: Vec<f64>,
-    /// δy(t) of the linear model [m].
-    pub linear: Vec<[f64; 6]>,
-    /// δy(t) of the nonlinear model: the run with the step minus the run without it [m].
-    pub nonlinear: Vec<[f64; 6]>,
+    /// δy(t) of the linear model [m] (the integration fails only if the linearization is
+    /// unstable enough to overflow).
+    pub linear: Result<Vec<[f64; 6]>, SimError>,
+    /// δy(t) of the nonlinear model: the run with the step minus the run without it [m]; or
+    /// why the simulation failed (the linear model is reported all the same).
+    pub nonlinear: Result<Vec<[f64; 6]>, SimError>,
 }
 
 impl StepComparison {
     /// max_t |linear − nonlinear| per output, relative to max_t |nonlinear| of that output.
-    pub fn relative_errors(&self) -> [f64; 6] {
-        [0, 1, 2, 3, 4, 5].map(|r| {
-            let peak = self
-                .nonlinear
+    pub fn relative_errors(&self) -> Option<[f64; 6]> {
+        let nonlinear = self.nonlinear.as_ref().ok()?;
+        let linear = self.linear.as_ref().ok()?;
+        Some([0, 1, 2, 3, 4, 5].map(|r| {
+            let peak = nonlinear.iter().map(|y| y[r].abs()).fold(0.0, f64::max);
+            let err = linear
                 .iter()
-                .map(|y| y[r].abs())
-                .fold(0.0, f64::max);
-            let err = self
-                .linear
-                .iter()
-                .zip(&self.nonlinear)
+                .zip(nonlinear)
                 .map(|(l, n)| (l[r] - n[r]).abs())
                 .fold(0.0, f64::max);
             if peak > 0.0 { err / peak } else { err }
-        })
+        }))
     }
 }
 
@@ -268,22 +307,37 @@ pub fn step_comparison(
     let t: Vec<f64> = (0..=samples)
         .map(|k| t_end * k as f64 / samples as f64)
         .collect();
+    if let Some(e) = unstable(lin) {
+        let skipped = || {
+            Err(SimError::Setting(format!(
+                "skipped: the linearization is unstable (eigenvalue {:.4e} {:+.4e}i)",
+                e.re, e.im
+            )))
+        };
+        return Ok(StepComparison {
+            du,
+            t,
+            linear: skipped(),
+            nonlinear: skipped(),
+        });
+    }
     let times: Vec<f64> = t.iter().map(|s| t0 + s).collect();
     let run = |u: [f64; 3]| -> Result<Vec<[f64; 6]>, SimError> {
         let mut sim = start.clone();
         let mut y = Vec::with_capacity(times.len());
-        sim.run_at(&Input::constant(u), &times, |s| {
+        run_budgeted(&mut sim, &Input::constant(u), &times, |s| {
             y.push([s.h[0], s.h[1], s.h[2], s.tip[0], s.tip[1], s.tip[2]]);
         })?;
         Ok(y)
     };
-    let stepped = run([0, 1, 2].map(|i| u0[i] + du[i]))?;
-    let baseline = run(u0)?;
-    let nonlinear = stepped
-        .iter()
-        .zip(&baseline)
-        .map(|(s, b)| [0, 1, 2, 3, 4, 5].map(|r| s[r] - b[r]))
-        .collect();
+    let nonlinear = run([0, 1, 2].map(|i| u0[i] + du[i])).and_then(|stepped| {
+        let baseline = run(u0)?;
+        Ok(stepped
+            .iter()
+            .zip(&baseline)
+            .map(|(s, b)| [0, 1, 2, 3, 4, 5].map(|r| s[r] - b[r]))
+            .collect())
+    });
 
     // the linear model in scaled states, integrated to the same times (shifted by the delay)
     let sys = &lin.system;
@@ -298,36 +352,35 @@ pub fn step_comparison(
     let n = a.nrows();
     let delay = start.model().params().effects.delay.tau_d;
     let lin_times: Vec<f64> = t.iter().map(|s| (s - delay).max(0.0)).collect();
-    let mut solver = Radau5::new(
-        n,
-        Tolerances {
+    let integrate = || -> Result<Vec<[f64; 6]>, SimError> {
+        let tol = Tolerances {
             rtol: 1e-9,
             atol: vec![1e-12; n],
-        },
-    );
-    solver
-        .init(&ode, 0.0, &vec![0.0; n], 1e-10)
-        .map_err(SimError::from)?;
-    let mut linear = Vec::with_capacity(t.len());
-    let mut x = vec![0.0; n];
-    let t_last = lin_times.last().copied().unwrap_or(0.0);
-    let mut k = 0;
-    loop {
-        while k < lin_times.len() && lin_times[k] <= solver.t() {
-            if lin_times[k] == 0.0 {
-                x.fill(0.0);
-            } else {
-                solver.interpolate(lin_times[k], &mut x);
+        };
+        let mut solver = Radau5::new(n, tol);
+        solver.init(&ode, 0.0, &vec![0.0; n], 1e-10)?;
+        let mut linear = Vec::with_capacity(t.len());
+        let mut x = vec![0.0; n];
+        let t_last = lin_times.last().copied().unwrap_or(0.0);
+        let mut k = 0;
+        loop {
+            while k < lin_times.len() && lin_times[k] <= solver.t() {
+                if lin_times[k] == 0.0 {
+                    x.fill(0.0);
+                } else {
+                    solver.interpolate(lin_times[k], &mut x);
+                }
+                let y = &c * DVector::from_column_slice(&x) + &sys.d * &du_v;
+                linear.push([0, 1, 2, 3, 4, 5].map(|r| y[r]));
+                k += 1;
             }
-            let y = &c * DVector::from_column_slice(&x) + &sys.d * &du_v;
-            linear.push([0, 1, 2, 3, 4, 5].map(|r| y[r]));
-            k += 1;
+            if k == lin_times.len() {
+                return Ok(linear);
+            }
+            solver.step(&ode, t_last)?;
         }
-        if k == lin_times.len() {
-            break;
-        }
-        solver.step(&ode, t_last).map_err(SimError::from)?;
-    }
+    };
+    let linear = integrate();
     Ok(StepComparison {
         du,
         t,

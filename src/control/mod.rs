@@ -112,7 +112,7 @@ impl fmt::Display for ControlError {
                 write!(
                     f,
                     "no equilibrium at U{actuator} = {} V on the branch through the rest state: \
-                     continued from 0 V up to U{actuator} = {:.6} V, ",
+                     continued from 0 V up to U{actuator} = {} V, ",
                     requested[i], reached[i]
                 )?;
                 match cause {
@@ -141,8 +141,7 @@ impl fmt::Display for ControlError {
             ),
             ControlError::NotStable { eigenvalue } => write!(
                 f,
-                "the linearization is not asymptotically stable (eigenvalue {:.4e} {:+.4e}i): \
-                 no balanced reduction",
+                "the linearization is not asymptotically stable (eigenvalue {:.4e} {:+.4e}i)",
                 eigenvalue.0, eigenvalue.1
             ),
             ControlError::NoGain => f.write_str(

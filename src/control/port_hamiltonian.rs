@@ -130,7 +130,10 @@ pub struct Passivity {
     pub worst_frequency: f64,
     /// max over the grid of ‖G_port‖ [S], the scale of the check.
     pub scale: f64,
-    /// min_hermitian ≥ −[`PASSIVITY_TOLERANCE`] · scale.
+    /// Are all eigenvalues of the minimal model in the open left half-plane? (Without that
+    /// the frequency-domain test says nothing.)
+    pub stable: bool,
+    /// stable and min_hermitian ≥ −[`PASSIVITY_TOLERANCE`] · scale.
     pub passive: bool,
     /// The port's DC conductance G_port(0) per actuator (diagonal) [S].
     pub dc: Vec<f64>,
@@ -244,7 +247,8 @@ pub fn decompose(model: &Platform, lin: &Linearization) -> Result<PortHamiltonia
         collocation_voltage_port: rel(&c_port_s - &bq, c_port_s.norm()),
         kyp_voltage_port: kyp(&minimal, &q_reach, &port_c, &t),
     };
-    let passivity = passivity(&minimal, &(&port_c * &t))?;
+    let stable = lin.minimal_eigenvalues.iter().all(|e| e.re < 0.0);
+    let passivity = passivity(&minimal, &(&port_c * &t), stable)?;
     Ok(PortHamiltonian {
         j,
         r,
@@ -292,7 +296,11 @@ fn kyp(
 }
 
 /// The grid check of the voltage port (minimal model, so that ω = 0 is included).
-fn passivity(minimal: &StateSpace, port_c: &DMatrix<f64>) -> Result<Passivity, ControlError> {
+fn passivity(
+    minimal: &StateSpace,
+    port_c: &DMatrix<f64>,
+    stable: bool,
+) -> Result<Passivity, ControlError> {
     let port = StateSpace {
         c: port_c.clone(),
         d: DMatrix::zeros(3, 3),
@@ -324,7 +332,8 @@ fn passivity(minimal: &StateSpace, port_c: &DMatrix<f64>) -> Result<Passivity, C
         min_hermitian: min_h,
         worst_frequency: worst,
         scale,
-        passive: min_h >= -PASSIVITY_TOLERANCE * scale,
+        stable,
+        passive: stable && min_h >= -PASSIVITY_TOLERANCE * scale,
         dc,
     })
 }

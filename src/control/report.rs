@@ -84,6 +84,8 @@ pub struct Contents<'a> {
     pub ph: Result<&'a PortHamiltonian, String>,
     pub reduced: Result<&'a Reduced, String>,
     pub sine: &'a [SineCheck],
+    /// Why the small-signal check could not run, if it could not.
+    pub sine_error: Option<&'a str>,
     pub step: &'a StepComparison,
 }
 
@@ -155,11 +157,25 @@ pub fn linearization_json(c: &Contents) -> Value {
     );
     m.insert(
         "step".into(),
-        json!({
-            "du_V": c.step.du,
-            "duration_s": c.step.t.last(),
-            "max_error_relative": c.step.relative_errors(),
-        }),
+        match (&c.step.linear, &c.step.nonlinear) {
+            (Err(e), _) => json!({
+                "du_V": c.step.du,
+                "linear": format!("integration failed: {e}"),
+            }),
+            (_, Err(e)) => json!({
+                "du_V": c.step.du,
+                "nonlinear": format!("simulation failed: {e}"),
+            }),
+            _ => json!({
+                "du_V": c.step.du,
+                "duration_s": c.step.t.last(),
+                "max_error_relative": c.step.relative_errors(),
+            }),
+        },
+    );
+    m.insert(
+        "small_signal_check_error".into(),
+        c.sine_error.map_or(Value::Null, |e| json!(e)),
     );
     m.insert(
         "reduced".into(),
@@ -236,6 +252,7 @@ fn ph_json(ph: &PortHamiltonian, lin: &Linearization) -> Value {
             "min_hermitian_part_S": pa.min_hermitian,
             "at_hz": pa.worst_frequency,
             "scale_S": pa.scale,
+            "stable": pa.stable,
             "passive": pa.passive,
             "dc_conductance_S": pa.dc,
         },
@@ -572,7 +589,7 @@ pub fn draw_step(path: &Path, s: &StepComparison) -> Result<(), FileError> {
                         points: s
                             .t
                             .iter()
-                            .zip(&s.linear)
+                            .zip(s.linear.as_deref().unwrap_or_default())
                             .map(|(t, y)| (*t, y[*o] * um))
                             .collect(),
                         color: k,
@@ -583,7 +600,7 @@ pub fn draw_step(path: &Path, s: &StepComparison) -> Result<(), FileError> {
                         points: s
                             .t
                             .iter()
-                            .zip(&s.nonlinear)
+                            .zip(s.nonlinear.as_deref().unwrap_or_default())
                             .map(|(t, y)| (*t, y[*o] * um))
                             .collect(),
                         color: k,
@@ -591,6 +608,7 @@ pub fn draw_step(path: &Path, s: &StepComparison) -> Result<(), FileError> {
                     },
                 ]
             })
+            .filter(|series| !series.points.is_empty())
             .collect()
     };
     let du = s.du;

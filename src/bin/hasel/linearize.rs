@@ -12,7 +12,7 @@ use hasel_fmu::control::{
     ControlError, Linearization, linearize_at, linearize_equilibrium, port_hamiltonian, reduce,
 };
 use hasel_fmu::model::{Params, Platform};
-use hasel_fmu::simulation::Simulator;
+use hasel_fmu::simulation::{SimError, Simulator};
 
 use crate::simulate::{InputArgs, load_params};
 
@@ -139,7 +139,15 @@ pub fn run(a: Args) -> Result<(), Error> {
             let (input, _) = a.input.input().map_err(Error::Input)?;
             let mut sim = Simulator::new(model.clone(), 0.0, a.rtol).map_err(ControlError::from)?;
             sim.run(&input, t, t, |_| {}).map_err(ControlError::from)?;
-            let lin = linearize_at(&model, sim.state(), sim.drive(), t)?;
+            // the voltages the model sees at t: the command, late by the delay effect's τ_d
+            // (0 V before the first command arrives)
+            let tau_d = params.effects.delay.tau_d;
+            let seen = if t >= tau_d {
+                input.value(t - tau_d)
+            } else {
+                [0.0; 3]
+            };
+            let lin = linearize_at(&model, sim.state(), seen, t)?;
             (lin, sim, input.value(t), None)
         }
         (None, None) => return Err(Error::Setting("give --u U1,U2,U3 or --at-time T".into())),
@@ -153,9 +161,17 @@ pub fn run(a: Args) -> Result<(), Error> {
             a.reduce_tol
         )));
     }
-    let sine: Vec<SineCheck> = match &sine_model {
-        Some(m) => frequency::sine_check(m, &lin, SINE_AMPLITUDE, &SINE_FREQUENCIES, a.rtol)?,
-        None => Vec::new(),
+    // the checks against the nonlinear model are reported, not required: a simulation that
+    // fails there (an unstable linearization, a parameter set the solver cannot follow) leaves
+    // the linearization itself standing
+    let (sine, sine_error): (Vec<SineCheck>, Option<String>) = match &sine_model {
+        Some(m) => {
+            match frequency::sine_check(m, &lin, SINE_AMPLITUDE, &SINE_FREQUENCIES, a.rtol) {
+                Ok(s) => (s, None),
+                Err(e) => (Vec::new(), Some(e.to_string())),
+            }
+        }
+        None => (Vec::new(), None),
     };
     let slowest = lin
         .minimal_eigenvalues
@@ -180,11 +196,15 @@ pub fn run(a: Args) -> Result<(), Error> {
     let bode = report::bode_data(&lin)?;
 
     summary(&lin, &ph, &reduced, &sine, &step);
+    if let Some(e) = &sine_error {
+        say!("small-signal check: {e}");
+    }
     let contents = Contents {
         lin: &lin,
         ph: ph.as_ref().map_err(|e| e.to_string()),
         reduced: reduced.as_ref().map_err(|e| e.to_string()),
         sine: &sine,
+        sine_error: sine_error.as_deref(),
         step: &step,
     };
     let written = report::write(&a.out, &contents, &bode).map_err(ControlError::from)?;
@@ -275,10 +295,15 @@ fn summary(
         Ok(ph) => {
             let c = &ph.checks;
             say!(
-                "port-Hamiltonian: A = (J - R) Q + g_w K_x holds to {:.1e} (worst row {:.1e}); J skew, R >= 0 (min eigenvalue {:.1e}), Q >= 0 on the reachable subspace (eigenvalues {:.2e} .. {:.2e}, scaled)",
+                "port-Hamiltonian: A = (J - R) Q + g_w K_x holds to {:.1e} (worst row {:.1e}); J skew, R >= 0 (min eigenvalue {:.1e}); Q on the reachable subspace {} (eigenvalues {:.2e} .. {:.2e}, scaled)",
                 c.residual_source_port,
                 c.residual_source_port_rows,
                 c.r_eigenvalues.0,
+                if c.q_reachable_eigenvalues.0 >= 0.0 {
+                    ">= 0"
+                } else {
+                    "NOT >= 0"
+                },
                 c.q_reachable_eigenvalues.0,
                 c.q_reachable_eigenvalues.1
             );
@@ -298,7 +323,13 @@ fn summary(
                 p.min_hermitian,
                 p.worst_frequency,
                 p.scale,
-                if p.passive { "passive" } else { "NOT passive" },
+                if !p.stable {
+                    "not applicable (unstable)"
+                } else if p.passive {
+                    "passive"
+                } else {
+                    "NOT passive"
+                },
                 p.dc.iter()
                     .map(|g| format!("{g:.4}"))
                     .collect::<Vec<_>>()
@@ -324,15 +355,23 @@ fn summary(
             phase
         );
     }
-    let errs = step.relative_errors();
-    say!(
-        "step of {} V: linear vs nonlinear, largest difference per output (relative to its response): {}",
-        step.du[0],
-        errs.iter()
-            .map(|e| format!("{e:.2e}"))
-            .collect::<Vec<_>>()
-            .join(" / ")
-    );
+    match (&step.nonlinear, step.relative_errors()) {
+        (Ok(_), Some(errs)) => say!(
+            "step of {} V: linear vs nonlinear, largest difference per output (relative to its response; 1 where the linear response is zero): {}",
+            step.du[0],
+            errs.iter()
+                .map(|e| format!("{e:.2e}"))
+                .collect::<Vec<_>>()
+                .join(" / ")
+        ),
+        (Err(SimError::Setting(why)), _) => say!("step: {why}"),
+        (Err(e), _) => say!("step: the nonlinear simulation failed: {e}"),
+        _ => {
+            if let Err(e) = &step.linear {
+                say!("step: the linear model's integration failed: {e}");
+            }
+        }
+    }
     match reduced {
         Ok(r) => say!(
             "reduced model: order {} of {} (bound 2 sum sigma = {:.2e} m/V = {:.2e} of the peak gain {:.3e} m/V); error up to {} Hz: {:.2e} m/V ({:.2e} of the peak gain)",
