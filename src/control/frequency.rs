@@ -158,7 +158,8 @@ impl SineCheck {
 
 /// Drives the nonlinear model from its equilibrium with U = u0 + a sin(2π f t) on every
 /// actuator (the same phase) at each frequency, and measures each output's first harmonic
-/// over two periods after one period of settling. The run starts from the linear model's
+/// over two periods after one period of settling (least squares on sin, cos, a mean and a
+/// drift). The run starts from the linear model's
 /// periodic state x0 + Im X̂, so what remains of a transient is of second order. Outputs
 /// whose predicted response is below 1e-6 of the largest are left out (an actuator at 0 V
 /// does not respond to first order: its force goes with U²).
@@ -204,28 +205,45 @@ pub fn sine_check(
             .map(|k| period * (1.0 + k as f64 / per_period as f64))
             .collect();
         let mut sim = Simulator::from_state(model.clone(), 0.0, &x_start, rtol)?;
-        let mut sums = [(0.0, 0.0); 6];
+        let mut samples: Vec<(f64, [f64; 6])> = Vec::with_capacity(times.len());
         run_budgeted(&mut sim, &input, &times, |s| {
             let y = [s.h[0], s.h[1], s.h[2], s.tip[0], s.tip[1], s.tip[2]];
-            let (sin, cos) = (omega * s.t).sin_cos();
-            for r in 0..6 {
-                let dy = y[r] - lin.y0[r];
-                sums[r].0 += dy * sin;
-                sums[r].1 += dy * cos;
-            }
+            samples.push((s.t, [0, 1, 2, 3, 4, 5].map(|r| y[r] - lin.y0[r])));
         })?;
-        let m = times.len() as f64;
+        // least squares δy ≈ s sin ωt + c cos ωt + d0 + d1 (t − t_mid): the mean and the drift
+        // take up the second-order shift of the mean (U² in the force), which settles with the
+        // slow modes and would otherwise leak into the first harmonic
+        let t_mid = 0.5 * (times[0] + times[times.len() - 1]);
+        let basis = |t: f64| {
+            let (sin, cos) = (omega * t).sin_cos();
+            [sin, cos, 1.0, (t - t_mid) / period]
+        };
+        let mut normal = nalgebra::Matrix4::<f64>::zeros();
+        for &(t, _) in &samples {
+            let b = nalgebra::Vector4::from(basis(t));
+            normal += b * b.transpose();
+        }
+        let Some(inverse) = normal.try_inverse() else {
+            return Err(ControlError::Numerics {
+                what: "small-signal check",
+                why: "singular least-squares problem",
+            });
+        };
         for r in 0..6 {
             if predicted[r].norm() <= 1e-6 * largest {
                 continue;
             }
+            let mut rhs = nalgebra::Vector4::<f64>::zeros();
+            for (t, dy) in &samples {
+                rhs += nalgebra::Vector4::from(basis(*t)) * dy[r];
+            }
+            let coef = inverse * rhs;
             // δy = s sin ωt + c cos ωt = Im((s + j c) e^{jωt}): the phasor is s + j c
-            let (s, c) = (2.0 * sums[r].0 / m, 2.0 * sums[r].1 / m);
             out.push(SineCheck {
                 frequency: f,
                 output: r,
                 linear: predicted[r],
-                nonlinear: Complex::new(s, c) / amplitude,
+                nonlinear: Complex::new(coef[0], coef[1]) / amplitude,
             });
         }
     }

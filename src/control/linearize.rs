@@ -15,7 +15,7 @@
 
 use nalgebra::{Complex, DMatrix};
 
-use super::equilibrium::{self, Equilibrium, relative_residual};
+use super::equilibrium::{self, Equilibrium};
 use super::{ControlError, linalg};
 use crate::model::actuator::{self, L_P, P, THETA};
 use crate::model::effects::HysteresisLaw;
@@ -56,8 +56,9 @@ pub enum Point {
     /// f(x0, u0) ≠ 0, the linearization is the frozen Jacobian there).
     Trajectory {
         t: f64,
-        /// max_r |f_r(x0, u0)| / (the magnitudes of the terms of row r).
-        rhs_relative: f64,
+        /// How fast the state moves there: max_r |f_r(x0, u0)| / scale_r [1/s] (state scales
+        /// per second; 0 at an equilibrium).
+        rate: f64,
     },
 }
 
@@ -121,8 +122,14 @@ pub fn linearize_at(
     u: [f64; 3],
     t: f64,
 ) -> Result<Linearization, ControlError> {
-    let rhs_relative = relative_residual(model, x, u)?;
-    build(model, x, u, Point::Trajectory { t, rhs_relative })
+    let mut f = vec![0.0; x.len()];
+    model.rhs(x, u, &mut f)?;
+    let rate = f
+        .iter()
+        .zip(model.state_scales())
+        .map(|(fr, s)| fr.abs() / s)
+        .fold(0.0, f64::max);
+    build(model, x, u, Point::Trajectory { t, rate })
 }
 
 fn build(

@@ -103,8 +103,9 @@ pub fn linearization_json(c: &Contents) -> Value {
         "zero_eigenvalues".into(),
         json!({
             "count": 3,
+            "exact": lin.at_equilibrium(),
             "computed": pairs(&cas.eigenvalues),
-            "why": "one per actuator: l_p and theta are tied by dl_p/dt = d dtheta/dt, so c(theta, l_p) with dc/dtheta + d dc/dl_p = 0 is a Casimir and the equilibria form a curve; at an equilibrium w_i = e(l_p_i) - d_i e(theta_i) satisfies w_i^T A = 0 and w_i^T B = 0 (uncontrollable, moves to a neighbouring invariant curve)",
+            "why": "one per actuator: l_p and theta are tied by dl_p/dt = d dtheta/dt, so c(theta, l_p) with dc/dtheta + d dc/dl_p = 0 is a Casimir and the equilibria form a curve; at an equilibrium w_i = e(l_p_i) - d_i e(theta_i) satisfies w_i^T A = 0 and w_i^T B = 0 (uncontrollable, moves to a neighbouring invariant curve); away from equilibria (p != 0) these eigenvalues are only near zero",
             "curve_slopes_d": cas.slopes,
             "left_null_residual": cas.left_residual,
             "input_residual": cas.input_residual,
@@ -197,10 +198,10 @@ fn point_json(p: &Point) -> Value {
             "continuation_steps": eq.steps,
             "stiffness_along_curve_Nm_per_rad": eq.stiffness,
         }),
-        Point::Trajectory { t, rhs_relative } => json!({
+        Point::Trajectory { t, rate } => json!({
             "kind": "trajectory",
             "t": t,
-            "rhs_relative": rhs_relative,
+            "rate_state_scales_per_s": rate,
             "note": "not an equilibrium: the linearization is the Jacobian frozen at x(t)",
         }),
     }

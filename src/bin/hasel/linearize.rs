@@ -245,15 +245,15 @@ fn summary(
             eq.steps,
             eq.iterations
         ),
-        Point::Trajectory { t, rhs_relative } => say!(
-            "state at t = {t} s (U = {:.4}, {:.4}, {:.4} V): h = {} / {} / {} um; not an equilibrium (|f| = {:.1e} of its terms): the Jacobian frozen there",
+        Point::Trajectory { t, rate } => say!(
+            "state at t = {t} s (U = {:.4}, {:.4}, {:.4} V): h = {} / {} / {} um; not an equilibrium (the state moves at up to {:.2e} state scales per second): the Jacobian frozen there",
             u[0],
             u[1],
             u[2],
             um(y[0]),
             um(y[1]),
             um(y[2]),
-            rhs_relative
+            rate
         ),
     }
     let zeros = lin
@@ -262,9 +262,15 @@ fn summary(
         .iter()
         .map(|e| e.norm())
         .fold(0.0, f64::max);
-    say!(
-        "eigenvalues [1/s]: 3 zero, one per actuator (the Casimir of l_p and theta; computed |lambda| <= {zeros:.1e}), removed from the minimal and the reduced model"
-    );
+    if lin.at_equilibrium() {
+        say!(
+            "eigenvalues [1/s]: 3 zero, one per actuator (the Casimir of l_p and theta; computed |lambda| <= {zeros:.1e}), removed from the minimal and the reduced model"
+        );
+    } else {
+        say!(
+            "eigenvalues [1/s]: 3 near zero (|lambda| <= {zeros:.1e}; the Casimir directions, exactly zero only at equilibria), removed from the minimal and the reduced model"
+        );
+    }
     for class in ["slow", "mechanical", "electrical"] {
         let list: Vec<String> = lin
             .minimal_eigenvalues
