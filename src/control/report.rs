@@ -9,6 +9,7 @@ use nalgebra::{Complex, DMatrix};
 use plotters::prelude::*;
 use serde_json::{Value, json};
 
+use super::ControlError;
 use super::frequency::{Evaluator, SineCheck, StepComparison, log_grid};
 use super::linalg::rows;
 use super::linearize::{Linearization, Point, StateSpace};
@@ -81,8 +82,8 @@ fn system_json(
 /// Everything `linearization.json` holds.
 pub struct Contents<'a> {
     pub lin: &'a Linearization,
-    pub ph: Result<&'a PortHamiltonian, String>,
-    pub reduced: Result<&'a Reduced, String>,
+    pub ph: Result<&'a PortHamiltonian, &'a ControlError>,
+    pub reduced: Result<&'a Reduced, &'a ControlError>,
     pub sine: &'a [SineCheck],
     /// Why the small-signal check could not run, if it could not.
     pub sine_error: Option<&'a str>,
@@ -137,7 +138,7 @@ pub fn linearization_json(c: &Contents) -> Value {
         "port_hamiltonian".into(),
         match &c.ph {
             Ok(ph) => ph_json(ph, lin),
-            Err(why) => json!({"computed": false, "why": why}),
+            Err(why) => json!({"computed": false, "why": why.to_string()}),
         },
     );
     m.insert(
@@ -182,7 +183,7 @@ pub fn linearization_json(c: &Contents) -> Value {
         "reduced".into(),
         match &c.reduced {
             Ok(r) => json!({"order": r.order, "bound": r.bound, "file": "reduced.json"}),
-            Err(why) => json!({"computed": false, "why": why}),
+            Err(why) => json!({"computed": false, "why": why.to_string()}),
         },
     );
     Value::Object(m)
@@ -345,7 +346,7 @@ pub struct Bode {
 }
 
 /// G(j2πf) of the minimal model from 0.01 Hz to 1e9 Hz (beyond the electrical poles).
-pub fn bode_data(lin: &Linearization) -> Result<Bode, super::ControlError> {
+pub fn bode_data(lin: &Linearization) -> Result<Bode, ControlError> {
     let minimal = lin.minimal();
     let ev = Evaluator::new(&minimal);
     let freqs = log_grid(1e-2, 1e9, 40);

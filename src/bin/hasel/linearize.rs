@@ -201,8 +201,8 @@ pub fn run(a: Args) -> Result<(), Error> {
     }
     let contents = Contents {
         lin: &lin,
-        ph: ph.as_ref().map_err(|e| e.to_string()),
-        reduced: reduced.as_ref().map_err(|e| e.to_string()),
+        ph: ph.as_ref(),
+        reduced: reduced.as_ref(),
         sine: &sine,
         sine_error: sine_error.as_deref(),
         step: &step,
