@@ -1,6 +1,7 @@
 //! hasel-fmu: the HASEL-actuated 3PS micro parallel platform as a library, an FMI 2.0
 //! Co-Simulation FMU and the `hasel` command-line tool.
 
+pub mod control;
 pub mod diagnose;
 pub mod fmi2;
 pub mod fmi_common;

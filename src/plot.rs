@@ -46,7 +46,7 @@ const PALETTE: [RGBColor; 6] = [
     RGBColor(255, 127, 14),
 ];
 
-fn register_font() {
+pub(crate) fn register_font() {
     static FONT: Once = Once::new();
     FONT.call_once(|| {
         // the embedded font is valid TrueType; a failure here would only lose the text

@@ -22,6 +22,7 @@ const ROOMS: &[(&str, &[&str])] = &[
         "diagnose",
         &["identify", "io", "model", "plot", "simulation"],
     ),
+    ("control", &["io", "model", "plot", "simulation", "solver"]),
     (
         "uncertainty",
         &["identify", "io", "model", "plot", "simulation"],

@@ -94,6 +94,17 @@ pub struct Voltages {
     pub v2_l: f64,
 }
 
+/// The port-Hamiltonian structure matrices of one actuator at a state (row-major 5×5).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Structure {
+    /// Interconnection J(x), skew-symmetric.
+    pub j: [[f64; N]; N],
+    /// Dissipation R, symmetric positive semi-definite.
+    pub r: [[f64; N]; N],
+    /// Input map g(x).
+    pub g: [f64; N],
+}
+
 /// Quantities shared by H, ∇H, f and ∂f/∂x at one state.
 struct Eval {
     shell: Shell,
@@ -256,6 +267,68 @@ impl Actuator {
         set(Q2, Q1, -self.g0 / self.par.c1);
         set(Q2, Q2, -(self.g0 + self.g2) / e.c2);
         Ok(())
+    }
+
+    /// ∇²H, the Hessian of the energy H (module doc), symmetric 5×5; the entries the
+    /// Jacobian uses: H_θθ, H_θl, H_ll of the bending, gravity, film and zipping-electrode terms,
+    /// H_xQ2 = ∂V2/∂x = −V2 C2_x / C2, and the diagonal 1/I, 1/C1, 1/C2.
+    pub fn hessian(&self, x: &[f64]) -> Result<[[f64; N]; N], DomainError> {
+        let e = self.eval(x)?;
+        let s = e.shell.curvature();
+        // E = Q2²/(2 C2): E_xy = (V2²/C2) C2_x C2_y − ½ V2² C2_xy (as in `jacobian`)
+        let (c2_t, c2_l) = (self.c2_a * e.shell.a_s_t, self.c2_a * e.shell.a_s_l);
+        let w = e.v2 * e.v2 / e.c2;
+        let half_v2sq = 0.5 * e.v2 * e.v2 * self.c2_a;
+        let mut h = [[0.0; N]; N];
+        h[THETA][THETA] =
+            self.par.kb - self.gravity * x[THETA].sin() + w * c2_t * c2_t - half_v2sq * s.a_s_tt;
+        h[THETA][L_P] = w * c2_t * c2_l - half_v2sq * s.a_s_tl;
+        h[L_P][L_P] = 0.5 * self.par.k + w * c2_l * c2_l - half_v2sq * s.a_s_ll;
+        h[THETA][Q2] = -e.v2 * c2_t / e.c2;
+        h[L_P][Q2] = -e.v2 * c2_l / e.c2;
+        h[P][P] = 1.0 / self.inertia;
+        h[Q1][Q1] = 1.0 / self.par.c1;
+        h[Q2][Q2] = 1.0 / e.c2;
+        h[L_P][THETA] = h[THETA][L_P];
+        h[Q2][THETA] = h[THETA][Q2];
+        h[Q2][L_P] = h[L_P][Q2];
+        Ok(h)
+    }
+
+    /// The port-Hamiltonian structure at x (module doc, ẋ = (J(x) − R) ∇H + g(x) U): the skew
+    /// J(x) (J_θp = 1, J_l p = d(θ, l_p)), the constant R ≥ 0 (b on p; the circuit's
+    /// conductances on (Q1, Q2)) and the input map g(x) = G0 ga(θ) (e_Q1 + e_Q2).
+    pub fn structure(&self, x: &[f64]) -> Result<Structure, DomainError> {
+        let shell = Shell::new(x[THETA], x[L_P], self.lv)?;
+        let mut j = [[0.0; N]; N];
+        j[THETA][P] = 1.0;
+        j[P][THETA] = -1.0;
+        j[L_P][P] = shell.d;
+        j[P][L_P] = -shell.d;
+        let mut r = [[0.0; N]; N];
+        r[P][P] = self.par.b;
+        r[Q1][Q1] = self.g0 + self.g1;
+        r[Q1][Q2] = self.g0;
+        r[Q2][Q1] = self.g0;
+        r[Q2][Q2] = self.g0 + self.g2;
+        let mut g = [0.0; N];
+        g[Q1] = self.g0 * self.ga(x[THETA]);
+        g[Q2] = g[Q1];
+        Ok(Structure { j, r, g })
+    }
+
+    /// ∂y/∂x of the port output y = G0 ga(θ) (V1 + V2) (`port_output`):
+    /// G0 ga'(θ) (V1 + V2) e_θ + G0 ga(θ) (∂V1/∂x + ∂V2/∂x), with ∂V1/∂Q1 = 1/C1 and
+    /// ∂V2/∂x = (H_θQ2, H_lQ2, 0, 0, 1/C2).
+    pub fn port_output_jacobian(&self, x: &[f64]) -> Result<[f64; N], DomainError> {
+        let v = self.voltages(x)?;
+        let k = self.g0 * self.ga(x[THETA]);
+        let mut c = [0.0; N];
+        c[THETA] = self.g0 * self.ga_prime(x[THETA]) * (v.v1 + v.v2) + k * v.v2_t;
+        c[L_P] = k * v.v2_l;
+        c[Q1] = k / self.par.c1;
+        c[Q2] = k / v.c2;
+        Ok(c)
     }
 
     /// Port output y = G0 ga(θ) (Q1/C1 + Q2/C2) [A]; y·U is the supplied power.

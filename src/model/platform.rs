@@ -200,6 +200,75 @@ impl Platform {
         Ok(())
     }
 
+    /// ∂f/∂U into `jac`, column-major `n_states × 3` (column j: the command U_j). The command
+    /// enters ẋ = (J − R)∇H + g(x) U (model.md, "Dynamics") through g(x) = G0 ga(θ) (e_Q1 + e_Q2)
+    /// at the port voltage; with effects, through the first amplifier stage, or through the
+    /// clipping's slope into the circuit and the drift stages (`effects::terms`).
+    pub fn input_jacobian(
+        &self,
+        x: &[f64],
+        u: [f64; 3],
+        jac: &mut [f64],
+    ) -> Result<(), ModelError> {
+        let (nb, dim) = (self.nb, self.n_states());
+        let xs = self.blocks(x);
+        jac.fill(0.0);
+        self.each(|i, a| {
+            let column = &mut jac[i * dim + nb * i..i * dim + nb * (i + 1)];
+            if self.terms.neutral {
+                let g = a.structure(&xs[i][..actuator::N])?.g;
+                column[..actuator::N].copy_from_slice(&g);
+            } else {
+                self.terms
+                    .add_input_jacobian(a, xs[i], u[i], |r, v| column[r] += v);
+            }
+            Ok(())
+        })?;
+        Ok(())
+    }
+
+    /// The outputs y = (h1, h2, h3, tip_x, tip_y, tip_z) [m], as the FMU's.
+    pub fn outputs(&self, x: &[f64]) -> [f64; 6] {
+        let (h, tip) = (self.heights(x), self.tip(x));
+        [h[0], h[1], h[2], tip[0], tip[1], tip[2]]
+    }
+
+    /// ∂y/∂x of [`Platform::outputs`] into `jac`, column-major `6 × n_states`: the heights
+    /// h_i = ½ Lv sin θ_i give ∂h_i/∂θ_i = ½ Lv cos θ_i (model.md, "Kinematics"); the tip,
+    /// an explicit function of the heights (FKM: Tip = C_p + L n), gives ∂Tip/∂θ_i =
+    /// ∂Tip/∂h_i · ∂h_i/∂θ_i with ∂Tip/∂h from [`Kinematics::tip_jacobian`]. No other state
+    /// moves an output.
+    pub fn output_jacobian(&self, x: &[f64], jac: &mut [f64]) {
+        let dim = self.n_states();
+        jac[..6 * dim].fill(0.0);
+        let tip = self.kinematics.tip_jacobian(self.heights(x));
+        for i in 0..3 {
+            let col = self.nb * i + actuator::THETA;
+            let slope = self.actuators[i].height_slope(self.block(x, i)[actuator::THETA]);
+            jac[col * 6 + i] = slope;
+            for k in 0..3 {
+                jac[col * 6 + 3 + k] = tip[(k, i)] * slope;
+            }
+        }
+    }
+
+    /// ∂y/∂U of [`Platform::outputs`], row-major 6 × 3: zero, the outputs depend on the states
+    /// only (the FMU declares `dependencies=""` for them).
+    pub fn output_input_jacobian(&self) -> [[f64; 3]; 6] {
+        [[0.0; 3]; 6]
+    }
+
+    /// The voltage each actuator's port receives for the commands `u` at state `x` [V]: U
+    /// itself, or after the amplifier's lag and clipping when those effects are on.
+    pub fn port_voltages(&self, x: &[f64], u: [f64; 3]) -> [f64; 3] {
+        [0, 1, 2].map(|i| self.port_voltage(self.block(x, i), u[i]))
+    }
+
+    /// The effects' extra states of each actuator block, in block order (after its five).
+    pub fn extra_states(&self) -> &[Extra] {
+        &self.terms.extras
+    }
+
     /// Sizes of the diagonal blocks of ∂f/∂x: the actuators are independent unless coupled.
     pub fn jacobian_blocks(&self) -> Vec<usize> {
         if self.params.effects.coupling.k_c != 0.0 {

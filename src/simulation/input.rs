@@ -106,6 +106,14 @@ impl Input {
         }
     }
 
+    /// A constant voltage on each actuator.
+    pub fn constant(u: [f64; 3]) -> Input {
+        Input::Tones {
+            offset: u,
+            tones: [vec![], vec![], vec![]],
+        }
+    }
+
     /// A sampled input; at least two samples, strictly increasing finite times, finite values.
     pub fn sampled(
         t: Vec<f64>,

@@ -22,6 +22,11 @@ pub enum Error {
     Diagnose(#[from] diagnose::Error),
     #[error(transparent)]
     Uncertainty(#[from] UncertaintyError),
+    #[error(transparent)]
+    Control(#[from] hasel_fmu::control::ControlError),
+    /// A combination or range of command-line settings that does not work, as a sentence.
+    #[error("{0}")]
+    Usage(String),
     /// A value given on the command line that is wrong, named with its flag.
     #[error("--{flag} {value}: {problem}")]
     Flag {

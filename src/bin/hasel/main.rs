@@ -23,6 +23,7 @@ mod diagnose;
 mod error;
 mod fmu;
 mod identify;
+mod linearize;
 mod simulate;
 
 use std::process::ExitCode;
@@ -59,6 +60,9 @@ enum Command {
     Diagnose(diagnose::Args),
     /// Measure the solver: wall time, work counters and error against the reference data
     Bench(bench::Args),
+    /// Linearize at an equilibrium (or a simulated state): A, B, C, D, the port-Hamiltonian
+    /// structure, Bode and step figures, a reduced model
+    Linearize(linearize::Args),
 }
 
 fn main() -> ExitCode {
@@ -72,6 +76,7 @@ fn main() -> ExitCode {
         Command::Synth(a) => identify::synth(a),
         Command::Diagnose(a) => diagnose::run(a),
         Command::Describe(a) => fmu::describe(a),
+        Command::Linearize(a) => linearize::run(a),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -407,6 +407,29 @@ impl Terms {
         Ok(())
     }
 
+    /// ∂(actuator i's block of ẋ)/∂U through `add(row, value)`, rows counted inside the block:
+    /// the command drives the first amplifier stage if there is one (τ U̇_amp = U − U_amp),
+    /// otherwise the port voltage clamp(U) enters the circuit (Q1, Q2) and the drift stages
+    /// through G0 ga(θ) times the clipping's slope.
+    pub fn add_input_jacobian(
+        &self,
+        act: &Actuator,
+        xi: &[f64],
+        u: f64,
+        mut add: impl FnMut(usize, f64),
+    ) {
+        if let Some(&(k, t)) = self.amp.first() {
+            add(k, 1.0 / t);
+            return;
+        }
+        let source = act.g0 * act.ga(xi[THETA]) * self.port(xi, u).slope;
+        add(Q1, source);
+        add(Q2, source);
+        for &(k, _, _) in &self.drift {
+            add(k, source);
+        }
+    }
+
     /// Energy stored in the terms [J] (hysteresis, a rate-independent dissipative law with no
     /// storage function here, adds none).
     pub fn energy(&self, a: &[&Actuator; 3], x: [&[f64]; 3]) -> f64 {
