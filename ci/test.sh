@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Every test: the repository's self-containment, formatting and lints, the Rust suite (model, solver, FMI shell, CLI, FMU import), then the packed FMU
+# Every test: self-containment, formatting and lints, the Rust suite, then the packed FMU
 # through fmpy, fmutool, libcosimpy, ecospy and ctypes.
 source "$(dirname "${BASH_SOURCE[0]}")/lib.sh"
 step "the repository refers to nothing outside it (ci/self_contained.py)"
