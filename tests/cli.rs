@@ -270,11 +270,10 @@ fn diagnose_answers_in_json_and_refuses_bad_data() {
 
     let bad = dir.join("bad.csv");
     let text = std::fs::read_to_string(&b).unwrap();
-    std::fs::write(
-        &bad,
-        text.replacen("\n1.000000000000e-3,", "\n1.000000000000e-3,x", 1),
-    )
-    .unwrap();
+    // the second data row (file line 3) gets a field that is not a number
+    let mut lines: Vec<String> = text.lines().map(str::to_owned).collect();
+    lines[2] = lines[2].replacen(',', ",x", 1);
+    std::fs::write(&bad, lines.join("\n")).unwrap();
     let out = dir.join("out2");
     let o = hasel(&["diagnose", s(&a), s(&bad), "--out", s(&out)]);
     assert!(!o.status.success());

@@ -14,11 +14,10 @@ pub const COLUMNS: [&str; 10] = [
 /// Writes `samples` to `path` atomically.
 pub fn write(path: &Path, samples: &[Sample]) -> Result<(), FileError> {
     let rows = samples.iter().map(|s| {
-        let mut r = vec![s.t];
-        r.extend(s.u);
-        r.extend(s.h);
-        r.extend(s.tip);
-        r
+        let [u1, u2, u3] = s.u;
+        let [h1, h2, h3] = s.h;
+        let [x, y, z] = s.tip;
+        [s.t, u1, u2, u3, h1, h2, h3, x, y, z]
     });
     write_atomic(path, &COLUMNS, rows)
 }
