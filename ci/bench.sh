@@ -4,8 +4,8 @@
 source "$(dirname "${BASH_SOURCE[0]}")/lib.sh"
 ensure_apt
 build_fmu
-step "solver: hasel bench"
-./target/release/hasel bench
+step "solver: hasel bench, with the library solvers beside it (diffsol, native SUNDIALS CVODE)"
+cargo run -q --release --features compare --bin hasel -- bench
 step "identification: hasel bench --identify"
 ./target/release/hasel bench --identify
 step "FMU through the Rust fmi crate"

@@ -10,9 +10,10 @@ FMU_LIB="$ROOT/target/$FMU_TARGET/release/libhasel_fmu.so"
 step() { printf '\n== %s\n' "$*"; }
 
 ensure_apt() {
-    # libclang-dev: bindgen of the `fmi` crate (Rust import test); libtbb12: ecospy
+    # libclang-dev: bindgen of the `fmi` crate (Rust import test) and of sundials-sys; libtbb12:
+    # ecospy; libsundials-dev: native CVODE in hasel bench's `compare` feature
     local missing=()
-    for pkg in libclang-dev libtbb12; do
+    for pkg in libclang-dev libtbb12 libsundials-dev; do
         dpkg -s "$pkg" >/dev/null 2>&1 || missing+=("$pkg")
     done
     if ((${#missing[@]})); then

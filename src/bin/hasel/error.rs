@@ -46,6 +46,10 @@ pub enum Error {
         method: Option<&'static str>,
         source: diffsol::DiffsolError,
     },
+    /// A SUNDIALS call of the CVODE comparison failed: the call and CVODE's flag name.
+    #[cfg(feature = "compare")]
+    #[error("CVODE: {call}: {flag}")]
+    Cvode { call: &'static str, flag: String },
 }
 
 impl Error {

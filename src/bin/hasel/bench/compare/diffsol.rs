@@ -1,29 +1,22 @@
-//! `hasel bench` with `--features compare`: the same two runs with a library stiff solver,
-//! diffsol 0.18 (BDF, ESDIRK34 and TR-BDF2, dense nalgebra LU), printed beside our Radau IIA(5).
+//! diffsol 0.18 (BDF, ESDIRK34 and TR-BDF2, dense nalgebra LU) on the two runs of the table.
 //!
 //! The model enters diffsol through `OdeBuilder::rhs_implicit`: f(x, t) and the action J·v of
 //! the analytic Jacobian. diffsol builds its dense Newton matrix from 15 such products (one per
 //! unit vector), so the J·v closure keeps the last `Platform::jacobian` and re-evaluates it only
 //! when the state or the input changes: one model Jacobian per diffsol Jacobian, as in Radau5.
-//! Tolerances are the project's: rtol and atol_i = rtol · scale_i. The counters are taken in the
-//! closures (f and model-Jacobian calls) and from diffsol's `OdeSolverStatistics` (steps,
-//! rejections, LU set-ups).
+//! The counters are taken in the closures (f and model-Jacobian calls) and from diffsol's
+//! `OdeSolverStatistics` (steps, rejections, LU set-ups).
 
 use std::cell::{Cell, RefCell};
-use std::path::Path;
-use std::time::Duration;
 
 use diffsol::{
     NalgebraContext, NalgebraLU, NalgebraMat, NalgebraVec, OdeBuilder, OdeEquationsImplicit,
     OdeSolverMethod, OdeSolverStopReason, ode_solver::OdeSolverStatistics,
 };
-use hasel_fmu::io::csv::Table;
 use hasel_fmu::model::Platform;
 use hasel_fmu::simulation::{Input, Sample, SimError, tolerances};
-use hasel_fmu::solver::Stats;
 
-use super::reference::{error_against, reference};
-use super::timing::best;
+use super::{Case, Work, sample};
 use crate::error::Error;
 
 type M = NalgebraMat<f64>;
@@ -31,79 +24,22 @@ type LS = NalgebraLU<f64>;
 
 /// Library methods compared.
 #[derive(Clone, Copy)]
-enum Method {
+pub enum Method {
     Bdf,
     Esdirk34,
     TrBdf2,
 }
 
 impl Method {
-    const ALL: [Method; 3] = [Method::Bdf, Method::Esdirk34, Method::TrBdf2];
+    pub const ALL: [Method; 3] = [Method::Bdf, Method::Esdirk34, Method::TrBdf2];
 
-    fn name(self) -> &'static str {
+    pub fn name(self) -> &'static str {
         match self {
             Method::Bdf => "diffsol BDF",
             Method::Esdirk34 => "diffsol ESDIRK34",
             Method::TrBdf2 => "diffsol TR-BDF2",
         }
     }
-}
-
-/// The two runs of `hasel bench`.
-#[derive(Clone, Copy, PartialEq)]
-pub enum Case {
-    /// 10 s of the sine, outputs every 1 ms from the solver's interpolant
-    Sine,
-    /// 10,000 co-simulation steps of 1 ms, input held over each step
-    Held,
-}
-
-impl Case {
-    fn name(self) -> &'static str {
-        match self {
-            Case::Sine => "10 s sine",
-            Case::Held => "10k x 1 ms held",
-        }
-    }
-
-    fn reference(self) -> &'static str {
-        match self {
-            Case::Sine => "sine60_w3pi.csv",
-            Case::Held => "zoh1ms_sine60_w3pi.csv",
-        }
-    }
-}
-
-/// Work of one run, in the columns of the table.
-#[derive(Clone, Copy, Default)]
-pub struct Work {
-    pub steps: usize,
-    pub rejected: usize,
-    pub f: usize,
-    pub jac: usize,
-    pub lu: usize,
-}
-
-impl From<Stats> for Work {
-    fn from(s: Stats) -> Work {
-        Work {
-            steps: s.accepted,
-            rejected: s.rejected,
-            f: s.rhs_evals,
-            jac: s.jac_evals,
-            lu: s.decompositions,
-        }
-    }
-}
-
-/// One line of the table.
-pub struct Row {
-    pub solver: String,
-    pub case: Case,
-    pub wall: Duration,
-    pub work: Work,
-    /// max |Δh| [µm] against the reference, if the file was found
-    pub dh: Option<f64>,
 }
 
 /// Evaluation counters and the cached model Jacobian shared by the closures of one run.
@@ -159,17 +95,8 @@ impl<'m> Evals<'m> {
     }
 }
 
-fn sample(model: &Platform, t: f64, u: [f64; 3], x: &[f64]) -> Sample {
-    Sample {
-        t,
-        u,
-        h: model.heights(x),
-        tip: model.tip(x),
-    }
-}
-
 /// Runs `case` once with `method`; returns the samples (every 1 ms) and diffsol's statistics.
-fn run_once(
+pub fn run(
     model: &Platform,
     method: Method,
     case: Case,
@@ -320,95 +247,5 @@ impl Drive<'_, '_> {
             }
         }
         Ok((samples, solver.get_statistics().clone()))
-    }
-}
-
-fn dh_against(reference: &Table, samples: &[Sample]) -> Option<f64> {
-    error_against(reference, samples).map(|(dh, _)| dh)
-}
-
-/// Runs both cases with each diffsol method (best of `repeat`) and prints them under `ours`.
-pub fn print(
-    model: &Platform,
-    rtol: f64,
-    repeat: usize,
-    reference_dir: Option<&Path>,
-    ours: Vec<Row>,
-) -> Result<(), Error> {
-    let mut rows = ours;
-    for case in [Case::Sine, Case::Held] {
-        let reference = reference(reference_dir, case.reference())?;
-        for method in Method::ALL {
-            let mut failed = None;
-            let (wall, out) = best(repeat, || match run_once(model, method, case, rtol) {
-                Ok(r) => Some(r),
-                Err(e) => {
-                    failed = Some(e);
-                    None
-                }
-            });
-            match out {
-                Some((samples, work)) => rows.push(Row {
-                    solver: method.name().to_string(),
-                    case,
-                    wall,
-                    work,
-                    dh: dh_against(&reference, &samples),
-                }),
-                None => say!(
-                    "{} on {}: failed: {}",
-                    method.name(),
-                    case.name(),
-                    failed.map(|e| e.to_string()).unwrap_or_default()
-                ),
-            }
-        }
-    }
-    rows.sort_by_key(|r| r.case != Case::Sine);
-    say!();
-    say!(
-        "Side by side with a library solver (diffsol 0.18, dense nalgebra LU, analytic Jacobian), \
-         rtol {rtol:e}, atol_i = rtol*scale_i, best of {repeat}"
-    );
-    say!(
-        "{:<17} | {:<15} | {:>9} | {:>17} | {:>9} | {:>7} | {:>7} | {:>13}",
-        "solver",
-        "case",
-        "wall ms",
-        "steps (+rej)",
-        "f evals",
-        "J evals",
-        "LU",
-        "max |dh| um"
-    );
-    say!("{}", "-".repeat(17 + 15 + 9 + 17 + 9 + 7 + 7 + 13 + 7 * 3));
-    for r in &rows {
-        say!(
-            "{:<17} | {:<15} | {:>9.2} | {:>17} | {:>9} | {:>7} | {:>7} | {:>13}",
-            r.solver,
-            r.case.name(),
-            r.wall.as_secs_f64() * 1e3,
-            format!("{} (+{})", r.work.steps, r.work.rejected),
-            r.work.f,
-            r.work.jac,
-            r.work.lu,
-            r.dh.map_or("n/a".to_string(), |d| format!("{d:.2e}")),
-        );
-    }
-    say!(
-        "  diffsol: Newton-failure cap (default 50 per solve) lifted; rej = error-test + Newton \
-         failures; the held case restarts at every step (new dy, diffsol's initial step-size rule)"
-    );
-    Ok(())
-}
-
-/// Our solver's line of the table.
-pub fn case_row(solver: &str, case: Case, wall: Duration, stats: Stats, dh: Option<f64>) -> Row {
-    Row {
-        solver: solver.to_string(),
-        case,
-        wall,
-        work: stats.into(),
-        dh,
     }
 }
