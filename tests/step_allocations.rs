@@ -58,8 +58,14 @@ unsafe extern "C" {
         logging_on: i32,
     ) -> Component;
     fn fmi2FreeInstance(c: Component);
-    fn fmi2SetupExperiment(c: Component, tol_on: i32, tol: f64, t0: f64, stop_on: i32, stop: f64)
-    -> c_int;
+    fn fmi2SetupExperiment(
+        c: Component,
+        tol_on: i32,
+        tol: f64,
+        t0: f64,
+        stop_on: i32,
+        stop: f64,
+    ) -> c_int;
     fn fmi2EnterInitializationMode(c: Component) -> c_int;
     fn fmi2ExitInitializationMode(c: Component) -> c_int;
     fn fmi2SetReal(c: Component, vr: *const u32, n: usize, v: *const f64) -> c_int;
@@ -86,7 +92,15 @@ fn set_real_do_step_and_get_real_allocate_nothing() {
         environment: std::ptr::null_mut(),
     };
     let c = unsafe {
-        fmi2Instantiate(c"alloc".as_ptr(), 1, guid.as_ptr(), null(), &callbacks, 0, 0)
+        fmi2Instantiate(
+            c"alloc".as_ptr(),
+            1,
+            guid.as_ptr(),
+            null(),
+            &callbacks,
+            0,
+            0,
+        )
     };
     assert!(!c.is_null());
     unsafe {
@@ -99,7 +113,10 @@ fn set_real_do_step_and_get_real_allocate_nothing() {
     let mut y = [0.0; 6];
     let mut step = |k: usize| unsafe {
         let t = k as f64 * dt;
-        assert_eq!(fmi2SetReal(c, inputs.as_ptr(), 3, input.value(t).as_ptr()), 0);
+        assert_eq!(
+            fmi2SetReal(c, inputs.as_ptr(), 3, input.value(t).as_ptr()),
+            0
+        );
         assert_eq!(fmi2DoStep(c, t, dt, 1), 0, "step {k}");
         assert_eq!(fmi2GetReal(c, outputs.as_ptr(), 6, y.as_mut_ptr()), 0);
     };

@@ -37,6 +37,9 @@ pub enum Error {
     /// The FMU library is looked for beside this executable.
     #[error("cannot locate this executable: {0}")]
     CurrentExe(std::io::Error),
+    /// A command that `hasel bench` times failed.
+    #[error("benchmark: {command}: {problem}")]
+    Benchmark { command: String, problem: String },
     #[error("no embedded reference trajectory {0}")]
     NoEmbeddedReference(String),
     /// The library solver of `hasel bench --features compare`, with the method once it runs.

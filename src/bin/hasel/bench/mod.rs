@@ -1,5 +1,6 @@
-//! `hasel bench`: the solver (`solver.rs`, with the library solvers of `compare.rs` beside it
-//! under the `compare` feature), the identification (`identify.rs`) and the missing-effect
+//! `hasel bench`: the solver (`solver.rs`, with the library solvers of `compare/` beside it
+//! under the `compare` feature), the command's whole process with and without its CSV
+//! (`process.rs`), the identification (`identify.rs`) and the missing-effect
 //! diagnosis (`diagnose.rs`). The reference trajectories (`reference.rs`) and the timing
 //! (`timing.rs`) are leaves that the benchmarks use; nothing uses this module's command back.
 
@@ -11,6 +12,7 @@ use crate::error::Error;
 mod compare;
 mod diagnose;
 mod identify;
+mod process;
 mod reference;
 mod solver;
 mod timing;
@@ -48,5 +50,6 @@ pub fn run(a: Args) -> Result<(), Error> {
     if a.identify {
         return identify::run();
     }
-    solver::run(a.repeat, a.reference.as_deref())
+    solver::run(a.repeat, a.reference.as_deref())?;
+    process::run(a.repeat)
 }

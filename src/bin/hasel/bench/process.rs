@@ -1,0 +1,107 @@
+//! `hasel bench`: the command as a user runs it, the whole process (start, integration,
+//! sampling, the CSV, exit) with and without `--out`, and the CSV writing alone beside the
+//! integration that made the rows.
+
+use std::path::Path;
+use std::process::Command;
+use std::time::{Duration, Instant};
+
+use hasel_fmu::io::file::FileError;
+use hasel_fmu::io::trajectory;
+use hasel_fmu::model::{Params, Platform};
+use hasel_fmu::simulation::{DEFAULT_RTOL, Input, Simulator};
+
+use super::timing::best;
+use crate::error::Error;
+
+/// The issue's command: 10 s of the paper's sine at 1 ms outputs.
+const SIMULATE: [&str; 7] = [
+    "simulate",
+    "--sine",
+    "60,9.42477796",
+    "--t-end",
+    "10",
+    "--dt",
+    "0.001",
+];
+
+/// Best wall time of `repeat` runs of this executable with `args`.
+fn process(repeat: usize, args: &[&str]) -> Result<Duration, Error> {
+    let exe = std::env::current_exe().map_err(Error::CurrentExe)?;
+    let mut failure = None;
+    let (wall, _) = best(repeat, || {
+        let start = Instant::now();
+        match Command::new(&exe).args(args).output() {
+            Ok(o) if o.status.success() => {}
+            Ok(o) => failure = Some(String::from_utf8_lossy(&o.stderr).into_owned()),
+            Err(e) => failure = Some(e.to_string()),
+        }
+        start.elapsed()
+    });
+    match failure {
+        Some(problem) => Err(Error::Benchmark {
+            command: format!("hasel {}", args.join(" ")),
+            problem,
+        }),
+        None => Ok(wall),
+    }
+}
+
+pub fn run(repeat: usize) -> Result<(), Error> {
+    let dir = std::env::temp_dir().join(format!("hasel-bench-{}", std::process::id()));
+    std::fs::create_dir_all(&dir)
+        .map_err(|e| FileError::new(&dir, format!("cannot create folder: {e}")))?;
+    let csv = dir.join("run.csv");
+    let result = measure(repeat, &csv);
+    let _ = std::fs::remove_dir_all(&dir);
+    result
+}
+
+fn measure(repeat: usize, csv: &Path) -> Result<(), Error> {
+    let with_out: Vec<&str> = SIMULATE
+        .iter()
+        .copied()
+        .chain(["--out", csv.to_str().unwrap_or("run.csv")])
+        .collect();
+    let quiet = process(repeat, &SIMULATE)?;
+    let written = process(repeat, &with_out)?;
+
+    let model = Platform::new(Params::default())?;
+    let input = Input::sine(60.0, 9.42477796);
+    let (integration, samples) = best(repeat, || {
+        let mut sim = Simulator::new(model.clone(), 0.0, DEFAULT_RTOL).expect("valid model");
+        let mut samples = Vec::with_capacity(10_001);
+        sim.run(&input, 10.0, 1e-3, |s| samples.push(*s))
+            .expect("the default run succeeds");
+        samples
+    });
+    let mut write_error = None;
+    let (writing, _) = best(repeat, || {
+        if let Err(e) = trajectory::write(csv, &samples) {
+            write_error = Some(e);
+        }
+    });
+    if let Some(e) = write_error {
+        return Err(e.into());
+    }
+    let ms = |d: Duration| d.as_secs_f64() * 1e3;
+    say!(
+        "hasel {} [--out run.csv], whole process, best of {repeat}",
+        SIMULATE.join(" ")
+    );
+    say!(
+        "  without --out {:.1} ms | with --out {:.1} ms | in the process: integration and \
+         sampling {:.2} ms, writing the {}-row CSV {:.2} ms ({})",
+        ms(quiet),
+        ms(written),
+        ms(integration),
+        samples.len(),
+        ms(writing),
+        if writing < integration {
+            "less than the integration: met"
+        } else {
+            "more than the integration: MISSED"
+        }
+    );
+    Ok(())
+}
