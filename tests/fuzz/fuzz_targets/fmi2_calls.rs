@@ -11,15 +11,17 @@
 #![no_main]
 #![feature(c_variadic)]
 
+mod common;
+
 use std::ffi::{CStr, CString, c_char, c_int, c_void};
 use std::ptr::{null, null_mut};
 
 use arbitrary::Arbitrary;
+use common::{Len, Real, Vr, Who, damage};
 use hasel_fmu::fmu::pack::guid;
 use hasel_fmu::fmu::variables::{Slot, rows};
 use hasel_fmu::model::Params;
 use libfuzzer_sys::fuzz_target;
-use sha2::{Digest, Sha256};
 
 type Component = *mut c_void;
 type FmuState = *mut c_void;
@@ -182,69 +184,6 @@ unsafe extern "C" {
     fn libc_calloc(n: usize, size: usize) -> *mut c_void;
     #[link_name = "free"]
     fn libc_free(p: *mut c_void);
-}
-
-/// A real number: one of the values that matter to this model, or any bit pattern.
-#[derive(Arbitrary, Debug, Clone, Copy)]
-enum Real {
-    Pick(u8),
-    Raw(f64),
-}
-
-impl Real {
-    fn get(self) -> f64 {
-        const PICKS: [f64; 14] = [
-            0.0,
-            1e-3,
-            -1e-3,
-            1.0,
-            60.0,
-            -60.0,
-            1e-9,
-            0.5,
-            10.0,
-            1e9,
-            f64::NAN,
-            f64::INFINITY,
-            f64::NEG_INFINITY,
-            -0.0,
-        ];
-        match self {
-            Real::Pick(k) => PICKS[k as usize % PICKS.len()],
-            Real::Raw(x) => x,
-        }
-    }
-}
-
-/// A value reference: mostly one of the model's, sometimes any number.
-#[derive(Arbitrary, Debug, Clone, Copy)]
-enum Vr {
-    Known(u8),
-    Any(u32),
-}
-
-impl Vr {
-    fn get(self) -> u32 {
-        match self {
-            Vr::Known(k) => k as u32 % rows().len() as u32,
-            Vr::Any(v) => v,
-        }
-    }
-}
-
-/// An array length: the right one for the call, or another.
-#[derive(Arbitrary, Debug, Clone, Copy)]
-enum Len {
-    Right,
-    Other(u8),
-}
-
-/// The instance (of two) a call goes to; `Null` passes a NULL component.
-#[derive(Arbitrary, Debug, Clone, Copy)]
-enum Who {
-    First,
-    Second,
-    Null,
 }
 
 #[derive(Arbitrary, Debug)]
@@ -851,21 +790,7 @@ impl World {
         if unsafe { fmi2SerializeFMUstate(c, s, bytes.as_mut_ptr().cast(), n) } != OK {
             return;
         }
-        for &(at, x) in corrupt {
-            if !bytes.is_empty() {
-                let k = at as usize % bytes.len();
-                bytes[k] ^= x;
-            }
-        }
-        if let Some(m) = truncate {
-            bytes.truncate(m as usize);
-        }
-        if fix_checksum && bytes.len() > 8 {
-            // the format ends in the first 8 bytes of the SHA-256 of what precedes them
-            let body = bytes.len() - 8;
-            let sum = Sha256::digest(&bytes[..body]);
-            bytes[body..].copy_from_slice(&sum[..8]);
-        }
+        damage(&mut bytes, corrupt, truncate, fix_checksum);
         let k = into as usize % STATE_SLOTS;
         let Some(i) = World::index(who) else {
             unsafe { fmi2DeSerializeFMUstate(c, bytes.as_ptr().cast(), bytes.len(), null_mut()) };
