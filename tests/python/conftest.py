@@ -18,3 +18,11 @@ def fmu_path():
 @pytest.fixture(scope="session")
 def reference_dir():
     return ROOT / "tests" / "data" / "reference"
+
+
+@pytest.fixture(scope="session")
+def hasel_path():
+    path = pathlib.Path(os.environ.get("HASEL", ROOT / "target" / "release" / "hasel"))
+    if not path.exists():
+        pytest.fail(f"{path} is missing: build it with `cargo build --release --bin hasel` first")
+    return str(path)
