@@ -27,7 +27,7 @@ import numpy as np
 
 from fmpy_controller import STEP
 
-LAMBDA = 300.0  # rad/s: the shaped slow pole (k + k_s) / (b + k_d)
+LAMBDA = 300.0  # rad/s: the shaped slow pole, about (k + k_s) / (b + k_d) (I is small)
 DAMPING = 0.5  # k_d = DAMPING * b: the injected damping relative to the film's own
 MECH, ELEC = [0, 1, 2], [3, 4]  # theta, l_p, p and Q1, Q2 in an actuator's block of the state
 

@@ -1,6 +1,6 @@
-"""The inverse FMU (fmu/HaselInverse.fmu) through fmpy: valid, its interface, the same heights
-and voltages as `hasel inverse --method xy` step by step, and a tip it cannot reach discarded
-with the reason logged."""
+"""The inverse FMU (fmu/HaselInverse.fmu) through fmpy: its interface, the same heights and
+voltages as `hasel inverse --method xy` step by step, and a tip it cannot reach discarded with
+the reason logged (fmpy validate and fmutool: tests/python/test_fmu_fmpy.py)."""
 import subprocess
 
 import numpy as np
@@ -8,15 +8,10 @@ import pytest
 from fmpy import extract, read_model_description
 from fmpy.fmi1 import FMICallException
 from fmpy.fmi2 import FMU2Slave
-from fmpy.validation import validate_fmu
 
 MEAN = 50e-6  # m
 STEP = 0.05  # s
 OUTPUTS = ["h1", "h2", "h3", "U1", "U2", "U3"]
-
-
-def test_fmpy_validate_finds_no_problem(inverse_fmu_path):
-    assert validate_fmu(inverse_fmu_path) == []
 
 
 def test_interface_is_the_contract(inverse_fmu_path):
