@@ -6,6 +6,10 @@ cd "$ROOT"
 VENV="$ROOT/.venv"
 FMU_TARGET=x86_64-unknown-linux-gnu
 FMU_LIB="$ROOT/target/$FMU_TARGET/release/libhasel_fmu.so"
+# the inverse FMU's build of the same library (feature inverse-fmu), in a target folder of its own
+# so that neither build undoes the other
+INVERSE_TARGET_DIR="$ROOT/target/inverse"
+INVERSE_LIB="$INVERSE_TARGET_DIR/$FMU_TARGET/release/libhasel_fmu.so"
 
 step() { printf '\n== %s\n' "$*"; }
 
@@ -41,7 +45,21 @@ ensure_zigbuild() {
 }
 
 # Builds the FMU's shared library against glibc 2.17 (so it loads on older hosts), the CLI,
-# and packs fmu/HaselPlatform.fmu.
+# and packs fmu/HaselPlatform.fmu; then the same for the inverse FMU, fmu/HaselInverse.fmu.
+# A cdylib built with other features needs a target folder of its own (its file name would
+# clash); seeded once from the main build's artifacts, so that only this crate compiles again,
+# not its dependencies (a cold build of them takes minutes on two cores).
+seed_target_dir() {
+    local dir="$1"
+    if [ ! -d "$dir/$FMU_TARGET" ] && [ -d "target/$FMU_TARGET" ]; then
+        mkdir -p "$dir/release"
+        cp -a "target/$FMU_TARGET" "$dir/"
+        for sub in build deps .fingerprint; do
+            if [ -d "target/release/$sub" ]; then cp -a "target/release/$sub" "$dir/release/"; fi
+        done
+    fi
+}
+
 build_fmu() {
     ensure_venv
     ensure_zigbuild
@@ -51,4 +69,9 @@ build_fmu() {
     cargo build --release --bin hasel
     step "pack fmu/HaselPlatform.fmu"
     ./target/release/hasel fmu --lib "$FMU_LIB"
+    step "build the inverse FMU's library (feature inverse-fmu) and pack fmu/HaselInverse.fmu"
+    seed_target_dir "$INVERSE_TARGET_DIR"
+    cargo zigbuild --release --lib --features inverse-fmu --target "$FMU_TARGET.2.17" \
+        --target-dir "$INVERSE_TARGET_DIR"
+    ./target/release/hasel fmu --model inverse --lib "$INVERSE_LIB"
 }

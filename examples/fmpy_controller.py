@@ -69,6 +69,74 @@ def circle(tau):
     return rho * np.array([math.cos(phase), math.sin(phase)])
 
 
+class CircleHeights:
+    """The heights that put the tip on the circle (the inverse kinematics above), read from the FMU."""
+
+    def __init__(self, r, L, angles):
+        self.r, self.L, self.angles = r, L, np.asarray(angles)
+
+    def __call__(self, t):
+        """Reference heights h1..h3 [m] at time t: H0 while settling, then the circle."""
+        if t < T_SETTLE - STEP / 2:
+            return np.full(3, H0)
+        d = circle(t - T_SETTLE)
+        return H0 - (self.r / self.L) * (d[0] * np.cos(self.angles) + d[1] * np.sin(self.angles))
+
+
+def run_circle(fmu_path, make_controller, t_end, name="controlled"):
+    """Drive the FMU in STEP co-simulation steps with `controller(t, h) -> U`, made by
+    `make_controller(reference, get)` (reference: CircleHeights; get(*names): the FMU's values
+    at the start of the run). Returns rows t, reference tip x y, tip x y, U1..U3 from T_SETTLE on
+    and the circle's centre (the tip at the operating point)."""
+    md = read_model_description(fmu_path)
+    vr = {v.name: v.valueReference for v in md.modelVariables}
+    refs = lambda *names: [vr[n] for n in names]  # noqa: E731
+    fmu = FMU2Slave(guid=md.guid, unzipDirectory=extract(fmu_path),
+                    modelIdentifier=md.coSimulation.modelIdentifier, instanceName=name)
+    fmu.instantiate()
+    fmu.setupExperiment(startTime=0.0)
+    fmu.enterInitializationMode()
+    get = lambda *names: np.array(fmu.getReal(refs(*names)))  # noqa: E731
+    r, L = get("anchor_radius", "L")
+    reference = CircleHeights(r, L, get("anchor_angle_1", "anchor_angle_2", "anchor_angle_3"))
+    controller = make_controller(reference, get)
+    fmu.exitInitializationMode()
+
+    centre = None
+    log = []  # t, reference x y, tip x y, U1..U3
+    t = 0.0
+    for _ in range(round(t_end / STEP)):
+        h = get("h1", "h2", "h3")
+        if centre is None and t >= T_SETTLE - STEP / 2:
+            centre = get("tip_x", "tip_y")  # the tip at the operating point
+        u = controller(t, h)
+        fmu.setReal(refs("U1", "U2", "U3"), list(u))
+        fmu.doStep(currentCommunicationPoint=t, communicationStepSize=STEP)
+        t += STEP
+        if centre is not None:  # the tip at the end of the step against the reference then
+            log.append([t, *(centre + circle(t - T_SETTLE)), *get("tip_x", "tip_y"), *u])
+    fmu.terminate()
+    fmu.freeInstance()
+    return np.array(log), centre
+
+
+def tracking_error(log):
+    """RMS and maximum distance [m] of the tip from the circle after the first period."""
+    time, ref, got = log[:, 0], log[:, 1:3], log[:, 3:5]
+    err = np.hypot(*(got - ref).T)
+    steady = time > T_SETTLE + PERIOD
+    if not steady.any():
+        raise SystemExit(f"--t-end must exceed {T_SETTLE + PERIOD} s to measure after the first period")
+    return math.sqrt(np.mean(err[steady] ** 2)), err[steady].max(), err
+
+
+def make_pi(reference, get):
+    """The hand-tuned PI above; since the input is held over the step, its setpoint is the
+    reference at the step's end."""
+    pi = PiOnSquaredVoltage(KP, KI)
+    return lambda t, h: pi(reference(t + STEP) - h, STEP)
+
+
 def main():
     default_fmu = pathlib.Path(__file__).resolve().parents[1] / "fmu" / "HaselPlatform.fmu"
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
@@ -77,51 +145,12 @@ def main():
     parser.add_argument("--out", default="tip_circle.png", help="PNG to write")
     args = parser.parse_args()
 
-    md = read_model_description(args.fmu)
-    vr = {v.name: v.valueReference for v in md.modelVariables}
-    refs = lambda *names: [vr[n] for n in names]  # noqa: E731
-    fmu = FMU2Slave(guid=md.guid, unzipDirectory=extract(args.fmu),
-                    modelIdentifier=md.coSimulation.modelIdentifier, instanceName="controlled")
-    fmu.instantiate()
-    fmu.setupExperiment(startTime=0.0)
-    fmu.enterInitializationMode()
-    r, L = fmu.getReal(refs("anchor_radius", "L"))
-    angles = np.array(fmu.getReal(refs("anchor_angle_1", "anchor_angle_2", "anchor_angle_3")))
-    fmu.exitInitializationMode()
-
-    controller = PiOnSquaredVoltage(KP, KI)
-    centre = None
-    log = []  # t, reference x y, tip x y, U1..U3
-    t = 0.0
-    for _ in range(round(args.t_end / STEP)):
-        h = np.array(fmu.getReal(refs("h1", "h2", "h3")))
-        tip = np.array(fmu.getReal(refs("tip_x", "tip_y")))
-        if t < T_SETTLE - STEP / 2:
-            h_set = np.full(3, H0)
-        else:
-            if centre is None:
-                centre = tip.copy()  # the tip at the operating point
-            d = circle(t + STEP - T_SETTLE)  # aim at where the reference is at the end of the step
-            h_set = H0 - (r / L) * (d[0] * np.cos(angles) + d[1] * np.sin(angles))
-        u = controller(h_set - h, STEP)
-        fmu.setReal(refs("U1", "U2", "U3"), list(u))
-        fmu.doStep(currentCommunicationPoint=t, communicationStepSize=STEP)
-        t += STEP
-        if centre is not None:  # the tip at the end of the step against the reference then
-            log.append([t, *(centre + circle(t - T_SETTLE)), *fmu.getReal(refs("tip_x", "tip_y")), *u])
-    fmu.terminate()
-    fmu.freeInstance()
-
-    log = np.array(log)
+    log, centre = run_circle(args.fmu, make_pi, args.t_end)
     time, ref, got, volts = log[:, 0], log[:, 1:3], log[:, 3:5], log[:, 5:8]
-    err = np.hypot(*(got - ref).T)
-    steady = time > T_SETTLE + PERIOD
-    if not steady.any():
-        raise SystemExit(f"--t-end must exceed {T_SETTLE + PERIOD} s to measure after the first period")
-    rms = math.sqrt(np.mean(err[steady] ** 2))
+    rms, worst, err = tracking_error(log)
     print(f"centre of the circle: ({centre[0] * 1e6:.3f}, {centre[1] * 1e6:.3f}) um; "
           f"voltages {volts.min():.1f} .. {volts.max():.1f} V")
-    print(f"tip tracking error after the first period: RMS {rms * 1e6:.3f} um, max {err[steady].max() * 1e6:.3f} um")
+    print(f"tip tracking error after the first period: RMS {rms * 1e6:.3f} um, max {worst * 1e6:.3f} um")
 
     fig, (ax_xy, ax_err) = plt.subplots(1, 2, figsize=(11, 4.8))
     ax_xy.plot(ref[:, 0] * 1e6, ref[:, 1] * 1e6, "k--", lw=1, label="reference")

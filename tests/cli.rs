@@ -4,6 +4,9 @@
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
+use hasel_fmu::io::csv::Table;
+use hasel_fmu::model::{Params, Platform};
+
 fn hasel(args: &[&str]) -> Output {
     Command::new(env!("CARGO_BIN_EXE_hasel"))
         .args(args)
@@ -293,4 +296,99 @@ fn diagnose_answers_in_json_and_refuses_bad_data() {
     ]);
     assert!(!o.status.success());
     assert!(stderr(&o).contains("--effect gremlins"), "{}", stderr(&o));
+}
+
+/// `hasel inverse` on a 40 µm tip circle around the level platform at 60 µm by `method`: the
+/// path's rows t, x, y, z and the written rows t, h1..h3, U1..U3.
+fn inverse_circle(dir: &Path, method: &[&str]) -> (Vec<[f64; 4]>, Vec<Vec<f64>>) {
+    let kinematics = Platform::new(Params::default()).unwrap().kinematics;
+    let z = kinematics.tip([60e-6; 3])[2];
+    let mut text = String::from("t,tip_x,tip_y,tip_z\n");
+    let path: Vec<[f64; 4]> = (0..25)
+        .map(|k| {
+            let t = k as f64 / 12.0;
+            let phase = std::f64::consts::PI * t;
+            [t, 40e-6 * phase.cos(), 40e-6 * phase.sin(), z]
+        })
+        .collect();
+    for p in &path {
+        text.push_str(&format!("{:?},{:?},{:?},{:?}\n", p[0], p[1], p[2], p[3]));
+    }
+    let (tip, out) = (dir.join("tip.csv"), dir.join("inverse.csv"));
+    std::fs::write(&tip, text).unwrap();
+    let mut args = vec!["inverse", "--tip", s(&tip), "--out", s(&out)];
+    args.extend_from_slice(method);
+    let o = hasel(&args);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let table = Table::read(&out).unwrap();
+    assert_eq!(table.header, ["t", "h1", "h2", "h3", "U1", "U2", "U3"]);
+    (path, table.rows)
+}
+
+#[test]
+fn inverse_writes_heights_whose_forward_kinematics_is_the_tip_path() {
+    let dir = scratch("inverse");
+    let kinematics = Platform::new(Params::default()).unwrap().kinematics;
+    for (method, xyz) in [
+        (&["--method", "exact"][..], 3),
+        (&["--method", "xy", "--mean-height", "60e-6"][..], 2),
+    ] {
+        let (path, rows) = inverse_circle(&dir, method);
+        assert_eq!(rows.len(), path.len());
+        for (row, p) in rows.iter().zip(&path) {
+            assert!((row[0] - p[0]).abs() <= 1e-12, "t {} vs {}", row[0], p[0]);
+            let tip = kinematics.tip([row[1], row[2], row[3]]);
+            for axis in 0..xyz {
+                // the heights as written (13 digits) put the tip on the path to 1e-12 m
+                assert!(
+                    (tip[axis] - p[axis + 1]).abs() <= 1e-12,
+                    "{method:?} t = {}: tip {tip:?} vs {p:?}",
+                    p[0]
+                );
+            }
+            if xyz == 2 {
+                let mean_height = (row[1] + row[2] + row[3]) / 3.0;
+                assert!((mean_height - 60e-6).abs() <= 1e-15, "{mean_height}");
+            }
+            assert!(row[4..].iter().all(|u| *u > 0.0), "{row:?}");
+        }
+    }
+}
+
+#[test]
+fn inverse_lists_the_points_it_cannot_reach_and_writes_nothing() {
+    let dir = scratch("unreachable");
+    let tip = dir.join("tip.csv");
+    std::fs::write(
+        &tip,
+        "t,tip_x,tip_y,tip_z\n0,0,0,0.05005\n0.5,0,0,0.0503\n1,0,0,0.049\n",
+    )
+    .unwrap();
+    let out = dir.join("inverse.csv");
+    let o = hasel(&["inverse", "--tip", s(&tip), "--out", s(&out)]);
+    assert!(!o.status.success());
+    let err = stderr(&o);
+    assert!(
+        err.contains("2 of 3 tip points cannot be reached (nothing written)")
+            && err.contains("line 3, t = 0.5 s: actuator 1: h = 3.000000e-4 m is at or beyond")
+            && err.contains(
+                "line 4, t = 1 s: actuator 1: h = -1.000000e-3 m is below the rest height"
+            ),
+        "{err}"
+    );
+    assert!(!out.exists());
+    let o = hasel(&[
+        "inverse",
+        "--tip",
+        s(&tip),
+        "--method",
+        "xy",
+        "--out",
+        s(&out),
+    ]);
+    assert!(
+        stderr(&o).contains("--method xy needs --mean-height H"),
+        "{}",
+        stderr(&o)
+    );
 }

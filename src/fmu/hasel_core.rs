@@ -26,6 +26,28 @@ pub fn resource_params(resource_dir: Option<&Path>) -> Result<Params, String> {
     }
 }
 
+/// The parameters as a serialized state holds them: the values in table order.
+pub fn saved_params(params: &Params) -> Vec<f64> {
+    parameters().map(|d| (d.get)(params)).collect()
+}
+
+/// The parameters back from [`saved_params`], each validated.
+pub fn restored_params(values: &[f64]) -> Result<Params, String> {
+    let defs: Vec<&ParamDef> = parameters().collect();
+    if values.len() != defs.len() {
+        return Err(format!(
+            "state holds {} parameters, this FMU has {}",
+            values.len(),
+            defs.len()
+        ));
+    }
+    let mut params = Params::default();
+    for (d, v) in defs.iter().zip(values) {
+        params.set_param(d, *v).map_err(|e| format!("state: {e}"))?;
+    }
+    Ok(params)
+}
+
 /// The core: parameters until initialization ends, then a running simulation.
 #[derive(Clone, Debug)]
 pub struct HaselCore {
@@ -175,7 +197,7 @@ impl FmuCore for HaselCore {
 
     fn serialize_state(&self) -> Vec<u8> {
         let state = State {
-            params: parameters().map(|d| (d.get)(&self.params)).collect(),
+            params: saved_params(&self.params),
             rtol: self.rtol,
             tolerance: self.tolerance,
             u: self.u,
@@ -188,18 +210,7 @@ impl FmuCore for HaselCore {
     fn deserialize_state(&self, bytes: &[u8]) -> Result<Self, String> {
         let state: State =
             postcard::from_bytes(bytes).map_err(|e| format!("not a HaselPlatform state: {e}"))?;
-        let defs: Vec<&ParamDef> = parameters().collect();
-        if state.params.len() != defs.len() {
-            return Err(format!(
-                "state holds {} parameters, this FMU has {}",
-                state.params.len(),
-                defs.len()
-            ));
-        }
-        let mut params = Params::default();
-        for (d, v) in defs.iter().zip(&state.params) {
-            params.set_param(d, *v).map_err(|e| format!("state: {e}"))?;
-        }
+        let params = restored_params(&state.params)?;
         let sim = match state.sim {
             Some(snapshot) => {
                 let model = Platform::new(params.clone()).map_err(|e| format!("state: {e}"))?;

@@ -1,9 +1,11 @@
 //! The HaselPlatform FMU: its variable table ([`variables`]), the model core that maps FMI
 //! calls onto a simulation ([`hasel_core`]), and the archive with its documentation
 //! ([`pack`]). The generic FMI 2.0 shell of [`crate::fmi2`] does every check of the standard
-//! around the core.
+//! around the core. Beside it the HaselInverse FMU for feedforward ([`inverse`]), served by the
+//! same shell from a build of the library with the feature `inverse-fmu`.
 
 pub mod hasel_core;
+pub mod inverse;
 pub mod pack;
 pub mod variables;
 
@@ -21,13 +23,22 @@ pub const RESOURCE_PARAMS: &str = "parameters.toml";
 
 /// The model-level data of `modelDescription.xml`.
 pub fn model_info() -> ModelInfo {
+    model_info_of(
+        MODEL_IDENTIFIER,
+        "3-DOF micro parallel platform (3PS) driven by three HASEL actuators, each a \
+         port-Hamiltonian system (Feregrino et al.); inputs U1..U3 [V], outputs actuator heights \
+         and antenna tip [m]",
+        DEFAULT_RTOL,
+    )
+}
+
+/// The model-level data of an FMU of this crate: its identifier (also its model name), its
+/// description and the default experiment's tolerance (0 to 10 s in steps of 1 ms).
+pub fn model_info_of(identifier: &str, description: &str, tolerance: f64) -> ModelInfo {
     ModelInfo {
-        model_name: MODEL_IDENTIFIER.into(),
-        model_identifier: MODEL_IDENTIFIER.into(),
-        description: "3-DOF micro parallel platform (3PS) driven by three HASEL actuators, each a \
-                      port-Hamiltonian system (Feregrino et al.); inputs U1..U3 [V], outputs \
-                      actuator heights and antenna tip [m]"
-            .into(),
+        model_name: identifier.into(),
+        model_identifier: identifier.into(),
+        description: description.into(),
         author: "hasel-fmu".into(),
         version: env!("CARGO_PKG_VERSION").into(),
         generation_tool: concat!("hasel-fmu ", env!("CARGO_PKG_VERSION")).into(),
@@ -35,7 +46,7 @@ pub fn model_info() -> ModelInfo {
             start_time: 0.0,
             stop_time: 10.0,
             step_size: 1e-3,
-            tolerance: DEFAULT_RTOL,
+            tolerance,
         },
         log_categories: vec![],
     }
@@ -43,6 +54,7 @@ pub fn model_info() -> ModelInfo {
 
 /// The 44 C functions of the FMU binary, around [`HaselCore`]; in a module of their own, as
 /// the macro imports the C types where it is invoked.
+#[cfg(not(feature = "inverse-fmu"))]
 mod fmi2_functions {
     crate::export_fmi2!(super::HaselCore);
 }

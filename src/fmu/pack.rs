@@ -1,29 +1,52 @@
-//! Packs the FMU archive: `modelDescription.xml`, `binaries/linux64/HaselPlatform.so`,
-//! `documentation/index.html` and `resources/parameters.toml`, all generated from the one
-//! variable table of [`super::variables`] and one parameter set.
+//! Packs an FMU archive: `modelDescription.xml`, `binaries/linux64/<modelIdentifier>.so`,
+//! `documentation/index.html` and `resources/parameters.toml`, all generated from one variable
+//! table and one parameter set: the platform's ([`platform`]) or the inverse's
+//! ([`super::inverse::spec`]).
 
 use std::io::Write;
 use std::path::Path;
 
 use super::variables::variables;
-use super::{MODEL_IDENTIFIER, RESOURCE_PARAMS, model_info};
-use crate::fmi_common::variables::{Causality, Variable};
+use super::{RESOURCE_PARAMS, model_info};
+use crate::fmi_common::variables::{Causality, ModelInfo, Variable};
 use crate::fmi2::model_description::{guid_for, model_description_xml};
 use crate::io::file::{FileError, write_bytes_atomic};
 use crate::io::params_file;
 use crate::model::Params;
 use crate::simulation::DEFAULT_RTOL;
 
-/// The `modelDescription.xml` of an FMU whose start values are `params`.
-pub fn model_description(params: &Params) -> String {
-    model_description_xml(&model_info(), &variables(params, DEFAULT_RTOL))
+/// One FMU of this crate: its model data, its variables with their start values, and what its
+/// documentation says of the model.
+pub struct Spec {
+    pub info: ModelInfo,
+    pub variables: Vec<Variable>,
+    pub about: &'static str,
+}
+
+/// The HaselPlatform FMU with the start values `params`.
+pub fn platform(params: &Params) -> Spec {
+    Spec {
+        info: model_info(),
+        variables: variables(params, DEFAULT_RTOL),
+        about: "Each actuator is the port-Hamiltonian system of Feregrino et al.: state (theta, \
+                l_p, p, Q1, Q2), energy H, dynamics dx/dt = (J - R) grad H + g U; the heights \
+                h_i = 1/2 Lv sin(theta_i) drive the 3PS platform, whose forward kinematics gives \
+                the antenna tip. The inputs are held constant over each communication step; the \
+                internal solver is a Radau IIA method of order 5 with error control (relative \
+                tolerance from fmi2SetupExperiment, else the parameter <code>rtol</code>). The \
+                simulation starts from the U = 0 equilibrium under gravity.",
+    }
+}
+
+/// The `modelDescription.xml` of `spec`.
+pub fn model_description(spec: &Spec) -> String {
+    model_description_xml(&spec.info, &spec.variables)
         .expect("the variable table is valid (tested)")
 }
 
 /// The GUID of that description.
-pub fn guid(params: &Params) -> String {
-    guid_for(&model_info(), &variables(params, DEFAULT_RTOL))
-        .expect("the variable table is valid (tested)")
+pub fn guid(spec: &Spec) -> String {
+    guid_for(&spec.info, &spec.variables).expect("the variable table is valid (tested)")
 }
 
 fn escape(s: &str) -> String {
@@ -43,25 +66,19 @@ fn group(v: &Variable) -> &'static str {
 
 /// `documentation/index.html`: the model, its interface and every variable with its unit,
 /// start value and description.
-pub fn documentation(params: &Params) -> String {
-    let vars = variables(params, DEFAULT_RTOL);
-    let info = model_info();
+pub fn documentation(spec: &Spec) -> String {
+    let info = &spec.info;
     let mut html = format!(
         "<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\"><title>{id}</title>\n\
          <style>body{{font-family:sans-serif;max-width:60em;margin:2em auto}}table{{border-collapse:collapse}}\
          td,th{{border:1px solid #ccc;padding:2px 6px;text-align:left}}</style></head><body>\n\
          <h1>{id}</h1>\n<p>{desc}</p>\n\
-         <p>FMI 2.0 Co-Simulation, GUID <code>{guid}</code>. Each actuator is the port-Hamiltonian \
-         system of Feregrino et al.: state (theta, l_p, p, Q1, Q2), energy H, dynamics \
-         dx/dt = (J - R) grad H + g U; the heights h_i = 1/2 Lv sin(theta_i) drive the 3PS platform, \
-         whose forward kinematics gives the antenna tip. The inputs are held constant over each \
-         communication step; the internal solver is a Radau IIA method of order 5 with error \
-         control (relative tolerance from fmi2SetupExperiment, else the parameter <code>rtol</code>). \
-         The simulation starts from the U = 0 equilibrium under gravity.</p>\n\
+         <p>FMI 2.0 Co-Simulation, GUID <code>{guid}</code>. {about}</p>\n\
          <p>Default experiment: 0 to {stop} s, step {step} s, tolerance {tol}.</p>\n",
-        id = MODEL_IDENTIFIER,
+        id = info.model_identifier,
         desc = escape(&info.description),
-        guid = guid(params),
+        guid = guid(spec),
+        about = spec.about,
         stop = info.default_experiment.stop_time,
         step = info.default_experiment.step_size,
         tol = info.default_experiment.tolerance,
@@ -70,7 +87,7 @@ pub fn documentation(params: &Params) -> String {
         html.push_str(&format!(
             "<h2>{title}</h2>\n<table><tr><th>name</th><th>value reference</th><th>unit</th><th>start</th><th>description</th></tr>\n"
         ));
-        for v in vars.iter().filter(|v| group(v) == title) {
+        for v in spec.variables.iter().filter(|v| group(v) == title) {
             html.push_str(&format!(
                 "<tr><td><code>{}</code></td><td>{}</td><td>{}</td><td>{}</td><td>{}</td></tr>\n",
                 v.name,
@@ -86,8 +103,9 @@ pub fn documentation(params: &Params) -> String {
     html
 }
 
-/// Writes the FMU to `out` (atomically) from the shared library at `library`.
-pub fn pack(library: &Path, params: &Params, out: &Path) -> Result<(), FileError> {
+/// Writes the FMU of `spec` to `out` (atomically) from the shared library at `library`, with
+/// `params` as its resource file.
+pub fn pack(library: &Path, spec: &Spec, params: &Params, out: &Path) -> Result<(), FileError> {
     let so = std::fs::read(library)
         .map_err(|e| FileError::new(library, format!("cannot read the FMU library: {e}")))?;
     if !so.starts_with(b"\x7fELF") {
@@ -99,12 +117,15 @@ pub fn pack(library: &Path, params: &Params, out: &Path) -> Result<(), FileError
     let entries: [(String, Vec<u8>); 4] = [
         (
             "modelDescription.xml".into(),
-            model_description(params).into_bytes(),
+            model_description(spec).into_bytes(),
         ),
-        (format!("binaries/linux64/{MODEL_IDENTIFIER}.so"), so),
+        (
+            format!("binaries/linux64/{}.so", spec.info.model_identifier),
+            so,
+        ),
         (
             "documentation/index.html".into(),
-            documentation(params).into_bytes(),
+            documentation(spec).into_bytes(),
         ),
         (
             format!("resources/{RESOURCE_PARAMS}"),
@@ -128,10 +149,19 @@ pub fn pack(library: &Path, params: &Params, out: &Path) -> Result<(), FileError
 mod tests {
     use super::*;
     use crate::fmi_common::variables::check_variable_table;
+    use crate::fmu::inverse;
+
+    /// Both FMUs at the default parameters.
+    fn specs() -> [Spec; 2] {
+        let p = Params::default();
+        [platform(&p), inverse::spec(&p)]
+    }
 
     #[test]
-    fn the_variable_table_follows_the_fmi_rules() {
-        check_variable_table(&variables(&Params::default(), DEFAULT_RTOL)).unwrap();
+    fn the_variable_tables_follow_the_fmi_rules() {
+        for spec in specs() {
+            check_variable_table(&spec.variables).unwrap();
+        }
     }
 
     #[test]
@@ -140,7 +170,7 @@ mod tests {
             Path::new(env!("CARGO_MANIFEST_DIR")).join("modelDescription/modelDescription.xml");
         let committed = std::fs::read_to_string(&path).unwrap_or_default();
         assert!(
-            committed == model_description(&Params::default()),
+            committed == model_description(&platform(&Params::default())),
             "{} differs from the generated description: run `cargo run -- describe --out modelDescription/modelDescription.xml`",
             path.display()
         );
@@ -149,21 +179,25 @@ mod tests {
     #[test]
     fn the_guid_follows_the_start_values() {
         let mut p = Params::default();
-        let g0 = guid(&p);
+        let g0 = [guid(&platform(&p)), guid(&inverse::spec(&p))];
         p.set("Kb_1", 0.31).unwrap();
-        assert_ne!(g0, guid(&p));
-        assert!(model_description(&p).contains(&guid(&p)));
+        for (spec, g0) in [platform(&p), inverse::spec(&p)].iter().zip(g0) {
+            assert_ne!(g0, guid(spec));
+            assert!(model_description(spec).contains(&guid(spec)));
+        }
     }
 
     #[test]
     fn documentation_lists_every_variable() {
-        let doc = documentation(&Params::default());
-        for v in variables(&Params::default(), DEFAULT_RTOL) {
-            assert!(
-                doc.contains(&format!("<code>{}</code>", v.name)),
-                "{}",
-                v.name
-            );
+        for spec in specs() {
+            let doc = documentation(&spec);
+            for v in &spec.variables {
+                assert!(
+                    doc.contains(&format!("<code>{}</code>", v.name)),
+                    "{}",
+                    v.name
+                );
+            }
         }
     }
 }

@@ -120,32 +120,53 @@ pub fn rows() -> &'static [Row] {
     })
 }
 
+/// Causality, variability, initial and start of a variable.
+pub type Kind = (Causality, Variability, Option<Initial>, Option<f64>);
+
+/// An output the model computes.
+pub const OUTPUT: Kind = (
+    Causality::Output,
+    Variability::Continuous,
+    Some(Initial::Calculated),
+    None,
+);
+
+/// A fixed parameter whose start value is `start`.
+pub fn parameter(start: f64) -> Kind {
+    (
+        Causality::Parameter,
+        Variability::Fixed,
+        Some(Initial::Exact),
+        Some(start),
+    )
+}
+
+/// The FMI variable at value reference `vr`.
+pub fn variable(vr: usize, name: &str, unit: &str, description: &str, kind: Kind) -> Variable {
+    let (causality, variability, initial, start) = kind;
+    Variable {
+        name: name.to_string(),
+        value_reference: vr as u32,
+        causality,
+        variability,
+        initial,
+        unit: Some(unit.to_string()),
+        description: description.to_string(),
+        start,
+    }
+}
+
 /// The FMI variables with the start values of `params` and `rtol`.
 pub fn variables(params: &Params, rtol: f64) -> Vec<Variable> {
     rows()
         .iter()
         .enumerate()
         .map(|(vr, row)| {
-            let (causality, variability, initial, start) = match row.slot {
+            let kind = match row.slot {
                 Slot::Input(_) => (Causality::Input, Variability::Continuous, None, Some(0.0)),
-                Slot::Height(_) | Slot::Tip(_) => (
-                    Causality::Output,
-                    Variability::Continuous,
-                    Some(Initial::Calculated),
-                    None,
-                ),
-                Slot::Param(d) => (
-                    Causality::Parameter,
-                    Variability::Fixed,
-                    Some(Initial::Exact),
-                    Some((d.get)(params)),
-                ),
-                Slot::Rtol => (
-                    Causality::Parameter,
-                    Variability::Fixed,
-                    Some(Initial::Exact),
-                    Some(rtol),
-                ),
+                Slot::Height(_) | Slot::Tip(_) => OUTPUT,
+                Slot::Param(d) => parameter((d.get)(params)),
+                Slot::Rtol => parameter(rtol),
                 Slot::State { .. } | Slot::Energy | Slot::SuppliedPower | Slot::DissipatedPower => {
                     (
                         Causality::Local,
@@ -155,16 +176,7 @@ pub fn variables(params: &Params, rtol: f64) -> Vec<Variable> {
                     )
                 }
             };
-            Variable {
-                name: row.name.clone(),
-                value_reference: vr as u32,
-                causality,
-                variability,
-                initial,
-                unit: Some(row.unit.to_string()),
-                description: row.description.clone(),
-                start,
-            }
+            variable(vr, &row.name, row.unit, &row.description, kind)
         })
         .collect()
 }

@@ -27,6 +27,17 @@ impl std::fmt::Display for IkmError {
 
 impl std::error::Error for IkmError {}
 
+/// Which inverse of the kinematics (src/model/model.md, "Inverse kinematics").
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Inverse {
+    /// The paper's closed form, approximate: [`Kinematics::heights_closed_form`].
+    ClosedForm,
+    /// Newton on the FKM: [`Kinematics::heights`].
+    Exact,
+    /// From the tip's X and Y and the mean height h̄ [m]: [`Kinematics::heights_from_xy`].
+    Xy { mean_height: f64 },
+}
+
 impl Kinematics {
     pub fn new(p: &Params) -> Kinematics {
         let anchor = |a: f64| [p.anchor_radius * a.cos(), p.anchor_radius * a.sin()];
@@ -96,6 +107,16 @@ impl Kinematics {
         let c_p = Vector3::from(tip) - self.length * n;
         self.anchors
             .map(|a| c_p.z - (n.x * (a[0] - c_p.x) + n.y * (a[1] - c_p.y)) / n.z)
+    }
+
+    /// The heights [m] that put the tip at `tip` [m] by `method` (the XY inverse reads only
+    /// the tip's X and Y).
+    pub fn inverse(&self, method: Inverse, tip: [f64; 3]) -> Result<[f64; 3], IkmError> {
+        match method {
+            Inverse::ClosedForm => Ok(self.heights_closed_form(tip)),
+            Inverse::Exact => self.heights(tip),
+            Inverse::Xy { mean_height } => self.heights_from_xy([tip[0], tip[1]], mean_height),
+        }
     }
 
     /// Exact IKM: Newton on the FKM from the closed form, to `1e-15 m`.

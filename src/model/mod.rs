@@ -10,6 +10,7 @@ pub mod kinematics;
 pub mod params;
 pub mod platform;
 pub mod shell;
+pub mod statics;
 
 pub use effects::{Effect, EffectParams};
 pub use kinematics::Kinematics;

@@ -1,4 +1,4 @@
-"""Shared fixtures: the packed FMU and the reference data."""
+"""Shared fixtures: the packed FMUs, the hasel command and the reference data."""
 import os
 import pathlib
 
@@ -7,14 +7,30 @@ import pytest
 ROOT = pathlib.Path(__file__).resolve().parents[2]
 
 
+def built(variable, default, how):
+    """The file named by the environment `variable`, else `default`; a clear failure if missing."""
+    path = pathlib.Path(os.environ.get(variable, default))
+    if not path.exists():
+        pytest.fail(f"{path} is missing: build it with {how} first")
+    return str(path)
+
+
 @pytest.fixture(scope="session")
 def fmu_path():
-    path = pathlib.Path(os.environ.get("HASEL_FMU", ROOT / "fmu" / "HaselPlatform.fmu"))
-    if not path.exists():
-        pytest.fail(f"{path} is missing: build it with `bash ci/main.sh` (or `hasel fmu`) first")
-    return str(path)
+    return built("HASEL_FMU", ROOT / "fmu" / "HaselPlatform.fmu", "`bash ci/main.sh` (or `hasel fmu`)")
 
 
 @pytest.fixture(scope="session")
 def reference_dir():
     return ROOT / "tests" / "data" / "reference"
+
+
+@pytest.fixture(scope="session")
+def hasel_path():
+    return built("HASEL", ROOT / "target" / "release" / "hasel", "`cargo build --release --bin hasel`")
+
+
+@pytest.fixture(scope="session")
+def inverse_fmu_path():
+    return built("HASEL_INVERSE_FMU", ROOT / "fmu" / "HaselInverse.fmu",
+                 "`bash ci/main.sh` (or `hasel fmu --model inverse`)")

@@ -1,4 +1,4 @@
-"""The shared object inside the FMU: exactly the 44 FMI 2.0 functions exported, and nothing
+"""The shared object inside each FMU: exactly the 44 FMI 2.0 functions exported, and nothing
 but glibc (at most 2.17) and libgcc_s needed, so it loads in common hosts."""
 import re
 import subprocess
@@ -25,13 +25,17 @@ FMI2_FUNCTIONS = {
 ALLOWED_NEEDED = re.compile(r"^(libc|libm|libpthread|libdl|librt|libgcc_s|ld-linux-x86-64)\.so\.\d+$")
 
 
-@pytest.fixture(scope="module")
-def shared_object(fmu_path, tmp_path_factory):
-    with zipfile.ZipFile(fmu_path) as z:
+@pytest.fixture(scope="module", params=["HaselPlatform", "HaselInverse"])
+def shared_object(request, tmp_path_factory):
+    """The binary of each FMU: the platform's and the inverse's (the same library built with
+    the feature inverse-fmu)."""
+    path = request.getfixturevalue("fmu_path" if request.param == "HaselPlatform" else "inverse_fmu_path")
+    with zipfile.ZipFile(path) as z:
         names = z.namelist()
-        assert "binaries/linux64/HaselPlatform.so" in names, names
+        so = f"binaries/linux64/{request.param}.so"
+        assert so in names, names
         assert all("\\" not in n for n in names)
-        return z.extract("binaries/linux64/HaselPlatform.so", tmp_path_factory.mktemp("so"))
+        return z.extract(so, tmp_path_factory.mktemp("so"))
 
 
 def run(*cmd):

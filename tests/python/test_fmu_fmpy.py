@@ -1,9 +1,11 @@
-"""The packed FMU through fmpy: validation, the 1 ms ZOH reference, the state API."""
+"""The packed FMU through fmpy: validation (of the inverse FMU too), the 1 ms ZOH reference, the
+state API."""
 import pathlib
 import subprocess
 import sys
 
 import numpy as np
+import pytest
 from fmpy import read_model_description, simulate_fmu
 from fmpy.validation import validate_fmu
 
@@ -22,14 +24,20 @@ def zoh_input(ref):
     return signals
 
 
-def test_fmpy_validate_finds_no_problem(fmu_path):
-    assert validate_fmu(fmu_path) == []
+@pytest.fixture(params=["fmu_path", "inverse_fmu_path"])
+def each_fmu(request):
+    """Both FMUs: the platform's and the inverse's (tests/python/test_inverse_fmu.py)."""
+    return request.getfixturevalue(request.param)
 
 
-def test_fmutool_check_passes(fmu_path):
+def test_fmpy_validate_finds_no_problem(each_fmu):
+    assert validate_fmu(each_fmu) == []
+
+
+def test_fmutool_check_passes(each_fmu):
     # fmu-manipulation-toolbox installs its command beside this interpreter
     fmutool = str(pathlib.Path(sys.executable).with_name("fmutool"))
-    result = subprocess.run([fmutool, "-input", fmu_path, "-check"], capture_output=True, text=True)
+    result = subprocess.run([fmutool, "-input", each_fmu, "-check"], capture_output=True, text=True)
     log = result.stdout + result.stderr
     assert result.returncode == 0, log
     assert "compliant with FMI-2.0" in log and "No semantic error" in log, log

@@ -1,8 +1,11 @@
 //! Why a command failed: the library's errors as they are, and the command line's own. `main`
 //! prints it after `hasel: error: `.
 
+use std::path::PathBuf;
+
 use hasel_fmu::io::file::FileError;
 use hasel_fmu::model::params::ParamError;
+use hasel_fmu::model::statics::StaticsError;
 use hasel_fmu::simulation::SimError;
 use hasel_fmu::uncertainty::UncertaintyError;
 use hasel_fmu::{diagnose, identify};
@@ -24,6 +27,16 @@ pub enum Error {
     Uncertainty(#[from] UncertaintyError),
     #[error(transparent)]
     Control(#[from] hasel_fmu::control::ControlError),
+    #[error(transparent)]
+    Statics(#[from] StaticsError),
+    /// Points of a tip path that no heights or voltages reach, each with its line, time and
+    /// reason (`hasel inverse`; nothing is written).
+    #[error("{}", unreachable(path, *total, points))]
+    Unreachable {
+        path: PathBuf,
+        total: usize,
+        points: Vec<UnreachablePoint>,
+    },
     /// A combination or range of command-line settings that does not work, as a sentence.
     #[error("{0}")]
     Usage(String),
@@ -53,6 +66,34 @@ pub enum Error {
     #[cfg(feature = "compare")]
     #[error("CVODE: {call}: {flag}")]
     Cvode { call: &'static str, flag: String },
+}
+
+/// One point of a tip path that cannot be reached.
+#[derive(Debug)]
+pub struct UnreachablePoint {
+    /// 1-based line of the file.
+    pub line: usize,
+    /// Its time [s].
+    pub t: f64,
+    pub why: String,
+}
+
+/// How many points are listed before the rest is counted.
+const LISTED: usize = 20;
+
+fn unreachable(path: &std::path::Path, total: usize, points: &[UnreachablePoint]) -> String {
+    let mut text = format!(
+        "{}: {} of {total} tip points cannot be reached (nothing written):",
+        path.display(),
+        points.len()
+    );
+    for p in points.iter().take(LISTED) {
+        text.push_str(&format!("\n  line {}, t = {} s: {}", p.line, p.t, p.why));
+    }
+    if points.len() > LISTED {
+        text.push_str(&format!("\n  ... and {} more", points.len() - LISTED));
+    }
+    text
 }
 
 impl Error {

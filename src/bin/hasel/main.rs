@@ -23,6 +23,7 @@ mod diagnose;
 mod error;
 mod fmu;
 mod identify;
+mod inverse;
 mod linearize;
 mod simulate;
 
@@ -63,6 +64,9 @@ enum Command {
     /// Linearize at an equilibrium (or a simulated state): A, B, C, D, the port-Hamiltonian
     /// structure, Bode and step figures, a reduced model
     Linearize(linearize::Args),
+    /// The heights for a tip path and the constant voltages that hold each at equilibrium
+    /// (feedforward)
+    Inverse(inverse::Args),
 }
 
 fn main() -> ExitCode {
@@ -77,6 +81,7 @@ fn main() -> ExitCode {
         Command::Diagnose(a) => diagnose::run(a),
         Command::Describe(a) => fmu::describe(a),
         Command::Linearize(a) => linearize::run(a),
+        Command::Inverse(a) => inverse::run(a),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

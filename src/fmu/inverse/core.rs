@@ -1,0 +1,221 @@
+//! The inverse FMU's core: stateless apart from what it holds between calls. Each
+//! communication step maps the inputs held over it, the tip's X and Y and the mean height, to
+//! the heights (inverse kinematics from X and Y, src/model/model.md "Inverse kinematics") and
+//! the voltages that hold them ("Statics"), which are the outputs at the step's end. So the
+//! outputs depend on the state the last step left, not directly on the inputs, as the FMI shell's
+//! contract asks (`modelDescription.xml` declares no direct feedthrough); in Initialization Mode
+//! they follow the inputs and parameters set there.
+
+use std::path::Path;
+
+use serde::{Deserialize, Serialize};
+
+use super::model_info;
+use super::variables::{Slot, rows, variables};
+use crate::fmi_common::model_api::FmuCore;
+use crate::fmi_common::variables::{ModelInfo, Variable};
+use crate::fmu::hasel_core::{resource_params, restored_params, saved_params};
+use crate::model::kinematics::Inverse;
+use crate::model::statics::feedforward;
+use crate::model::{Params, Platform};
+
+/// Heights [m] and voltages [V] of one tip position.
+type Outputs = ([f64; 3], [f64; 3]);
+
+/// The core: parameters and inputs, and the outputs of the last communication point.
+#[derive(Clone, Debug)]
+pub struct InverseCore {
+    params: Params,
+    /// tip_x, tip_y, mean_height [m].
+    inputs: [f64; 3],
+    /// The outputs at the current time, from Initialization Mode's end on.
+    held: Option<Outputs>,
+    t: f64,
+}
+
+/// The serialized state.
+#[derive(Serialize, Deserialize)]
+struct State {
+    params: Vec<f64>,
+    inputs: [f64; 3],
+    held: Option<Outputs>,
+    t: f64,
+}
+
+impl InverseCore {
+    /// The heights and holding voltages of the current inputs.
+    fn outputs(&self) -> Result<Outputs, String> {
+        let model = Platform::new(self.params.clone()).map_err(|e| e.to_string())?;
+        let [x, y, mean_height] = self.inputs;
+        feedforward(&model, Inverse::Xy { mean_height }, [x, y, 0.0])
+            .map_err(|e| format!("tip ({x:e}, {y:e}) m at the mean height {mean_height:e} m: {e}"))
+    }
+}
+
+impl FmuCore for InverseCore {
+    fn model_info() -> ModelInfo {
+        model_info()
+    }
+
+    fn instantiate(resource_dir: Option<&Path>) -> Result<Self, String> {
+        Ok(InverseCore {
+            params: resource_params(resource_dir)?,
+            inputs: super::variables::START,
+            held: None,
+            t: 0.0,
+        })
+    }
+
+    fn variables(&self) -> Vec<Variable> {
+        variables(&self.params)
+    }
+
+    fn get_real(&mut self, vr: u32) -> Result<f64, String> {
+        let slot = rows()[vr as usize].slot;
+        let outputs = |core: &Self| match core.held {
+            Some(held) => Ok(held),
+            None => core.outputs(),
+        };
+        Ok(match slot {
+            Slot::Input(i) => self.inputs[i],
+            Slot::Param(d) => (d.get)(&self.params),
+            Slot::Height(i) => outputs(self)?.0[i],
+            Slot::Voltage(i) => outputs(self)?.1[i],
+        })
+    }
+
+    fn set_real(&mut self, vr: u32, value: f64) -> Result<(), String> {
+        let row = &rows()[vr as usize];
+        match row.slot {
+            Slot::Input(i) => {
+                if !value.is_finite() {
+                    return Err(format!("{} = {value}: must be finite", row.name));
+                }
+                self.inputs[i] = value;
+            }
+            Slot::Param(d) => self.params.set_param(d, value).map_err(|e| e.to_string())?,
+            Slot::Height(_) | Slot::Voltage(_) => {
+                return Err(format!(
+                    "{} is computed by the model and cannot be set",
+                    row.name
+                ));
+            }
+        }
+        Ok(())
+    }
+
+    fn enter_initialization(
+        &mut self,
+        start_time: f64,
+        _stop: Option<f64>,
+        _tolerance: Option<f64>,
+    ) -> Result<(), String> {
+        self.t = start_time;
+        Ok(())
+    }
+
+    fn exit_initialization(&mut self) -> Result<(), String> {
+        self.held = Some(self.outputs()?);
+        Ok(())
+    }
+
+    fn do_step(&mut self, step: f64) -> Result<(), String> {
+        if self.held.is_none() {
+            return Err("the FMU has not been initialized".into());
+        }
+        self.held = Some(self.outputs()?);
+        self.t += step;
+        Ok(())
+    }
+
+    fn time(&self) -> f64 {
+        self.t
+    }
+
+    fn serialize_state(&self) -> Vec<u8> {
+        let state = State {
+            params: saved_params(&self.params),
+            inputs: self.inputs,
+            held: self.held,
+            t: self.t,
+        };
+        postcard::to_stdvec(&state).expect("serializing to memory cannot fail")
+    }
+
+    fn deserialize_state(&self, bytes: &[u8]) -> Result<Self, String> {
+        let state: State =
+            postcard::from_bytes(bytes).map_err(|e| format!("not a HaselInverse state: {e}"))?;
+        Ok(InverseCore {
+            params: restored_params(&state.params)?,
+            inputs: state.inputs,
+            held: state.held,
+            t: state.t,
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The value reference of the variable `name`.
+    fn vr(name: &str) -> u32 {
+        rows().iter().position(|r| r.name == name).unwrap() as u32
+    }
+
+    fn outputs(core: &mut InverseCore) -> Vec<f64> {
+        ["h1", "h2", "h3", "U1", "U2", "U3"]
+            .map(|n| core.get_real(vr(n)).unwrap())
+            .to_vec()
+    }
+
+    #[test]
+    fn a_step_gives_the_feedforward_of_the_inputs_held_over_it() {
+        let mut core = InverseCore::instantiate(None).unwrap();
+        core.enter_initialization(0.0, None, None).unwrap();
+        core.exit_initialization().unwrap();
+        let (x, y, mean) = (20e-6, -10e-6, 70e-6);
+        for (name, value) in [("tip_x", x), ("tip_y", y), ("mean_height", mean)] {
+            core.set_real(vr(name), value).unwrap();
+        }
+        // no direct feedthrough: the outputs change at the end of the step
+        let level = outputs(&mut core);
+        core.do_step(1e-3).unwrap();
+        let model = Platform::new(Params::default()).unwrap();
+        let mean_height = mean;
+        let (h, u) = feedforward(&model, Inverse::Xy { mean_height }, [x, y, 0.0]).unwrap();
+        let expected: Vec<f64> = h.iter().chain(&u).copied().collect();
+        assert_eq!(outputs(&mut core), expected);
+        assert_ne!(level, expected);
+        assert_eq!(core.time(), 1e-3);
+    }
+
+    #[test]
+    fn a_tip_out_of_reach_fails_the_step_and_leaves_the_core_as_it_was() {
+        let mut core = InverseCore::instantiate(None).unwrap();
+        core.enter_initialization(0.0, None, None).unwrap();
+        core.exit_initialization().unwrap();
+        let before = outputs(&mut core);
+        core.set_real(vr("tip_x"), 1e-3).unwrap();
+        let e = core.do_step(1e-3).unwrap_err();
+        assert!(e.contains("actuator 2") && e.contains("input gain"), "{e}");
+        assert_eq!(outputs(&mut core), before);
+        assert_eq!(core.time(), 0.0);
+        assert!(core.set_real(vr("h1"), 0.0).is_err());
+        assert!(core.set_real(vr("tip_y"), f64::NAN).is_err());
+    }
+
+    #[test]
+    fn a_restored_state_is_the_same_core() {
+        let mut core = InverseCore::instantiate(None).unwrap();
+        core.set_real(vr("Kb_1"), 0.31).unwrap();
+        core.enter_initialization(0.0, None, None).unwrap();
+        core.exit_initialization().unwrap();
+        core.set_real(vr("tip_y"), 15e-6).unwrap();
+        core.do_step(1e-3).unwrap();
+        let mut back = core.deserialize_state(&core.serialize_state()).unwrap();
+        assert_eq!(outputs(&mut back), outputs(&mut core));
+        assert_eq!(back.get_real(vr("Kb_1")), Ok(0.31));
+        assert!(core.deserialize_state(b"garbage").is_err());
+    }
+}
