@@ -9,7 +9,7 @@ use std::ffi::{CString, c_char, c_int, c_void};
 use std::ptr::null;
 use std::sync::atomic::{AtomicUsize, Ordering};
 
-use hasel_fmu::fmu::pack::guid;
+use hasel_fmu::fmu::pack::{guid, platform};
 use hasel_fmu::fmu::variables::rows;
 use hasel_fmu::model::Params;
 use hasel_fmu::simulation::Input;
@@ -83,7 +83,7 @@ fn vrs<const N: usize>(names: [&str; N]) -> [u32; N] {
 fn set_real_do_step_and_get_real_allocate_nothing() {
     let inputs = vrs(["U1", "U2", "U3"]);
     let outputs = vrs(["h1", "h2", "h3", "tip_x", "tip_y", "tip_z"]);
-    let guid = CString::new(guid(&Params::default())).unwrap();
+    let guid = CString::new(guid(&platform(&Params::default()))).unwrap();
     let callbacks = Callbacks {
         logger: null(),
         allocate: Some(calloc),

@@ -18,7 +18,7 @@ use std::ptr::{null, null_mut};
 
 use arbitrary::Arbitrary;
 use common::{Len, Real, Vr, Who, damage};
-use hasel_fmu::fmu::pack::guid;
+use hasel_fmu::fmu::pack::{guid, platform};
 use hasel_fmu::fmu::variables::{Slot, rows};
 use hasel_fmu::model::Params;
 use libfuzzer_sys::fuzz_target;
@@ -333,7 +333,7 @@ impl World {
                 step_finished: None,
                 environment: null_mut(),
             },
-            guid: CString::new(guid(&Params::default())).unwrap(),
+            guid: CString::new(guid(&platform(&Params::default()))).unwrap(),
             states_expected: rows()
                 .iter()
                 .filter(|r| matches!(r.slot, Slot::State { .. }))
