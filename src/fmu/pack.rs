@@ -5,6 +5,7 @@
 use std::io::Write;
 use std::path::Path;
 
+use super::structure::model_structure;
 use super::variables::variables;
 use super::{MODEL_IDENTIFIER, RESOURCE_PARAMS, model_info};
 use crate::fmi_common::variables::{Causality, Variable};
@@ -16,14 +17,22 @@ use crate::simulation::DEFAULT_RTOL;
 
 /// The `modelDescription.xml` of an FMU whose start values are `params`.
 pub fn model_description(params: &Params) -> String {
-    model_description_xml(&model_info(), &variables(params, DEFAULT_RTOL))
-        .expect("the variable table is valid (tested)")
+    model_description_xml(
+        &model_info(),
+        &variables(params, DEFAULT_RTOL),
+        &model_structure(),
+    )
+    .expect("the variable table is valid (tested)")
 }
 
 /// The GUID of that description.
 pub fn guid(params: &Params) -> String {
-    guid_for(&model_info(), &variables(params, DEFAULT_RTOL))
-        .expect("the variable table is valid (tested)")
+    guid_for(
+        &model_info(),
+        &variables(params, DEFAULT_RTOL),
+        &model_structure(),
+    )
+    .expect("the variable table is valid (tested)")
 }
 
 fn escape(s: &str) -> String {
@@ -51,12 +60,16 @@ pub fn documentation(params: &Params) -> String {
          <style>body{{font-family:sans-serif;max-width:60em;margin:2em auto}}table{{border-collapse:collapse}}\
          td,th{{border:1px solid #ccc;padding:2px 6px;text-align:left}}</style></head><body>\n\
          <h1>{id}</h1>\n<p>{desc}</p>\n\
-         <p>FMI 2.0 Co-Simulation, GUID <code>{guid}</code>. Each actuator is the port-Hamiltonian \
-         system of Feregrino et al.: state (theta, l_p, p, Q1, Q2), energy H, dynamics \
+         <p>FMI 2.0 Co-Simulation and Model Exchange (one binary), GUID <code>{guid}</code>. \
+         Each actuator is the port-Hamiltonian system of Feregrino et al.: state (theta, l_p, p, Q1, Q2), energy H, dynamics \
          dx/dt = (J - R) grad H + g U; the heights h_i = 1/2 Lv sin(theta_i) drive the 3PS platform, \
-         whose forward kinematics gives the antenna tip. The inputs are held constant over each \
-         communication step; the internal solver is a Radau IIA method of order 5 with error \
-         control (relative tolerance from fmi2SetupExperiment, else the parameter <code>rtol</code>). \
+         whose forward kinematics gives the antenna tip. In Co-Simulation the inputs are held \
+         constant over each communication step; the internal solver is a Radau IIA method of order \
+         5 with error control (relative tolerance from fmi2SetupExperiment, else the parameter \
+         <code>rtol</code>). In Model Exchange the importer integrates the 27 states (the paper's \
+         five and four effect states per actuator, each with its der() variable; an effect that is \
+         off keeps its state at 0); the transport delay tau_d needs Co-Simulation. Directional \
+         derivatives (both interfaces) come from the model's analytic Jacobian. \
          The simulation starts from the U = 0 equilibrium under gravity.</p>\n\
          <p>Default experiment: 0 to {stop} s, step {step} s, tolerance {tol}.</p>\n",
         id = MODEL_IDENTIFIER,

@@ -140,6 +140,7 @@ fn corrupted_or_foreign_buffers_are_rejected() {
         &LagCore::instantiate(InstanceKind::CoSimulation, Some(&dir))
             .unwrap()
             .variables(),
+        &LagCore::model_structure(),
     )
     .unwrap();
     let foreign = Fmu::with_guid(&guid, Some(&format!("file://{}", dir.display())));

@@ -5,6 +5,7 @@ mod fmu_state;
 mod lifecycle;
 mod logging;
 mod model_description;
+mod model_exchange;
 mod threads;
 mod values;
 
@@ -400,6 +401,7 @@ pub fn toy_guid() -> String {
         &LagCore::instantiate(InstanceKind::CoSimulation, None)
             .unwrap()
             .variables(),
+        &LagCore::model_structure(),
     )
     .unwrap()
 }
@@ -449,7 +451,11 @@ impl Fmu {
     }
 
     pub fn with_guid(guid: &str, resources: Option<&str>) -> Fmu {
-        let (c, log) = instantiate_raw("lag", FMI2_CO_SIMULATION, guid, resources, false);
+        Fmu::of_type(FMI2_CO_SIMULATION, guid, resources)
+    }
+
+    pub fn of_type(fmu_type: fmi2Type, guid: &str, resources: Option<&str>) -> Fmu {
+        let (c, log) = instantiate_raw("lag", fmu_type, guid, resources, false);
         assert!(!c.is_null(), "instantiation failed: {:?}", log.records());
         Fmu { c, log }
     }
