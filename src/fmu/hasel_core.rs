@@ -82,66 +82,110 @@ fn table_states() -> impl Iterator<Item = (usize, BlockState)> {
     })
 }
 
-/// The outputs' index in [`Platform::outputs`].
-fn output_index(slot: Slot) -> Option<usize> {
-    match slot {
-        Slot::Height(i) => Some(i),
-        Slot::Tip(i) => Some(3 + i),
-        _ => None,
-    }
+/// An unknown of a directional derivative, resolved to the model's layout: the row of a state
+/// derivative (`None` for an effect that is off: it never moves) or an output's index in
+/// [`Platform::outputs`].
+#[derive(Clone, Copy)]
+enum Unknown {
+    Derivative(Option<usize>),
+    Output(usize),
 }
 
-/// The analytic Jacobians at one point: A = ∂f/∂x, B = ∂f/∂U, C = ∂y/∂x (column-major, the
-/// model's layout) and D = ∂y/∂U.
+/// A known of a directional derivative: the column of a state (`None` for an effect that is
+/// off: it moves nothing) or the index of a command U_j.
+#[derive(Clone, Copy)]
+enum Known {
+    State(Option<usize>),
+    Input(usize),
+}
+
+/// The analytic Jacobians at one point, each computed on first use: A = ∂f/∂x, B = ∂f/∂U,
+/// C = ∂y/∂x (column-major, the model's layout) and D = ∂y/∂U.
 struct Jacobians<'m> {
     model: &'m Platform,
-    a: Vec<f64>,
-    b: Vec<f64>,
-    c: Vec<f64>,
-    d: [[f64; 3]; 6],
+    x: &'m [f64],
+    u: [f64; 3],
+    a: Option<Vec<f64>>,
+    b: Option<Vec<f64>>,
+    c: Option<Vec<f64>>,
 }
 
 impl<'m> Jacobians<'m> {
-    fn at(model: &'m Platform, x: &[f64], u: [f64; 3]) -> Result<Self, String> {
-        let n = model.n_states();
-        let (mut a, mut b, mut c) = (vec![0.0; n * n], vec![0.0; n * 3], vec![0.0; 6 * n]);
-        model.jacobian(x, u, &mut a).map_err(|e| e.to_string())?;
-        model
-            .input_jacobian(x, u, &mut b)
-            .map_err(|e| e.to_string())?;
-        model.output_jacobian(x, &mut c);
-        Ok(Jacobians {
+    fn at(model: &'m Platform, x: &'m [f64], u: [f64; 3]) -> Self {
+        Jacobians {
             model,
-            a,
-            b,
-            c,
-            d: model.output_input_jacobian(),
-        })
+            x,
+            u,
+            a: None,
+            b: None,
+            c: None,
+        }
     }
 
-    /// ∂unknown/∂known for an unknown (state derivative or output) and a known (state or
-    /// input) of the table; a state of an effect that is off neither moves nor is moved.
-    fn partial(&self, unknown: Slot, known: Slot) -> Result<f64, String> {
-        let n = self.model.n_states();
-        let position = |actuator, state| self.model.state_position(actuator, state);
+    fn unknown(&self, vr: u32) -> Result<Unknown, String> {
+        let row = &rows()[vr as usize];
+        match row.slot {
+            Slot::Derivative { actuator, state } => Ok(Unknown::Derivative(
+                self.model.state_position(actuator, state),
+            )),
+            Slot::Height(i) => Ok(Unknown::Output(i)),
+            Slot::Tip(i) => Ok(Unknown::Output(3 + i)),
+            _ => Err(format!(
+                "{} is neither a state derivative nor an output",
+                row.name
+            )),
+        }
+    }
+
+    fn known(&self, vr: u32) -> Result<Known, String> {
+        let row = &rows()[vr as usize];
+        match row.slot {
+            Slot::State { actuator, state } => {
+                Ok(Known::State(self.model.state_position(actuator, state)))
+            }
+            Slot::Input(j) => Ok(Known::Input(j)),
+            _ => Err(format!("{} is neither a state nor an input", row.name)),
+        }
+    }
+
+    /// ∂unknown/∂known.
+    fn partial(&mut self, unknown: Unknown, known: Known) -> Result<f64, String> {
+        let (model, x, u) = (self.model, self.x, self.u);
+        let n = model.n_states();
+        let error = |e: crate::model::ModelError| e.to_string();
         Ok(match (unknown, known) {
-            (Slot::Derivative { actuator, state }, Slot::State { actuator: a, state: s }) => {
-                match (position(actuator, state), position(a, s)) {
-                    (Some(r), Some(c)) => self.a[c * n + r],
-                    _ => 0.0,
-                }
+            (Unknown::Derivative(Some(r)), Known::State(Some(c))) => {
+                let a = match &mut self.a {
+                    Some(a) => a,
+                    none => {
+                        let mut a = vec![0.0; n * n];
+                        model.jacobian(x, u, &mut a).map_err(error)?;
+                        none.insert(a)
+                    }
+                };
+                a[c * n + r]
             }
-            (Slot::Derivative { actuator, state }, Slot::Input(j)) => {
-                position(actuator, state).map_or(0.0, |r| self.b[j * n + r])
+            (Unknown::Derivative(Some(r)), Known::Input(j)) => {
+                let b = match &mut self.b {
+                    Some(b) => b,
+                    none => {
+                        let mut b = vec![0.0; n * 3];
+                        model.input_jacobian(x, u, &mut b).map_err(error)?;
+                        none.insert(b)
+                    }
+                };
+                b[j * n + r]
             }
-            (output, Slot::State { actuator, state }) if output_index(output).is_some() => {
-                let o = output_index(output).unwrap_or_default();
-                position(actuator, state).map_or(0.0, |c| self.c[c * 6 + o])
+            (Unknown::Output(o), Known::State(Some(c))) => {
+                let jac = self.c.get_or_insert_with(|| {
+                    let mut jac = vec![0.0; 6 * n];
+                    model.output_jacobian(x, &mut jac);
+                    jac
+                });
+                jac[c * 6 + o]
             }
-            (output, Slot::Input(j)) if output_index(output).is_some() => {
-                self.d[output_index(output).unwrap_or_default()][j]
-            }
-            _ => return Err("not a pair of an unknown (state derivative or output) and a known (state or input)".into()),
+            (Unknown::Output(o), Known::Input(j)) => model.output_input_jacobian()[o][j],
+            (Unknown::Derivative(None), _) | (_, Known::State(None)) => 0.0,
         })
     }
 }
@@ -388,16 +432,22 @@ impl FmuCore for HaselCore {
     ) -> Result<(), String> {
         let u = self.u;
         self.evaluate(|model, x| {
-            let jac = Jacobians::at(model, x, u)?;
-            for (r, &unknown) in result.iter_mut().zip(unknowns) {
-                let row = &rows()[unknown as usize];
+            let mut jac = Jacobians::at(model, x, u);
+            let rows: Vec<Unknown> = unknowns
+                .iter()
+                .map(|&vr| jac.unknown(vr))
+                .collect::<Result<_, _>>()?;
+            let mut columns = Vec::with_capacity(knowns.len());
+            for (&vr, &s) in knowns.iter().zip(seed) {
+                let known = jac.known(vr)?;
+                if s != 0.0 {
+                    columns.push((known, s));
+                }
+            }
+            for (r, &unknown) in result.iter_mut().zip(&rows) {
                 *r = 0.0;
-                for (&known, &s) in knowns.iter().zip(seed) {
-                    let col = &rows()[known as usize];
-                    *r += jac
-                        .partial(row.slot, col.slot)
-                        .map_err(|e| format!("d {} / d {}: {e}", row.name, col.name))?
-                        * s;
+                for &(known, s) in &columns {
+                    *r += jac.partial(unknown, known)? * s;
                 }
             }
             Ok(())
