@@ -49,8 +49,9 @@ pub struct ModelStructure {
 /// One simulation model as seen by the FMI wrapper ([`crate::fmi2::instance::Instance`]).
 ///
 /// Contract, beyond the method docs:
-/// * Outputs must be functions of the internal state and parameters only (no direct
-///   feedthrough from inputs): `modelDescription.xml` declares `dependencies=""` for them.
+/// * An output depends on what [`ModelStructure::outputs`] lists for it (states, inputs), a
+///   state derivative on what [`ModelStructure::derivatives`] lists; `modelDescription.xml`
+///   declares exactly that.
 /// * `get_real` must give consistent values from Initialization Mode on, i.e. after
 ///   [`FmuCore::enter_initialization`]: outputs and calculated parameters are computed from
 ///   the current parameters and inputs, and values set in Initialization Mode are seen.

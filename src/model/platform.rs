@@ -285,7 +285,7 @@ impl Platform {
     }
 
     /// ∂y/∂U of [`Platform::outputs`], row-major 6 × 3: zero, the outputs depend on the states
-    /// only (the FMU declares `dependencies=""` for them).
+    /// only (no direct feedthrough).
     pub fn output_input_jacobian(&self) -> [[f64; 3]; 6] {
         [[0.0; 3]; 6]
     }
