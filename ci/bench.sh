@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Benchmarks that print their figures: the solver (hasel bench), the packed FMU through a
-# Rust importer (the fmi crate) and through fmpy, and uncertainty studies (examples/studies/bench.py).
+# Rust importer (the fmi crate) and through fmpy (Co-Simulation and Model Exchange), and uncertainty
+# studies (examples/studies/bench.py).
 source "$(dirname "${BASH_SOURCE[0]}")/lib.sh"
 ensure_apt
 build_fmu
@@ -8,9 +9,11 @@ step "solver: hasel bench, with the library solvers beside it (diffsol, native S
 cargo run -q --release --features compare --bin hasel -- bench
 step "identification: hasel bench --identify"
 ./target/release/hasel bench --identify
-step "FMU through the Rust fmi crate"
+step "FMU through the Rust fmi crate (Co-Simulation; Model Exchange derivatives and Jacobian)"
 cargo run -q --release --example bench_fmu -- fmu/HaselPlatform.fmu
 step "FMU through fmpy (Python's per-call overhead dominates)"
 python ci/demo.py --fmu fmu/HaselPlatform.fmu --out out/fmu_demo.png
+step "fmpy: Model Exchange with CVode beside Co-Simulation"
+python ci/bench_model_exchange.py --fmu fmu/HaselPlatform.fmu
 step "uncertainty studies: serial, hasel simulate --samples, LocalCluster of 2 workers, per-task overhead"
 python examples/studies/bench.py --fmu fmu/HaselPlatform.fmu --hasel target/release/hasel

@@ -44,6 +44,18 @@ ensure_zigbuild() {
     fi
 }
 
+# fmi-sim, the simulator of the rust-fmi project: the second, independent importer of
+# tests/python/test_fmi_sim.py. It compiles from source (arrow and the fmi bindings).
+ensure_fmi_sim() {
+    # fmi-sim 0.7 prints its version as an error: on stderr, with a non-zero exit status
+    local version
+    version="$(fmi-sim --version 2>&1 || true)"
+    if [[ "$version" != *"fmi-sim 0.7.0"* ]]; then
+        step "cargo install fmi-sim 0.7.0"
+        cargo install -q --locked fmi-sim@0.7.0
+    fi
+}
+
 # Builds the FMU's shared library against glibc 2.17 (so it loads on older hosts), the CLI,
 # and packs fmu/HaselPlatform.fmu; then the same for the inverse FMU, fmu/HaselInverse.fmu.
 # A cdylib built with other features needs a target folder of its own (its file name would

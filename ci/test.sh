@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Every test: self-containment, formatting and lints, the Rust suite, then the packed FMU
-# through fmpy, fmutool, libcosimpy, ecospy and ctypes.
+# through fmpy, fmutool, libcosimpy, ecospy, fmi-sim (installed by ci/lib.sh) and ctypes.
 source "$(dirname "${BASH_SOURCE[0]}")/lib.sh"
 step "the repository refers to nothing outside it (ci/self_contained.py)"
 python3 ci/self_contained.py
@@ -13,5 +13,6 @@ step "Rust tests"
 cargo test --release --all-targets
 step "the library-solver comparison of hasel bench compiles lint-free (feature compare, diffsol)"
 cargo clippy -q --release --features compare --bin hasel -- -D warnings
+ensure_fmi_sim
 step "Python tests of the packed FMU"
 python -m pytest tests/python -q -p no:cacheprovider

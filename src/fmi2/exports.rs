@@ -1,5 +1,5 @@
-//! The `extern "C"` layer: the 44 functions of `fmi2Functions.h` (FMI 2.0 standard, section
-//! 2.1 and 4.2), generated for one core by [`export_fmi2!`](crate::export_fmi2).
+//! The `extern "C"` layer: the 44 functions of `fmi2Functions.h` (FMI 2.0 standard, sections
+//! 2.1, 3.2 and 4.2), generated for one core by [`export_fmi2!`](crate::export_fmi2).
 //!
 //! Each function checks its pointers, converts them to slices and strings, and calls the safe
 //! [`Instance`] method inside `catch_unwind`; nothing unwinds across the C boundary. A caught
@@ -23,7 +23,7 @@ use super::fmu_state::Snapshot;
 use super::instance::{Instance, panic_message};
 use super::logging::Logger;
 use super::types::*;
-use crate::fmi_common::model_api::FmuCore;
+use crate::fmi_common::model_api::{FmuCore, InstanceKind};
 
 /// A C string argument; `None` for NULL.
 unsafe fn opt_str<'a>(p: fmi2String) -> Option<Cow<'a, str>> {
@@ -93,18 +93,22 @@ pub unsafe fn instantiate<M: FmuCore>(
             .log(Fmi2Status::Error, &format!("fmi2Instantiate: {msg}"));
         null_mut()
     };
-    if fmu_type != FMI2_CO_SIMULATION {
-        return fail(&format!(
-            "fmuType = {fmu_type} is not fmi2CoSimulation; the Model Exchange interface is not \
-             offered by this FMU"
-        ));
-    }
+    let kind = match fmu_type {
+        FMI2_MODEL_EXCHANGE => InstanceKind::ModelExchange,
+        FMI2_CO_SIMULATION => InstanceKind::CoSimulation,
+        _ => {
+            return fail(&format!(
+                "fmuType = {fmu_type} is neither fmi2ModelExchange (0) nor fmi2CoSimulation (1)"
+            ));
+        }
+    };
     let (Some(name), Some(guid)) = (name.as_deref(), guid.as_deref()) else {
         return fail("instanceName or fmuGUID is NULL");
     };
     match catch_unwind(|| {
         Instance::<M>::instantiate(
             name,
+            kind,
             guid,
             resources.as_deref(),
             callbacks,
@@ -369,7 +373,7 @@ pub unsafe fn deserialize_fmu_state<M: FmuCore>(
     }
 }
 
-/// Functions of interfaces or capabilities (`what`) this FMU does not offer.
+/// Functions of capabilities (`what`) this FMU does not offer.
 pub unsafe fn not_offered<M: FmuCore>(
     c: fmi2Component,
     func: &'static str,
@@ -378,9 +382,151 @@ pub unsafe fn not_offered<M: FmuCore>(
     unsafe { with_instance::<M>(c, func, |inst| inst.not_offered(func, what)) }
 }
 
-/// The functions of the Model Exchange interface, which this FMU does not offer.
-pub unsafe fn model_exchange_only<M: FmuCore>(c: fmi2Component, func: &'static str) -> Fmi2Status {
-    unsafe { not_offered::<M>(c, func, "the Model Exchange interface") }
+pub unsafe fn get_directional_derivative<M: FmuCore>(
+    c: fmi2Component,
+    unknown: *const fmi2ValueReference,
+    n_unknown: usize,
+    known: *const fmi2ValueReference,
+    n_known: usize,
+    dv_known: *const f64,
+    dv_unknown: *mut f64,
+) -> Fmi2Status {
+    const F: &str = "fmi2GetDirectionalDerivative";
+    unsafe {
+        with_instance::<M>(c, F, |inst| {
+            match (
+                in_slice(unknown, n_unknown),
+                in_slice(known, n_known),
+                in_slice(dv_known, n_known),
+                out_slice(dv_unknown, n_unknown),
+            ) {
+                (Some(u), Some(k), Some(dk), Some(du)) => {
+                    inst.get_directional_derivative(u, k, dk, du)
+                }
+                (None, ..) => inst.null_argument(F, "vUnknown_ref"),
+                (_, None, ..) => inst.null_argument(F, "vKnown_ref"),
+                (_, _, None, _) => inst.null_argument(F, "dvKnown"),
+                (.., None) => inst.null_argument(F, "dvUnknown"),
+            }
+        })
+    }
+}
+
+pub unsafe fn enter_event_mode<M: FmuCore>(c: fmi2Component) -> Fmi2Status {
+    unsafe { with_instance::<M>(c, "fmi2EnterEventMode", |inst| inst.enter_event_mode()) }
+}
+
+pub unsafe fn new_discrete_states<M: FmuCore>(
+    c: fmi2Component,
+    event_info: *mut fmi2EventInfo,
+) -> Fmi2Status {
+    const F: &str = "fmi2NewDiscreteStates";
+    unsafe {
+        with_instance::<M>(c, F, |inst| {
+            let Some(out) = event_info.as_mut() else {
+                return inst.null_argument(F, "fmi2eventInfo");
+            };
+            match inst.new_discrete_states() {
+                Ok(info) => {
+                    *out = fmi2EventInfo {
+                        new_discrete_states_needed: info.new_discrete_states_needed.into(),
+                        terminate_simulation: info.terminate_simulation.into(),
+                        nominals_of_continuous_states_changed: info
+                            .nominals_of_continuous_states_changed
+                            .into(),
+                        values_of_continuous_states_changed: info
+                            .values_of_continuous_states_changed
+                            .into(),
+                        next_event_time_defined: info.next_event_time.is_some().into(),
+                        next_event_time: info.next_event_time.unwrap_or(0.0),
+                    };
+                    Fmi2Status::Ok
+                }
+                Err(status) => status,
+            }
+        })
+    }
+}
+
+pub unsafe fn enter_continuous_time_mode<M: FmuCore>(c: fmi2Component) -> Fmi2Status {
+    unsafe {
+        with_instance::<M>(c, "fmi2EnterContinuousTimeMode", |inst| {
+            inst.enter_continuous_time_mode()
+        })
+    }
+}
+
+pub unsafe fn completed_integrator_step<M: FmuCore>(
+    c: fmi2Component,
+    enter_event_mode: *mut fmi2Boolean,
+    terminate_simulation: *mut fmi2Boolean,
+) -> Fmi2Status {
+    const F: &str = "fmi2CompletedIntegratorStep";
+    unsafe {
+        with_instance::<M>(c, F, |inst| {
+            match (enter_event_mode.as_mut(), terminate_simulation.as_mut()) {
+                (Some(event), Some(terminate)) => match inst.completed_integrator_step() {
+                    Ok((e, t)) => {
+                        (*event, *terminate) = (e.into(), t.into());
+                        Fmi2Status::Ok
+                    }
+                    Err(status) => status,
+                },
+                (None, _) => inst.null_argument(F, "enterEventMode"),
+                (_, None) => inst.null_argument(F, "terminateSimulation"),
+            }
+        })
+    }
+}
+
+pub unsafe fn set_time<M: FmuCore>(c: fmi2Component, time: f64) -> Fmi2Status {
+    unsafe { with_instance::<M>(c, "fmi2SetTime", |inst| inst.set_time(time)) }
+}
+
+pub unsafe fn set_continuous_states<M: FmuCore>(
+    c: fmi2Component,
+    x: *const f64,
+    nx: usize,
+) -> Fmi2Status {
+    const F: &str = "fmi2SetContinuousStates";
+    unsafe {
+        with_instance::<M>(c, F, |inst| match in_slice(x, nx) {
+            Some(x) => inst.set_continuous_states(x),
+            None => inst.null_argument(F, "x"),
+        })
+    }
+}
+
+/// The functions that fill an array of the `nx` continuous states (`func`, its array argument
+/// named `argument`): states, derivatives, nominals.
+pub unsafe fn get_state_vector<M: FmuCore>(
+    c: fmi2Component,
+    func: &'static str,
+    argument: &'static str,
+    out: *mut f64,
+    nx: usize,
+    get: fn(&mut Instance<M>, &mut [f64]) -> Fmi2Status,
+) -> Fmi2Status {
+    unsafe {
+        with_instance::<M>(c, func, |inst| match out_slice(out, nx) {
+            Some(out) => get(inst, out),
+            None => inst.null_argument(func, argument),
+        })
+    }
+}
+
+pub unsafe fn get_event_indicators<M: FmuCore>(
+    c: fmi2Component,
+    indicators: *mut f64,
+    ni: usize,
+) -> Fmi2Status {
+    const F: &str = "fmi2GetEventIndicators";
+    unsafe {
+        with_instance::<M>(c, F, |inst| match out_slice(indicators, ni) {
+            Some(_) => inst.get_event_indicators(ni),
+            None => inst.null_argument(F, "eventIndicators"),
+        })
+    }
 }
 
 pub unsafe fn do_step<M: FmuCore>(
@@ -697,101 +843,141 @@ macro_rules! __fmi2_functions {
             unsafe { shell::deserialize_fmu_state::<$core>(c, bytes, size, state) }
         }
 
-        // Directional derivatives (section 2.1.9): not offered
+        // Directional derivatives (section 2.1.9)
 
         $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)]
         pub unsafe extern "C" fn fmi2GetDirectionalDerivative(
             c: fmi2Component,
-            _v_unknown_ref: *const fmi2ValueReference,
-            _n_unknown: usize,
-            _v_known_ref: *const fmi2ValueReference,
-            _n_known: usize,
-            _dv_known: *const fmi2Real,
-            _dv_unknown: *mut fmi2Real,
+            v_unknown_ref: *const fmi2ValueReference,
+            n_unknown: usize,
+            v_known_ref: *const fmi2ValueReference,
+            n_known: usize,
+            dv_known: *const fmi2Real,
+            dv_unknown: *mut fmi2Real,
         ) -> fmi2Status {
-            let what = "providesDirectionalDerivative";
-            unsafe { shell::not_offered::<$core>(c, "fmi2GetDirectionalDerivative", what) }
+            unsafe {
+                shell::get_directional_derivative::<$core>(
+                    c,
+                    v_unknown_ref,
+                    n_unknown,
+                    v_known_ref,
+                    n_known,
+                    dv_known,
+                    dv_unknown,
+                )
+            }
         }
 
-        // Model Exchange (section 3.2): not offered
+        // Model Exchange (section 3.2)
 
         $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)]
         pub unsafe extern "C" fn fmi2EnterEventMode(c: fmi2Component) -> fmi2Status {
-            unsafe { shell::model_exchange_only::<$core>(c, "fmi2EnterEventMode") }
+            unsafe { shell::enter_event_mode::<$core>(c) }
         }
 
         $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)]
         pub unsafe extern "C" fn fmi2NewDiscreteStates(
             c: fmi2Component,
-            _event_info: *mut fmi2EventInfo,
+            event_info: *mut fmi2EventInfo,
         ) -> fmi2Status {
-            unsafe { shell::model_exchange_only::<$core>(c, "fmi2NewDiscreteStates") }
+            unsafe { shell::new_discrete_states::<$core>(c, event_info) }
         }
 
         $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)]
         pub unsafe extern "C" fn fmi2EnterContinuousTimeMode(c: fmi2Component) -> fmi2Status {
-            unsafe { shell::model_exchange_only::<$core>(c, "fmi2EnterContinuousTimeMode") }
+            unsafe { shell::enter_continuous_time_mode::<$core>(c) }
         }
 
         $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)]
         pub unsafe extern "C" fn fmi2CompletedIntegratorStep(
             c: fmi2Component,
             _no_set_fmu_state_prior_to_current_point: fmi2Boolean,
-            _enter_event_mode: *mut fmi2Boolean,
-            _terminate_simulation: *mut fmi2Boolean,
+            enter_event_mode: *mut fmi2Boolean,
+            terminate_simulation: *mut fmi2Boolean,
         ) -> fmi2Status {
-            unsafe { shell::model_exchange_only::<$core>(c, "fmi2CompletedIntegratorStep") }
+            unsafe {
+                shell::completed_integrator_step::<$core>(
+                    c,
+                    enter_event_mode,
+                    terminate_simulation,
+                )
+            }
         }
 
         $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)]
-        pub unsafe extern "C" fn fmi2SetTime(c: fmi2Component, _time: fmi2Real) -> fmi2Status {
-            unsafe { shell::model_exchange_only::<$core>(c, "fmi2SetTime") }
+        pub unsafe extern "C" fn fmi2SetTime(c: fmi2Component, time: fmi2Real) -> fmi2Status {
+            unsafe { shell::set_time::<$core>(c, time) }
         }
 
         $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)]
         pub unsafe extern "C" fn fmi2SetContinuousStates(
             c: fmi2Component,
-            _x: *const fmi2Real,
-            _nx: usize,
+            x: *const fmi2Real,
+            nx: usize,
         ) -> fmi2Status {
-            unsafe { shell::model_exchange_only::<$core>(c, "fmi2SetContinuousStates") }
+            unsafe { shell::set_continuous_states::<$core>(c, x, nx) }
         }
 
         $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)]
         pub unsafe extern "C" fn fmi2GetDerivatives(
             c: fmi2Component,
-            _derivatives: *mut fmi2Real,
-            _nx: usize,
+            derivatives: *mut fmi2Real,
+            nx: usize,
         ) -> fmi2Status {
-            unsafe { shell::model_exchange_only::<$core>(c, "fmi2GetDerivatives") }
+            unsafe {
+                shell::get_state_vector::<$core>(
+                    c,
+                    "fmi2GetDerivatives",
+                    "derivatives",
+                    derivatives,
+                    nx,
+                    |inst, out| inst.get_derivatives(out),
+                )
+            }
         }
 
         $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)]
         pub unsafe extern "C" fn fmi2GetEventIndicators(
             c: fmi2Component,
-            _event_indicators: *mut fmi2Real,
-            _ni: usize,
+            event_indicators: *mut fmi2Real,
+            ni: usize,
         ) -> fmi2Status {
-            unsafe { shell::model_exchange_only::<$core>(c, "fmi2GetEventIndicators") }
+            unsafe { shell::get_event_indicators::<$core>(c, event_indicators, ni) }
         }
 
         $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)]
         pub unsafe extern "C" fn fmi2GetContinuousStates(
             c: fmi2Component,
-            _x: *mut fmi2Real,
-            _nx: usize,
+            x: *mut fmi2Real,
+            nx: usize,
         ) -> fmi2Status {
-            unsafe { shell::model_exchange_only::<$core>(c, "fmi2GetContinuousStates") }
+            unsafe {
+                shell::get_state_vector::<$core>(
+                    c,
+                    "fmi2GetContinuousStates",
+                    "x",
+                    x,
+                    nx,
+                    |inst, out| inst.get_continuous_states(out),
+                )
+            }
         }
 
         $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)]
         pub unsafe extern "C" fn fmi2GetNominalsOfContinuousStates(
             c: fmi2Component,
-            _x_nominal: *mut fmi2Real,
-            _nx: usize,
+            x_nominal: *mut fmi2Real,
+            nx: usize,
         ) -> fmi2Status {
             unsafe {
-                shell::model_exchange_only::<$core>(c, "fmi2GetNominalsOfContinuousStates")
+                shell::get_state_vector::<$core>(
+                    c,
+                    "fmi2GetNominalsOfContinuousStates",
+                    "x_nominal",
+                    x_nominal,
+                    nx,
+                    |inst, out| inst.get_nominals(out),
+                )
             }
         }
 

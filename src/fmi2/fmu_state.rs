@@ -2,7 +2,7 @@
 //! format for `fmi2SerializeFMUstate` / `fmi2DeSerializeFMUstate`.
 //!
 //! Format (little endian): magic `FMI2RSST`, format version `u32`, GUID (`u32` length +
-//! UTF-8), phase `u8`, experiment (flag `u8`; start `f64`, stop and tolerance each as flag
+//! UTF-8), interface `u8` (0 Model Exchange, 1 Co-Simulation, as `fmi2Type`), phase `u8`, experiment (flag `u8`; start `f64`, stop and tolerance each as flag
 //! `u8` + `f64`), core bytes (`u64` length + bytes), and the first 8 bytes of the SHA-256 of
 //! everything before. A buffer of another model, a truncated or a corrupted one is rejected
 //! with a message.
@@ -10,10 +10,10 @@
 use sha2::{Digest, Sha256};
 
 use super::state_machine::{Experiment, Phase};
-use crate::fmi_common::model_api::FmuCore;
+use crate::fmi_common::model_api::{FmuCore, InstanceKind};
 
 const MAGIC: &[u8; 8] = b"FMI2RSST";
-const FORMAT_VERSION: u32 = 1;
+const FORMAT_VERSION: u32 = 2;
 const CHECKSUM_LEN: usize = 8;
 
 /// Everything an FMU state restores: the core and the wrapper's state-machine data.
@@ -21,6 +21,8 @@ const CHECKSUM_LEN: usize = 8;
 pub struct Snapshot<M> {
     /// GUID of the instance it was taken from; only instances with the same GUID accept it.
     pub guid: String,
+    /// Only instances of the same interface accept it.
+    pub kind: InstanceKind,
     pub phase: Phase,
     pub experiment: Option<Experiment>,
     pub core: M,
@@ -46,6 +48,7 @@ impl<M: FmuCore> Snapshot<M> {
         out.extend_from_slice(&FORMAT_VERSION.to_le_bytes());
         out.extend_from_slice(&(self.guid.len() as u32).to_le_bytes());
         out.extend_from_slice(self.guid.as_bytes());
+        out.push(u8::from(self.kind == InstanceKind::CoSimulation));
         out.push(self.phase as u8);
         out.push(u8::from(self.experiment.is_some()));
         let e = self.experiment.unwrap_or_default();
@@ -59,8 +62,13 @@ impl<M: FmuCore> Snapshot<M> {
         out
     }
 
-    /// Parses bytes of [`Snapshot::to_bytes`] for the instance with `guid` and `core`.
-    pub fn from_bytes(bytes: &[u8], guid: &str, core: &M) -> Result<Self, String> {
+    /// Parses bytes of [`Snapshot::to_bytes`] for the instance with `guid`, `kind` and `core`.
+    pub fn from_bytes(
+        bytes: &[u8],
+        guid: &str,
+        kind: InstanceKind,
+        core: &M,
+    ) -> Result<Self, String> {
         if bytes.len() < MAGIC.len() || &bytes[..MAGIC.len()] != MAGIC {
             return Err(
                 "the bytes are not a serialized FMU state of this FMU type (bad magic)".into(),
@@ -95,7 +103,19 @@ impl<M: FmuCore> Snapshot<M> {
                 "serialized FMU state is corrupted (checksum mismatch) or truncated".into(),
             );
         }
-        let phase = Phase::from_u8(r.u8()?).ok_or("serialized FMU state has an unknown phase")?;
+        let state_kind = if r.flag()? {
+            InstanceKind::CoSimulation
+        } else {
+            InstanceKind::ModelExchange
+        };
+        if state_kind != kind {
+            return Err(format!(
+                "serialized FMU state is of a {state_kind:?} instance, this one is {kind:?}"
+            ));
+        }
+        let phase = Phase::from_u8(r.u8()?)
+            .filter(|p| p.belongs_to(kind))
+            .ok_or("serialized FMU state has an unknown phase")?;
         let has_experiment = r.flag()?;
         let experiment = Experiment {
             start_time: r.f64()?,
@@ -113,6 +133,7 @@ impl<M: FmuCore> Snapshot<M> {
         }
         Ok(Snapshot {
             guid: guid.to_string(),
+            kind,
             phase,
             experiment: has_experiment.then_some(experiment),
             core,

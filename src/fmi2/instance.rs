@@ -1,7 +1,8 @@
 //! The generic FMU instance: the state transitions, argument checks and logging of FMI 2.0
-//! (standard sections 2.1 and 4.2) around one [`FmuCore`], in safe Rust; which call is allowed
-//! in which state is the table of [`super::state_machine`]. The `extern "C"` layer in
-//! [`super::exports`] only converts pointers and catches panics.
+//! (standard sections 2.1, 3.2 and 4.2) around one [`FmuCore`], for Model Exchange or
+//! Co-Simulation, in safe Rust; which call is allowed in which state is the table of
+//! [`super::state_machine`]. The `extern "C"` layer in [`super::exports`] only converts
+//! pointers and catches panics.
 //!
 //! Error policy: a call in a state where the table of section 4.2.4 does not allow it, or
 //! with invalid arguments, returns `fmi2Error` with a log message naming the function and
@@ -22,13 +23,14 @@ use super::types::{
     Fmi2Status, fmi2CallbackFunctions, fmi2StatusKind,
 };
 use super::uri::path_from_file_uri;
-use crate::fmi_common::model_api::FmuCore;
-use crate::fmi_common::variables::{Variable, check_variable_table};
+use crate::fmi_common::model_api::{FmuCore, InstanceKind, ModelStructure};
+use crate::fmi_common::variables::{Causality, Variable, check_variable_table};
 
 use Phase::*;
 
 /// One FMU instance: the wrapper state around a core `M`.
 pub struct Instance<M: FmuCore> {
+    kind: InstanceKind,
     guid: String,
     resource_dir: Option<PathBuf>,
     logger: Logger,
@@ -39,6 +41,27 @@ pub struct Instance<M: FmuCore> {
     core: M,
     /// The core's variables, sorted by value reference for lookups.
     variables: Vec<Variable>,
+    /// The continuous states and dependencies ([`FmuCore::model_structure`]).
+    structure: ModelStructure,
+}
+
+/// What `fmi2NewDiscreteStates` reports (section 3.2.2): this FMU has no events, so nothing
+/// changes and no event is pending.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct EventInfo {
+    pub new_discrete_states_needed: bool,
+    pub terminate_simulation: bool,
+    pub nominals_of_continuous_states_changed: bool,
+    pub values_of_continuous_states_changed: bool,
+    pub next_event_time: Option<f64>,
+}
+
+/// The FMI name of an interface, for messages.
+fn interface(kind: InstanceKind) -> &'static str {
+    match kind {
+        InstanceKind::ModelExchange => "Model Exchange",
+        InstanceKind::CoSimulation => "Co-Simulation",
+    }
 }
 
 /// A fresh core with its sorted variable table and GUID.
@@ -48,11 +71,11 @@ struct Built<M> {
     guid: String,
 }
 
-fn build<M: FmuCore>(resource_dir: Option<&Path>) -> Result<Built<M>, String> {
-    let core = M::instantiate(resource_dir)?;
+fn build<M: FmuCore>(kind: InstanceKind, resource_dir: Option<&Path>) -> Result<Built<M>, String> {
+    let core = M::instantiate(kind, resource_dir)?;
     let variables = core.variables();
     check_variable_table(&variables).map_err(|e| format!("invalid variable table: {e}"))?;
-    let guid = guid_for(&M::model_info(), &variables)?;
+    let guid = guid_for(&M::model_info(), &variables, &M::model_structure())?;
     let mut variables = variables;
     variables.sort_by_key(|v| v.value_reference);
     Ok(Built {
@@ -96,11 +119,12 @@ fn same_time(t: f64, tc: f64, h: f64) -> bool {
 }
 
 impl<M: FmuCore> Instance<M> {
-    /// `fmi2Instantiate` for Co-Simulation (section 2.1.6): creates the core from the
-    /// resources, checks the importer's GUID against the one computed for this core. Errors
-    /// are logged and give `None`.
+    /// `fmi2Instantiate` (section 2.1.6) for `kind`: creates the core from the resources,
+    /// checks the importer's GUID against the one computed for this core. Errors are logged
+    /// and give `None`.
     pub fn instantiate(
         name: &str,
+        kind: InstanceKind,
         guid: &str,
         resource_location: Option<&str>,
         callbacks: fmi2CallbackFunctions,
@@ -122,7 +146,7 @@ impl<M: FmuCore> Instance<M> {
             Ok(dir) => dir,
             Err(e) => return fail(e),
         };
-        let built = match build::<M>(resource_dir.as_deref()) {
+        let built = match build::<M>(kind, resource_dir.as_deref()) {
             Ok(b) => b,
             Err(e) => return fail(format!("cannot create the model: {e}")),
         };
@@ -137,6 +161,7 @@ impl<M: FmuCore> Instance<M> {
             .map(|(n, _)| n)
             .collect();
         let instance = Instance {
+            kind,
             guid: built.guid,
             resource_dir,
             logger,
@@ -145,13 +170,17 @@ impl<M: FmuCore> Instance<M> {
             experiment: None,
             core: built.core,
             variables: built.variables,
+            structure: M::model_structure(),
         };
         instance.trace(|| {
             let resources = instance
                 .resource_dir
                 .as_ref()
                 .map_or("none".into(), |d| d.display().to_string());
-            format!("fmi2Instantiate: instance of GUID {guid} created, resources: {resources}")
+            format!(
+                "fmi2Instantiate: {} instance of GUID {guid} created, resources: {resources}",
+                interface(kind)
+            )
         });
         Some(instance)
     }
@@ -190,6 +219,28 @@ impl<M: FmuCore> Instance<M> {
         ))
     }
 
+    /// Checks that `func`, a function of the `kind` interface only, is called on an instance
+    /// of that kind.
+    fn require_interface(&self, kind: InstanceKind, func: &str) -> Result<(), Fmi2Status> {
+        if self.kind == kind {
+            return Ok(());
+        }
+        Err(self.error(
+            func,
+            format_args!(
+                "is a {} function; this instance was instantiated for {}",
+                interface(kind),
+                interface(self.kind)
+            ),
+        ))
+    }
+
+    /// [`Self::require_interface`], then the state table.
+    fn require_of(&self, kind: InstanceKind, func: &str, mask: Mask) -> Result<(), Fmi2Status> {
+        self.require_interface(kind, func)?;
+        self.require(func, mask)
+    }
+
     /// Logs a caught panic of `func` and puts the instance into the error state.
     pub fn on_panic(&mut self, func: &str, message: &str) -> Fmi2Status {
         self.phase = Error;
@@ -201,8 +252,7 @@ impl<M: FmuCore> Instance<M> {
         self.error(func, format_args!("argument {argument} is NULL"))
     }
 
-    /// For functions of interfaces this FMU does not offer (Model Exchange, directional
-    /// derivatives, input/output derivatives).
+    /// For functions of capabilities this FMU does not offer (input/output derivatives).
     pub fn not_offered(&self, func: &str, what: &str) -> Fmi2Status {
         self.error(
             func,
@@ -295,7 +345,8 @@ impl<M: FmuCore> Instance<M> {
         }
     }
 
-    /// `fmi2ExitInitializationMode` (section 2.1.6): on to stepComplete.
+    /// `fmi2ExitInitializationMode` (section 2.1.6): on to stepComplete (Co-Simulation) or
+    /// Event Mode (Model Exchange, section 3.2.3).
     pub fn exit_initialization_mode(&mut self) -> Fmi2Status {
         const F: &str = "fmi2ExitInitializationMode";
         self.trace(|| F.into());
@@ -304,15 +355,18 @@ impl<M: FmuCore> Instance<M> {
         }
         match self.core.exit_initialization() {
             Ok(()) => {
-                self.phase = StepComplete;
+                self.phase = match self.kind {
+                    InstanceKind::ModelExchange => EventMode,
+                    InstanceKind::CoSimulation => StepComplete,
+                };
                 Fmi2Status::Ok
             }
             Err(msg) => self.error(F, msg),
         }
     }
 
-    /// `fmi2Terminate` (section 2.1.6); allowed in stepComplete and stepFailed only, so a
-    /// second call is an error.
+    /// `fmi2Terminate` (section 2.1.6); allowed in stepComplete, stepFailed, Event Mode and
+    /// Continuous-Time Mode only, so a second call is an error.
     pub fn terminate(&mut self) -> Fmi2Status {
         const F: &str = "fmi2Terminate";
         self.trace(|| F.into());
@@ -328,7 +382,7 @@ impl<M: FmuCore> Instance<M> {
     pub fn reset(&mut self) -> Fmi2Status {
         const F: &str = "fmi2Reset";
         self.trace(|| F.into());
-        let built = match build::<M>(self.resource_dir.as_deref()) {
+        let built = match build::<M>(self.kind, self.resource_dir.as_deref()) {
             Ok(b) => b,
             Err(e) => {
                 self.phase = Error;
@@ -454,7 +508,7 @@ impl<M: FmuCore> Instance<M> {
     pub fn do_step(&mut self, tc: f64, h: f64, no_set_fmu_state_prior: bool) -> Fmi2Status {
         const F: &str = "fmi2DoStep";
         self.trace(|| format!("{F}(currentCommunicationPoint={tc:?}, communicationStepSize={h:?}, noSetFMUStatePriorToCurrentPoint={no_set_fmu_state_prior})"));
-        if let Err(s) = self.require(F, allowed::DO_STEP) {
+        if let Err(s) = self.require_of(InstanceKind::CoSimulation, F, allowed::DO_STEP) {
             return s;
         }
         if !(h.is_finite() && h > 0.0) {
@@ -497,8 +551,12 @@ impl<M: FmuCore> Instance<M> {
 
     /// `fmi2CancelStep` (section 4.2.2): only for a step in progress, which never exists.
     pub fn cancel_step(&self) -> Fmi2Status {
+        const F: &str = "fmi2CancelStep";
+        if let Err(s) = self.require_interface(InstanceKind::CoSimulation, F) {
+            return s;
+        }
         self.error(
-            "fmi2CancelStep",
+            F,
             format_args!("not allowed in state {}: fmi2DoStep is synchronous and never returns fmi2Pending, so no step is in progress", self.phase.name()),
         )
     }
@@ -521,7 +579,7 @@ impl<M: FmuCore> Instance<M> {
     /// 4.2.3): never a value, since their kinds need a pending step (`fmi2DoStepStatus`,
     /// `fmi2PendingStatus`) and FMI 2.0 defines no Integer status.
     pub fn get_valueless_status(&self, func: &str, kind: fmi2StatusKind) -> Fmi2Status {
-        self.require(func, allowed::GET_STATUS)
+        self.require_of(InstanceKind::CoSimulation, func, allowed::GET_STATUS)
             .err()
             .unwrap_or_else(|| self.unsupported_kind(func, kind))
     }
@@ -530,7 +588,7 @@ impl<M: FmuCore> Instance<M> {
     /// since a failed step leaves the core at its start.
     pub fn get_real_status(&self, kind: fmi2StatusKind, value: &mut f64) -> Fmi2Status {
         const F: &str = "fmi2GetRealStatus";
-        if let Err(s) = self.require(F, allowed::GET_STATUS) {
+        if let Err(s) = self.require_of(InstanceKind::CoSimulation, F, allowed::GET_STATUS) {
             return s;
         }
         if kind != FMI2_LAST_SUCCESSFUL_TIME {
@@ -544,7 +602,7 @@ impl<M: FmuCore> Instance<M> {
     /// discarded step can be retried from a restored state.
     pub fn get_boolean_status(&self, kind: fmi2StatusKind, value: &mut bool) -> Fmi2Status {
         const F: &str = "fmi2GetBooleanStatus";
-        if let Err(s) = self.require(F, allowed::GET_STATUS) {
+        if let Err(s) = self.require_of(InstanceKind::CoSimulation, F, allowed::GET_STATUS) {
             return s;
         }
         if kind != FMI2_TERMINATED {
@@ -552,6 +610,235 @@ impl<M: FmuCore> Instance<M> {
         }
         *value = false;
         Fmi2Status::Ok
+    }
+
+    /// The number of continuous states.
+    pub fn n_states(&self) -> usize {
+        self.structure.derivatives.len()
+    }
+
+    /// Checks a Model Exchange call on the state vector: interface, state, and that the
+    /// importer's array holds the `nx` states of `modelDescription.xml`.
+    fn require_states(&self, func: &str, mask: Mask, nx: usize) -> Result<(), Fmi2Status> {
+        self.require_of(InstanceKind::ModelExchange, func, mask)?;
+        let n = self.n_states();
+        if nx != n {
+            return Err(self.error(
+                func,
+                format_args!("nx = {nx}, but the FMU has {n} continuous states (<Derivatives>)"),
+            ));
+        }
+        Ok(())
+    }
+
+    /// Runs a core call of `func` that can only fail with a message; `fmi2Error` then.
+    fn core_call(
+        &mut self,
+        func: &str,
+        f: impl FnOnce(&mut M) -> Result<(), String>,
+    ) -> Fmi2Status {
+        match f(&mut self.core) {
+            Ok(()) => Fmi2Status::Ok,
+            Err(msg) => self.error(func, msg),
+        }
+    }
+
+    /// `fmi2SetTime` (section 3.2.1).
+    pub fn set_time(&mut self, time: f64) -> Fmi2Status {
+        const F: &str = "fmi2SetTime";
+        self.trace(|| format!("{F}(time={time:?})"));
+        if let Err(s) = self.require_of(InstanceKind::ModelExchange, F, allowed::SET_TIME) {
+            return s;
+        }
+        if !time.is_finite() {
+            return self.error(F, format_args!("time = {time:?} is not finite"));
+        }
+        self.core_call(F, |core| core.set_time(time))
+    }
+
+    /// `fmi2SetContinuousStates` (section 3.2.1).
+    pub fn set_continuous_states(&mut self, x: &[f64]) -> Fmi2Status {
+        const F: &str = "fmi2SetContinuousStates";
+        if let Err(s) = self.require_states(F, allowed::SET_CONTINUOUS_STATES, x.len()) {
+            return s;
+        }
+        self.core_call(F, |core| core.set_continuous_states(x))
+    }
+
+    /// `fmi2GetContinuousStates` (section 3.2.2).
+    pub fn get_continuous_states(&mut self, x: &mut [f64]) -> Fmi2Status {
+        const F: &str = "fmi2GetContinuousStates";
+        if let Err(s) = self.require_states(F, allowed::GET_STATES, x.len()) {
+            return s;
+        }
+        self.core_call(F, |core| core.continuous_states(x))
+    }
+
+    /// `fmi2GetDerivatives` (section 3.2.2); `fmi2Discard` where the model cannot be evaluated
+    /// at the states the integrator tries (it should try a smaller step).
+    pub fn get_derivatives(&mut self, dx: &mut [f64]) -> Fmi2Status {
+        const F: &str = "fmi2GetDerivatives";
+        if let Err(s) = self.require_states(F, allowed::GET_DERIVATIVES, dx.len()) {
+            return s;
+        }
+        match self.core.derivatives(dx) {
+            Ok(()) => Fmi2Status::Ok,
+            Err(msg) => {
+                let t = self.core.time();
+                self.logger.log(
+                    Fmi2Status::Discard,
+                    &format!(
+                        "{F}: the model cannot be evaluated at t = {t:?} and these states: {msg}"
+                    ),
+                );
+                Fmi2Status::Discard
+            }
+        }
+    }
+
+    /// `fmi2GetNominalsOfContinuousStates` (section 3.2.2).
+    pub fn get_nominals(&mut self, nominal: &mut [f64]) -> Fmi2Status {
+        const F: &str = "fmi2GetNominalsOfContinuousStates";
+        if let Err(s) = self.require_states(F, allowed::GET_NOMINALS, nominal.len()) {
+            return s;
+        }
+        self.core_call(F, |core| core.nominals(nominal))
+    }
+
+    /// `fmi2GetEventIndicators` (section 3.2.2): the FMU has none (`numberOfEventIndicators`
+    /// is 0), so `ni` must be 0.
+    pub fn get_event_indicators(&self, ni: usize) -> Fmi2Status {
+        const F: &str = "fmi2GetEventIndicators";
+        if let Err(s) = self.require_of(InstanceKind::ModelExchange, F, allowed::GET_STATES) {
+            return s;
+        }
+        if ni != 0 {
+            return self.error(
+                F,
+                format_args!(
+                    "ni = {ni}, but the FMU has no event indicators (numberOfEventIndicators = 0)"
+                ),
+            );
+        }
+        Fmi2Status::Ok
+    }
+
+    /// `fmi2EnterEventMode` (section 3.2.2).
+    pub fn enter_event_mode(&mut self) -> Fmi2Status {
+        const F: &str = "fmi2EnterEventMode";
+        self.trace(|| F.into());
+        if let Err(s) = self.require_of(InstanceKind::ModelExchange, F, allowed::ENTER_EVENT_MODE) {
+            return s;
+        }
+        self.phase = EventMode;
+        Fmi2Status::Ok
+    }
+
+    /// `fmi2NewDiscreteStates` (section 3.2.2): the model has no discrete states and no
+    /// events, so one call completes the event iteration.
+    pub fn new_discrete_states(&mut self) -> Result<EventInfo, Fmi2Status> {
+        const F: &str = "fmi2NewDiscreteStates";
+        self.trace(|| F.into());
+        self.require_of(InstanceKind::ModelExchange, F, allowed::NEW_DISCRETE_STATES)?;
+        Ok(EventInfo::default())
+    }
+
+    /// `fmi2EnterContinuousTimeMode` (section 3.2.2).
+    pub fn enter_continuous_time_mode(&mut self) -> Fmi2Status {
+        const F: &str = "fmi2EnterContinuousTimeMode";
+        self.trace(|| F.into());
+        if let Err(s) = self.require_of(
+            InstanceKind::ModelExchange,
+            F,
+            allowed::ENTER_CONTINUOUS_TIME_MODE,
+        ) {
+            return s;
+        }
+        self.phase = ContinuousTimeMode;
+        Fmi2Status::Ok
+    }
+
+    /// `fmi2CompletedIntegratorStep` (section 3.2.2): no step event, no termination. Returns
+    /// `(enterEventMode, terminateSimulation)`.
+    pub fn completed_integrator_step(&mut self) -> Result<(bool, bool), Fmi2Status> {
+        const F: &str = "fmi2CompletedIntegratorStep";
+        self.require_of(
+            InstanceKind::ModelExchange,
+            F,
+            allowed::COMPLETED_INTEGRATOR_STEP,
+        )?;
+        Ok((false, false))
+    }
+
+    /// Whether `vr` may be an unknown of `fmi2GetDirectionalDerivative`: a state derivative or
+    /// an output (section 2.1.9).
+    fn is_unknown(&self, vr: u32) -> bool {
+        self.structure
+            .derivatives
+            .iter()
+            .any(|d| d.derivative == vr)
+            || self.structure.outputs.iter().any(|o| o.output == vr)
+    }
+
+    /// Whether `vr` may be a known: an input, or a state outside Initialization Mode (where the
+    /// states are calculated, not known).
+    fn is_known(&self, vr: u32) -> bool {
+        let input = find(&self.variables, vr).is_some_and(|v| v.causality == Causality::Input);
+        input
+            || (self.phase != InitializationMode
+                && self.structure.derivatives.iter().any(|d| d.state == vr))
+    }
+
+    /// `fmi2GetDirectionalDerivative` (section 2.1.9): `dv_unknown = Σ ∂unknown/∂known ·
+    /// dv_known` for state derivatives and outputs against states and inputs, analytic, at the
+    /// current states and inputs; the same in Model Exchange and Co-Simulation.
+    pub fn get_directional_derivative(
+        &mut self,
+        unknowns: &[u32],
+        knowns: &[u32],
+        dv_known: &[f64],
+        dv_unknown: &mut [f64],
+    ) -> Fmi2Status {
+        const F: &str = "fmi2GetDirectionalDerivative";
+        if let Err(s) = self.require(F, allowed::GET_DIRECTIONAL_DERIVATIVE) {
+            return s;
+        }
+        for &vr in unknowns {
+            let Some(v) = find(&self.variables, vr) else {
+                return self.unknown_reference(F, vr);
+            };
+            if !self.is_unknown(vr) {
+                return self.error(F, format_args!("unknown {} (value reference {vr}) is neither a state derivative nor an output (section 2.1.9)", v.name));
+            }
+        }
+        for (&vr, &seed) in knowns.iter().zip(dv_known) {
+            let Some(v) = find(&self.variables, vr) else {
+                return self.unknown_reference(F, vr);
+            };
+            if !self.is_known(vr) {
+                let what = if self.phase == InitializationMode {
+                    "an input (the states are calculated in Initialization Mode)"
+                } else {
+                    "a continuous state or an input"
+                };
+                return self.error(
+                    F,
+                    format_args!(
+                        "known {} (value reference {vr}) is not {what} (section 2.1.9)",
+                        v.name
+                    ),
+                );
+            }
+            if !seed.is_finite() {
+                return self.error(
+                    F,
+                    format_args!("dvKnown for {} is {seed:?}, not finite", v.name),
+                );
+            }
+        }
+        self.core_call(F, |core| {
+            core.directional_derivative(unknowns, knowns, dv_known, dv_unknown)
+        })
     }
 
     /// `fmi2GetFMUstate` (section 2.1.8): allowed in every state of this FMU.
@@ -565,6 +852,7 @@ impl<M: FmuCore> Instance<M> {
         });
         Snapshot {
             guid: self.guid.clone(),
+            kind: self.kind,
             phase: self.phase,
             experiment: self.experiment,
             core: self.core.clone(),
@@ -579,6 +867,16 @@ impl<M: FmuCore> Instance<M> {
                 format_args!(
                     "the state belongs to GUID {}, this instance has GUID {}",
                     state.guid, self.guid
+                ),
+            );
+        }
+        if state.kind != self.kind {
+            return self.error(
+                "fmi2SetFMUstate",
+                format_args!(
+                    "the state is of a {} instance, this one is {}",
+                    interface(state.kind),
+                    interface(self.kind)
                 ),
             );
         }
@@ -597,7 +895,7 @@ impl<M: FmuCore> Instance<M> {
 
     /// `fmi2DeSerializeFMUstate` (section 2.1.8): a state from bytes, or a logged error.
     pub fn deserialize_fmu_state(&self, bytes: &[u8]) -> Result<Snapshot<M>, Fmi2Status> {
-        Snapshot::from_bytes(bytes, &self.guid, &self.core)
+        Snapshot::from_bytes(bytes, &self.guid, self.kind, &self.core)
             .map_err(|e| self.error("fmi2DeSerializeFMUstate", e))
     }
 

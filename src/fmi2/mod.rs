@@ -1,4 +1,4 @@
-//! A generic FMI 2.0 Co-Simulation shell around one model that implements
+//! A generic FMI 2.0 shell, Co-Simulation and Model Exchange, around one model that implements
 //! [`FmuCore`](crate::fmi_common::model_api::FmuCore) (physics only):
 //! [`export_fmi2!`](crate::export_fmi2) generates the C functions of the FMU,
 //! [`instance`] checks every call against [`state_machine`] and the arguments, and

@@ -9,19 +9,47 @@ use quick_xml::events::{BytesDecl, Event};
 use sha2::{Digest, Sha256};
 
 use super::logging::WRAPPER_CATEGORIES;
+use crate::fmi_common::model_api::ModelStructure;
 use crate::fmi_common::units::{self, BASE_UNIT_NAMES};
 use crate::fmi_common::variables::{Causality, Initial, ModelInfo, Variable, check_variable_table};
 
+/// What `modelDescription.xml` is made of: the model-level data, the variable table and the
+/// model structure of a core.
+#[derive(Clone, Copy)]
+struct Description<'a> {
+    info: &'a ModelInfo,
+    vars: &'a [Variable],
+    structure: &'a ModelStructure,
+}
+
 /// The complete `modelDescription.xml`, with the GUID of [`guid_for`].
-pub fn model_description_xml(info: &ModelInfo, vars: &[Variable]) -> Result<String, String> {
-    write_xml(info, vars, &guid_for(info, vars)?)
+pub fn model_description_xml(
+    info: &ModelInfo,
+    vars: &[Variable],
+    structure: &ModelStructure,
+) -> Result<String, String> {
+    let d = Description {
+        info,
+        vars,
+        structure,
+    };
+    write_xml(d, &guid_for(info, vars, structure)?)
 }
 
 /// The GUID (section 2.2.1): a UUID in braces made of the SHA-256 of the description
 /// generated with an empty GUID, so that any change of the description (a variable, a start
 /// value, a unit, a capability) changes it. Formatted as an RFC 9562 version-8 UUID.
-pub fn guid_for(info: &ModelInfo, vars: &[Variable]) -> Result<String, String> {
-    let hash = Sha256::digest(write_xml(info, vars, "")?.as_bytes());
+pub fn guid_for(
+    info: &ModelInfo,
+    vars: &[Variable],
+    structure: &ModelStructure,
+) -> Result<String, String> {
+    let d = Description {
+        info,
+        vars,
+        structure,
+    };
+    let hash = Sha256::digest(write_xml(d, "")?.as_bytes());
     let mut b = [0u8; 16];
     b.copy_from_slice(&hash[..16]);
     b[6] = (b[6] & 0x0f) | 0x80;
@@ -84,21 +112,54 @@ pub fn log_categories(info: &ModelInfo) -> Vec<(String, String)> {
     all
 }
 
-fn write_xml(info: &ModelInfo, vars: &[Variable], guid: &str) -> Result<String, String> {
-    check_info(info)?;
-    check_variable_table(vars)?;
+/// Checks that every value reference of the structure is a variable of the table, and that
+/// each derivative is declared as the derivative of its state.
+fn check_structure(d: Description) -> Result<(), String> {
+    let var = |vr: u32| {
+        d.vars
+            .iter()
+            .find(|v| v.value_reference == vr)
+            .ok_or(format!(
+                "the model structure names value reference {vr}, which is not in the variable table"
+            ))
+    };
+    for s in &d.structure.derivatives {
+        let der = var(s.derivative)?;
+        if der.derivative != Some(s.state) {
+            return Err(format!(
+                "{} is listed as the derivative of value reference {}, but its derivative attribute says {:?}",
+                der.name, s.state, der.derivative
+            ));
+        }
+        for &vr in &s.dependencies {
+            var(vr)?;
+        }
+    }
+    for o in &d.structure.outputs {
+        if var(o.output)?.causality != Causality::Output {
+            return Err(format!(
+                "value reference {} of <Outputs> is not an output",
+                o.output
+            ));
+        }
+        for &vr in &o.dependencies {
+            var(vr)?;
+        }
+    }
+    Ok(())
+}
+
+fn write_xml(d: Description, guid: &str) -> Result<String, String> {
+    check_info(d.info)?;
+    check_variable_table(d.vars)?;
+    check_structure(d)?;
     let mut w = Writer::new_with_indent(Vec::new(), b' ', 2);
-    write_document(&mut w, info, vars, guid)
-        .map_err(|e| format!("writing modelDescription.xml: {e}"))?;
+    write_document(&mut w, d, guid).map_err(|e| format!("writing modelDescription.xml: {e}"))?;
     String::from_utf8(w.into_inner()).map_err(|e| e.to_string())
 }
 
-fn write_document(
-    w: &mut Writer<Vec<u8>>,
-    info: &ModelInfo,
-    vars: &[Variable],
-    guid: &str,
-) -> io::Result<()> {
+fn write_document(w: &mut Writer<Vec<u8>>, d: Description, guid: &str) -> io::Result<()> {
+    let (info, vars) = (d.info, d.vars);
     w.write_event(Event::Decl(BytesDecl::new("1.0", Some("UTF-8"), None)))?;
     let mut root = w.create_element("fmiModelDescription").with_attributes([
         ("fmiVersion", "2.0"),
@@ -120,13 +181,41 @@ fn write_document(
         ("numberOfEventIndicators", "0"),
     ])
     .write_inner_content(|w| {
+        if info.model_exchange {
+            write_model_exchange(w, info)?;
+        }
         write_co_simulation(w, info)?;
         write_units(w, vars)?;
         write_log_categories(w, info)?;
         write_default_experiment(w, info)?;
         write_variables(w, vars)?;
-        write_model_structure(w, vars)
+        write_model_structure(w, d)
     })?;
+    Ok(())
+}
+
+fn flag(b: bool) -> &'static str {
+    if b { "true" } else { "false" }
+}
+
+/// `<ModelExchange>` with the capability flags (section 3.3.1): the same binary and model
+/// identifier as Co-Simulation.
+fn write_model_exchange(w: &mut Writer<Vec<u8>>, info: &ModelInfo) -> io::Result<()> {
+    w.create_element("ModelExchange")
+        .with_attributes([
+            ("modelIdentifier", info.model_identifier.as_str()),
+            ("needsExecutionTool", "false"),
+            ("completedIntegratorStepNotNeeded", "true"),
+            ("canBeInstantiatedOnlyOncePerProcess", "false"),
+            ("canNotUseMemoryManagementFunctions", "true"),
+            ("canGetAndSetFMUstate", "true"),
+            ("canSerializeFMUstate", "true"),
+            (
+                "providesDirectionalDerivative",
+                flag(info.directional_derivatives),
+            ),
+        ])
+        .write_empty()?;
     Ok(())
 }
 
@@ -144,7 +233,10 @@ fn write_co_simulation(w: &mut Writer<Vec<u8>>, info: &ModelInfo) -> io::Result<
             ("canNotUseMemoryManagementFunctions", "true"),
             ("canGetAndSetFMUstate", "true"),
             ("canSerializeFMUstate", "true"),
-            ("providesDirectionalDerivative", "false"),
+            (
+                "providesDirectionalDerivative",
+                flag(info.directional_derivatives),
+            ),
         ])
         .write_empty()?;
     Ok(())
@@ -217,8 +309,22 @@ fn write_default_experiment(w: &mut Writer<Vec<u8>>, info: &ModelInfo) -> io::Re
     Ok(())
 }
 
+/// The 1-based index of the variable with value reference `vr` in `<ModelVariables>`.
+fn index(vars: &[Variable], vr: u32) -> usize {
+    // the structure's references are checked against the table before writing
+    vars.iter()
+        .position(|v| v.value_reference == vr)
+        .unwrap_or_default()
+        + 1
+}
+
+fn index_of(vars: &[Variable], vr: u32) -> String {
+    index(vars, vr).to_string()
+}
+
 /// `<ModelVariables>` (section 2.2.7). `initial` is written whenever the table allows it,
-/// as the declared or default value, so readers need not know the defaults.
+/// as the declared or default value, so readers need not know the defaults; a state
+/// derivative names its state's index in `derivative`.
 fn write_variables(w: &mut Writer<Vec<u8>>, vars: &[Variable]) -> io::Result<()> {
     w.create_element("ModelVariables")
         .write_inner_content(|w| {
@@ -238,10 +344,14 @@ fn write_variables(w: &mut Writer<Vec<u8>>, vars: &[Variable]) -> io::Result<()>
                     sv = sv.with_attribute(("initial", initial.as_str()));
                 }
                 let start = v.start.map(real);
+                let derivative = v.derivative.map(|state| index_of(vars, state));
                 sv.write_inner_content(|w| {
                     let mut real_el = w.create_element("Real");
                     if let Some(unit) = &v.unit {
                         real_el = real_el.with_attribute(("unit", unit.as_str()));
+                    }
+                    if let Some(state) = &derivative {
+                        real_el = real_el.with_attribute(("derivative", state.as_str()));
                     }
                     if let Some(start) = &start {
                         real_el = real_el.with_attribute(("start", start.as_str()));
@@ -257,41 +367,92 @@ fn write_variables(w: &mut Writer<Vec<u8>>, vars: &[Variable]) -> io::Result<()>
 
 /// `<ModelStructure>` (section 2.2.8), with 1-based ScalarVariable indices.
 ///
-/// * `<Outputs>`: every output, in index order, with `dependencies=""`: the core contract
-///   ([`crate::fmi_common::model_api::FmuCore`]) is that outputs are functions of the
-///   internal state only, i.e. no direct feedthrough from inputs, and a Co-Simulation FMU
-///   without `<Derivatives>` exposes no states that could be listed.
+/// * `<Outputs>`: every output, in index order, with the states (and inputs) it depends on
+///   from the core's [`ModelStructure`].
+/// * `<Derivatives>`: every state derivative, in the order of the state vector, with the
+///   states and inputs it depends on.
 /// * `<InitialUnknowns>`: exactly the list section 2.2.8 prescribes — outputs with initial
-///   approx or calculated, and all calculated parameters (continuous-time states and their
-///   derivatives would belong here too, but a Co-Simulation FMU without `<Derivatives>`
-///   has none) — in index order. Their values in Initialization Mode are computed from the
-///   parameters with initial exact (the Knowns), so `dependencies=""` ("depends on no Known")
-///   would be false; the attribute is omitted, which the standard defines as "depends on all
-///   Knowns" — always correct, without the generic layer having to know the physics.
-fn write_model_structure(w: &mut Writer<Vec<u8>>, vars: &[Variable]) -> io::Result<()> {
-    let indices = |keep: &dyn Fn(&Variable) -> bool| -> Vec<String> {
-        vars.iter()
-            .enumerate()
-            .filter(|(_, v)| keep(v))
-            .map(|(i, _)| (i + 1).to_string())
-            .collect()
+///   approx or calculated, calculated parameters, and the continuous states and state
+///   derivatives with initial approx or calculated — in index order. Their values in
+///   Initialization Mode are computed from the parameters with initial exact (the Knowns),
+///   so `dependencies=""` ("depends on no Known") would be false; the attribute is omitted,
+///   which the standard defines as "depends on all Knowns" — always correct, without the
+///   generic layer having to know the physics.
+fn write_model_structure(w: &mut Writer<Vec<u8>>, d: Description) -> io::Result<()> {
+    let vars = d.vars;
+    let list = |vrs: &[u32]| -> String {
+        let mut indices: Vec<usize> = vrs.iter().map(|&vr| index(vars, vr)).collect();
+        indices.sort_unstable();
+        let text: Vec<String> = indices.iter().map(usize::to_string).collect();
+        text.join(" ")
     };
-    let outputs = indices(&|v| v.causality == Causality::Output);
-    let initial_unknowns = indices(&|v| match v.causality {
-        Causality::Output => matches!(
-            v.effective_initial(),
-            Some(Initial::Approx | Initial::Calculated)
-        ),
-        Causality::CalculatedParameter => true,
-        _ => false,
-    });
+    let outputs: Vec<(String, Option<String>)> = vars
+        .iter()
+        .filter(|v| v.causality == Causality::Output)
+        .map(|v| {
+            let deps = d
+                .structure
+                .outputs
+                .iter()
+                .find(|o| o.output == v.value_reference);
+            (
+                index_of(vars, v.value_reference),
+                deps.map(|o| list(&o.dependencies)),
+            )
+        })
+        .collect();
+    let derivatives: Vec<(String, String)> = d
+        .structure
+        .derivatives
+        .iter()
+        .map(|s| (index_of(vars, s.derivative), list(&s.dependencies)))
+        .collect();
+    let is_state_or_derivative = |vr: u32| {
+        d.structure
+            .derivatives
+            .iter()
+            .any(|s| s.state == vr || s.derivative == vr)
+    };
+    let initial_unknowns: Vec<String> = vars
+        .iter()
+        .enumerate()
+        .filter(|(_, v)| {
+            let calculated = matches!(
+                v.effective_initial(),
+                Some(Initial::Approx | Initial::Calculated)
+            );
+            match v.causality {
+                Causality::Output => calculated,
+                Causality::CalculatedParameter => true,
+                _ => calculated && is_state_or_derivative(v.value_reference),
+            }
+        })
+        .map(|(i, _)| (i + 1).to_string())
+        .collect();
     w.create_element("ModelStructure")
         .write_inner_content(|w| {
             if !outputs.is_empty() {
                 w.create_element("Outputs").write_inner_content(|w| {
-                    for index in &outputs {
+                    for (index, deps) in &outputs {
+                        let mut el = w
+                            .create_element("Unknown")
+                            .with_attribute(("index", index.as_str()));
+                        if let Some(deps) = deps {
+                            el = el.with_attribute(("dependencies", deps.as_str()));
+                        }
+                        el.write_empty()?;
+                    }
+                    Ok(())
+                })?;
+            }
+            if !derivatives.is_empty() {
+                w.create_element("Derivatives").write_inner_content(|w| {
+                    for (index, deps) in &derivatives {
                         w.create_element("Unknown")
-                            .with_attributes([("index", index.as_str()), ("dependencies", "")])
+                            .with_attributes([
+                                ("index", index.as_str()),
+                                ("dependencies", deps.as_str()),
+                            ])
                             .write_empty()?;
                     }
                     Ok(())

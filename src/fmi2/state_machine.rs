@@ -1,11 +1,14 @@
-//! The Co-Simulation state machine of FMI 2.0 (standard section 4.2.4) as one table, laid out
-//! like the Modelica Reference FMUs' `MASK_fmi2…`: one bit per state ([`Phase::bit`]), and for
-//! each function the mask of the states it may be called in ([`allowed`]). The instance checks
-//! every call against it; which variables `fmi2SetReal` may set in a state is [`settable`].
+//! The state machines of FMI 2.0, Co-Simulation (standard section 4.2.4) and Model Exchange
+//! (section 3.2.3), as one table laid out like the Modelica Reference FMUs' `MASK_fmi2…`: one
+//! bit per state ([`Phase::bit`]), and for each function the mask of the states it may be
+//! called in ([`allowed`]). The instance checks every call against it (and that a function of
+//! one interface is not called on an instance of the other); which variables `fmi2SetReal` may
+//! set in a state is [`settable`].
 
+use crate::fmi_common::model_api::InstanceKind;
 use crate::fmi_common::variables::{Causality, Initial, Variability, Variable};
 
-/// The states of the Co-Simulation state machine this FMU can be in.
+/// The states of the two state machines this FMU can be in.
 /// `stepInProgress` and `stepCanceled` are unreachable: `fmi2DoStep` is synchronous.
 /// The discriminant is the state's byte in a serialized FMU state.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -19,19 +22,25 @@ pub enum Phase {
     StepFailed = 3,
     Terminated = 4,
     Error = 5,
+    /// Model Exchange
+    EventMode = 6,
+    /// Model Exchange
+    ContinuousTimeMode = 7,
 }
 
 /// A set of states, one bit per [`Phase`].
 pub type Mask = u8;
 
 impl Phase {
-    const ALL: [Phase; 6] = [
+    const ALL: [Phase; 8] = [
         Phase::Instantiated,
         Phase::InitializationMode,
         Phase::StepComplete,
         Phase::StepFailed,
         Phase::Terminated,
         Phase::Error,
+        Phase::EventMode,
+        Phase::ContinuousTimeMode,
     ];
 
     pub fn from_u8(b: u8) -> Option<Phase> {
@@ -47,6 +56,17 @@ impl Phase {
             Phase::StepFailed => "stepFailed",
             Phase::Terminated => "terminated",
             Phase::Error => "error",
+            Phase::EventMode => "eventMode",
+            Phase::ContinuousTimeMode => "continuousTimeMode",
+        }
+    }
+
+    /// Whether an instance of `kind` can be in this state.
+    pub fn belongs_to(self, kind: InstanceKind) -> bool {
+        match self {
+            Phase::StepComplete | Phase::StepFailed => kind == InstanceKind::CoSimulation,
+            Phase::EventMode | Phase::ContinuousTimeMode => kind == InstanceKind::ModelExchange,
+            _ => true,
         }
     }
 
@@ -71,10 +91,10 @@ pub fn names(mask: Mask) -> String {
     names.join(", ")
 }
 
-/// The states each function may be called in (section 4.2.4). Allowed in every state, and so
-/// not checked: `fmi2SetDebugLogging`, `fmi2Reset`, `fmi2FreeInstance` and the FMU-state
-/// functions (`fmi2GetFMUstate` … `fmi2DeSerializeFMUstate`). Functions this FMU does not
-/// offer (Model Exchange, derivatives) fail in every state.
+/// The states each function may be called in (sections 3.2.3 and 4.2.4). Allowed in every
+/// state, and so not checked: `fmi2SetDebugLogging`, `fmi2Reset`, `fmi2FreeInstance` and the
+/// FMU-state functions (`fmi2GetFMUstate` … `fmi2DeSerializeFMUstate`). Functions this FMU
+/// does not offer (input and output derivatives) fail in every state.
 pub mod allowed {
     use super::Mask;
     use super::Phase::*;
@@ -85,17 +105,49 @@ pub mod allowed {
     const STEP_FAILED: Mask = StepFailed.bit();
     const TERMINATED: Mask = Terminated.bit();
     const ERROR: Mask = Error.bit();
+    const EVENT_MODE: Mask = EventMode.bit();
+    const CONTINUOUS_TIME_MODE: Mask = ContinuousTimeMode.bit();
 
     pub const SETUP_EXPERIMENT: Mask = INSTANTIATED;
     pub const ENTER_INITIALIZATION_MODE: Mask = INSTANTIATED;
     pub const EXIT_INITIALIZATION_MODE: Mask = INITIALIZATION_MODE;
-    pub const TERMINATE: Mask = STEP_COMPLETE | STEP_FAILED;
+    pub const TERMINATE: Mask = STEP_COMPLETE | STEP_FAILED | EVENT_MODE | CONTINUOUS_TIME_MODE;
     /// `fmi2Get{Real,Integer,Boolean,String}`; in stepFailed and error for debugging only.
-    pub const GET_VALUES: Mask =
-        INITIALIZATION_MODE | STEP_COMPLETE | STEP_FAILED | TERMINATED | ERROR;
+    pub const GET_VALUES: Mask = INITIALIZATION_MODE
+        | STEP_COMPLETE
+        | STEP_FAILED
+        | TERMINATED
+        | ERROR
+        | EVENT_MODE
+        | CONTINUOUS_TIME_MODE;
     /// `fmi2Set{Real,Integer,Boolean,String}`; which variables depends on the state
     /// ([`settable`](super::settable)).
-    pub const SET_VALUES: Mask = INSTANTIATED | INITIALIZATION_MODE | STEP_COMPLETE;
+    pub const SET_VALUES: Mask =
+        INSTANTIATED | INITIALIZATION_MODE | STEP_COMPLETE | EVENT_MODE | CONTINUOUS_TIME_MODE;
+    /// `fmi2GetDirectionalDerivative`, both interfaces.
+    pub const GET_DIRECTIONAL_DERIVATIVE: Mask = INITIALIZATION_MODE
+        | EVENT_MODE
+        | CONTINUOUS_TIME_MODE
+        | STEP_COMPLETE
+        | STEP_FAILED
+        | TERMINATED
+        | ERROR;
+
+    // Model Exchange (section 3.2.3)
+    pub const ENTER_EVENT_MODE: Mask = EVENT_MODE | CONTINUOUS_TIME_MODE;
+    pub const NEW_DISCRETE_STATES: Mask = EVENT_MODE;
+    pub const ENTER_CONTINUOUS_TIME_MODE: Mask = EVENT_MODE;
+    pub const COMPLETED_INTEGRATOR_STEP: Mask = CONTINUOUS_TIME_MODE;
+    pub const SET_TIME: Mask = EVENT_MODE | CONTINUOUS_TIME_MODE;
+    pub const SET_CONTINUOUS_STATES: Mask = CONTINUOUS_TIME_MODE;
+    /// `fmi2GetEventIndicators` and `fmi2GetContinuousStates`.
+    pub const GET_STATES: Mask =
+        INITIALIZATION_MODE | EVENT_MODE | CONTINUOUS_TIME_MODE | TERMINATED | ERROR;
+    pub const GET_DERIVATIVES: Mask = EVENT_MODE | CONTINUOUS_TIME_MODE | TERMINATED | ERROR;
+    pub const GET_NOMINALS: Mask =
+        INSTANTIATED | EVENT_MODE | CONTINUOUS_TIME_MODE | TERMINATED | ERROR;
+
+    // Co-Simulation (section 4.2.4)
     pub const DO_STEP: Mask = STEP_COMPLETE;
     /// `fmi2CancelStep`: only while a step is in progress, which never happens here.
     pub const CANCEL_STEP: Mask = 0;
@@ -103,7 +155,9 @@ pub mod allowed {
     pub const GET_STATUS: Mask = STEP_COMPLETE | STEP_FAILED | TERMINATED;
 }
 
-/// Whether `fmi2SetReal` may set `v` in state `phase` (footnotes of the table in section 4.2.4).
+/// Whether `fmi2SetReal` may set `v` in state `phase` (footnotes of the tables in sections 3.2.3
+/// and 4.2.4): in Event Mode inputs and tunable parameters, in Continuous-Time Mode continuous
+/// inputs.
 pub fn settable(phase: Phase, v: &Variable) -> bool {
     let input = v.causality == Causality::Input;
     let initial = v.effective_initial();
@@ -113,11 +167,12 @@ pub fn settable(phase: Phase, v: &Variable) -> bool {
                 input || matches!(initial, Some(Initial::Exact | Initial::Approx))
             }
             Phase::InitializationMode => input || initial == Some(Initial::Exact),
-            Phase::StepComplete => {
+            Phase::StepComplete | Phase::EventMode => {
                 input
                     || (v.causality == Causality::Parameter
                         && v.variability == Variability::Tunable)
             }
+            Phase::ContinuousTimeMode => input && v.variability == Variability::Continuous,
             _ => false,
         }
 }
@@ -140,10 +195,10 @@ mod tests {
             assert_eq!(Phase::from_u8(p as u8), Some(p));
             assert_eq!(p.bit(), 1 << i);
         }
-        assert_eq!(Phase::from_u8(6), None);
+        assert_eq!(Phase::from_u8(8), None);
         assert_eq!(
             names(allowed::TERMINATE | Phase::Instantiated.bit()),
-            "instantiated, stepComplete, stepFailed"
+            "instantiated, stepComplete, stepFailed, eventMode, continuousTimeMode"
         );
     }
 }

@@ -90,8 +90,7 @@ pub struct fmi2CallbackFunctions {
     pub component_environment: fmi2ComponentEnvironment,
 }
 
-/// `fmi2EventInfo` (section 3.2.2), needed only for the signature of the Model Exchange
-/// function `fmi2NewDiscreteStates`, which this FMU does not offer.
+/// `fmi2EventInfo` (section 3.2.2), filled by `fmi2NewDiscreteStates`.
 #[repr(C)]
 #[derive(Debug, Clone, Copy)]
 pub struct fmi2EventInfo {

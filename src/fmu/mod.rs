@@ -7,6 +7,7 @@
 pub mod hasel_core;
 pub mod inverse;
 pub mod pack;
+pub mod structure;
 pub mod variables;
 
 pub use hasel_core::HaselCore;
@@ -29,12 +30,19 @@ pub fn model_info() -> ModelInfo {
          port-Hamiltonian system (Feregrino et al.); inputs U1..U3 [V], outputs actuator heights \
          and antenna tip [m]",
         DEFAULT_RTOL,
+        true,
     )
 }
 
 /// The model-level data of an FMU of this crate: its identifier (also its model name), its
-/// description and the default experiment's tolerance (0 to 10 s in steps of 1 ms).
-pub fn model_info_of(identifier: &str, description: &str, tolerance: f64) -> ModelInfo {
+/// description, the default experiment's tolerance (0 to 10 s in steps of 1 ms), and whether it
+/// has the dynamics that Model Exchange and directional derivatives need.
+pub fn model_info_of(
+    identifier: &str,
+    description: &str,
+    tolerance: f64,
+    dynamic: bool,
+) -> ModelInfo {
     ModelInfo {
         model_name: identifier.into(),
         model_identifier: identifier.into(),
@@ -49,6 +57,8 @@ pub fn model_info_of(identifier: &str, description: &str, tolerance: f64) -> Mod
             tolerance,
         },
         log_categories: vec![],
+        model_exchange: dynamic,
+        directional_derivatives: dynamic,
     }
 }
 

@@ -6,8 +6,10 @@
 use std::io::Write;
 use std::path::Path;
 
+use super::structure::model_structure;
 use super::variables::variables;
 use super::{RESOURCE_PARAMS, model_info};
+use crate::fmi_common::model_api::ModelStructure;
 use crate::fmi_common::variables::{Causality, ModelInfo, Variable};
 use crate::fmi2::model_description::{guid_for, model_description_xml};
 use crate::io::file::{FileError, write_bytes_atomic};
@@ -15,11 +17,12 @@ use crate::io::params_file;
 use crate::model::Params;
 use crate::simulation::DEFAULT_RTOL;
 
-/// One FMU of this crate: its model data, its variables with their start values, and what its
-/// documentation says of the model.
+/// One FMU of this crate: its model data, its variables with their start values, its structure
+/// and what its documentation says of the model.
 pub struct Spec {
     pub info: ModelInfo,
     pub variables: Vec<Variable>,
+    pub structure: ModelStructure,
     pub about: &'static str,
 }
 
@@ -28,25 +31,31 @@ pub fn platform(params: &Params) -> Spec {
     Spec {
         info: model_info(),
         variables: variables(params, DEFAULT_RTOL),
+        structure: model_structure(),
         about: "Each actuator is the port-Hamiltonian system of Feregrino et al.: state (theta, \
                 l_p, p, Q1, Q2), energy H, dynamics dx/dt = (J - R) grad H + g U; the heights \
                 h_i = 1/2 Lv sin(theta_i) drive the 3PS platform, whose forward kinematics gives \
-                the antenna tip. The inputs are held constant over each communication step; the \
-                internal solver is a Radau IIA method of order 5 with error control (relative \
-                tolerance from fmi2SetupExperiment, else the parameter <code>rtol</code>). The \
-                simulation starts from the U = 0 equilibrium under gravity.",
+                the antenna tip. In Co-Simulation the inputs are held constant over each \
+                communication step; the internal solver is a Radau IIA method of order 5 with \
+                error control (relative tolerance from fmi2SetupExperiment, else the parameter \
+                <code>rtol</code>). In Model Exchange the importer integrates the 27 states (the \
+                paper's five and four effect states per actuator, each with its der() variable; \
+                an effect that is off keeps its state at 0); the transport delay tau_d needs \
+                Co-Simulation. Directional derivatives (both interfaces) come from the model's \
+                analytic Jacobian. The simulation starts from the U = 0 equilibrium under gravity.",
     }
 }
 
 /// The `modelDescription.xml` of `spec`.
 pub fn model_description(spec: &Spec) -> String {
-    model_description_xml(&spec.info, &spec.variables)
+    model_description_xml(&spec.info, &spec.variables, &spec.structure)
         .expect("the variable table is valid (tested)")
 }
 
 /// The GUID of that description.
 pub fn guid(spec: &Spec) -> String {
-    guid_for(&spec.info, &spec.variables).expect("the variable table is valid (tested)")
+    guid_for(&spec.info, &spec.variables, &spec.structure)
+        .expect("the variable table is valid (tested)")
 }
 
 fn escape(s: &str) -> String {
@@ -73,12 +82,17 @@ pub fn documentation(spec: &Spec) -> String {
          <style>body{{font-family:sans-serif;max-width:60em;margin:2em auto}}table{{border-collapse:collapse}}\
          td,th{{border:1px solid #ccc;padding:2px 6px;text-align:left}}</style></head><body>\n\
          <h1>{id}</h1>\n<p>{desc}</p>\n\
-         <p>FMI 2.0 Co-Simulation, GUID <code>{guid}</code>. {about}</p>\n\
+         <p>FMI 2.0 {interfaces}, GUID <code>{guid}</code>. {about}</p>\n\
          <p>Default experiment: 0 to {stop} s, step {step} s, tolerance {tol}.</p>\n",
         id = info.model_identifier,
         desc = escape(&info.description),
         guid = guid(spec),
         about = spec.about,
+        interfaces = if info.model_exchange {
+            "Co-Simulation and Model Exchange (one binary)"
+        } else {
+            "Co-Simulation"
+        },
         stop = info.default_experiment.stop_time,
         step = info.default_experiment.step_size,
         tol = info.default_experiment.tolerance,

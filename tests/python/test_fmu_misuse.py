@@ -40,6 +40,17 @@ class CallbackFunctions(C.Structure):
     ]
 
 
+class EventInfo(C.Structure):
+    _fields_ = [
+        ("newDiscreteStatesNeeded", C.c_int),
+        ("terminateSimulation", C.c_int),
+        ("nominalsOfContinuousStatesChanged", C.c_int),
+        ("valuesOfContinuousStatesChanged", C.c_int),
+        ("nextEventTimeDefined", C.c_int),
+        ("nextEventTime", C.c_double),
+    ]
+
+
 class Log:
     """The logger callback and what it received: (env, instanceName, status, category, format, text)."""
 
@@ -88,6 +99,17 @@ class Api:
             "fmi2SerializedFMUstateSize": (i, [vp, vp, C.POINTER(sz)]),
             "fmi2SerializeFMUstate": (i, [vp, vp, C.c_char_p, sz]),
             "fmi2DeSerializeFMUstate": (i, [vp, C.c_char_p, sz, C.POINTER(vp)]),
+            "fmi2SetTime": (i, [vp, d]),
+            "fmi2SetContinuousStates": (i, [vp, dblp, sz]),
+            "fmi2GetContinuousStates": (i, [vp, dblp, sz]),
+            "fmi2GetDerivatives": (i, [vp, dblp, sz]),
+            "fmi2GetNominalsOfContinuousStates": (i, [vp, dblp, sz]),
+            "fmi2GetEventIndicators": (i, [vp, dblp, sz]),
+            "fmi2EnterEventMode": (i, [vp]),
+            "fmi2EnterContinuousTimeMode": (i, [vp]),
+            "fmi2NewDiscreteStates": (i, [vp, C.POINTER(EventInfo)]),
+            "fmi2CompletedIntegratorStep": (i, [vp, i, C.POINTER(i), C.POINTER(i)]),
+            "fmi2GetDirectionalDerivative": (i, [vp, uintp, sz, uintp, sz, dblp, dblp]),
         }
         for name, (restype, argtypes) in sig.items():
             f = getattr(lib, name)
@@ -110,6 +132,7 @@ def fmu(fmu_path, tmp_path_factory):
     f = F()
     f.dir, f.api, f.guid = root, Api(so), md.guid.encode()
     f.vr = {v.name: v.valueReference for v in md.modelVariables}
+    f.nx = len(md.derivatives)
     f.uri = (root / "resources").as_uri().encode()
     return f
 
@@ -413,11 +436,11 @@ def test_guid_mismatch_gives_null_with_a_log(fmu):
     s.log.expect(ERROR, "fmi2Instantiate", "GUID", "{00000000-0000-0000-0000-000000000000}", fmu.guid.decode())
 
 
-def test_model_exchange_gives_null_with_a_log(fmu):
-    """fmuType = fmi2ModelExchange: NULL, and the log says Model Exchange is not offered."""
-    s = Slave(fmu, fmu_type=MODEL_EXCHANGE)
+def test_unknown_fmu_type_gives_null_with_a_log(fmu):
+    """fmuType neither fmi2ModelExchange nor fmi2CoSimulation: NULL, and the log says so."""
+    s = Slave(fmu, fmu_type=2)
     assert not s.c
-    s.log.expect(ERROR, "fmi2Instantiate", "Model Exchange")
+    s.log.expect(ERROR, "fmi2Instantiate", "fmuType = 2 is neither")
 
 
 def test_null_instance_name_gives_null_with_a_log(fmu):
@@ -539,3 +562,148 @@ def test_many_instance_cycles_do_not_grow_memory(fmu):
     print(f"RSS after 100 cycles {rss[100] / 2**20:.1f} MiB, after 1000 {rss[1000] / 2**20:.1f} MiB, "
           f"growth {growth / 2**10:.0f} KiB")
     assert growth < 4 * 2**20
+
+
+# --- Model Exchange ------------------------------------------------------------------------------
+
+def doubles(n, value=0.0):
+    return (C.c_double * n)(*([value] * n))
+
+
+@pytest.fixture
+def model(fmu):
+    """A Model Exchange instance, initialized, in Event Mode."""
+    s = Slave(fmu, fmu_type=MODEL_EXCHANGE)
+    assert s.c, s.log.records
+    s.init()
+    yield s
+    s.free()
+
+
+def test_model_exchange_state_machine(model):
+    """Each Model Exchange call outside its states is fmi2Error naming function and state; Event
+    Mode after initialization, Continuous-Time Mode after fmi2EnterContinuousTimeMode."""
+    api, c, nx = model.api, model.c, model.fmu.nx
+    x = doubles(nx)
+    assert api.SetContinuousStates(c, x, nx) == ERROR
+    model.log.expect(ERROR, "fmi2SetContinuousStates", "not allowed in state eventMode")
+    assert api.DoStep(c, 0.0, 1e-3, 1) == ERROR
+    model.log.expect(ERROR, "fmi2DoStep", "is a Co-Simulation function")
+    info = EventInfo(1, 1, 1, 1, 1, 1.0)
+    assert api.NewDiscreteStates(c, C.byref(info)) == OK
+    assert (info.newDiscreteStatesNeeded, info.terminateSimulation, info.nextEventTimeDefined) == (0, 0, 0)
+    assert api.EnterContinuousTimeMode(c) == OK
+    assert api.NewDiscreteStates(c, C.byref(info)) == ERROR
+    model.log.expect(ERROR, "fmi2NewDiscreteStates", "not allowed in state continuousTimeMode")
+    assert api.GetContinuousStates(c, x, nx) == OK and api.SetContinuousStates(c, x, nx) == OK
+    assert model.set("Kb_1", 0.4) == ERROR
+    model.log.expect(ERROR, "Kb_1", "cannot be set in state continuousTimeMode")
+    assert api.EnterEventMode(c) == OK and api.Terminate(c) == OK
+    assert api.SetTime(c, 0.1) == ERROR
+    model.log.expect(ERROR, "fmi2SetTime", "not allowed in state terminated")
+
+
+def test_model_exchange_calls_on_a_co_simulation_instance(slave):
+    """fmi2SetTime, fmi2GetDerivatives, ... on a Co-Simulation instance: fmi2Error."""
+    slave.init()
+    nx = slave.fmu.nx
+    assert slave.api.SetTime(slave.c, 0.0) == ERROR
+    assert slave.api.GetDerivatives(slave.c, doubles(nx), nx) == ERROR
+    slave.log.expect(ERROR, "fmi2GetDerivatives", "is a Model Exchange function", "Co-Simulation")
+    assert slave.step() == OK, "still usable"
+
+
+def test_model_exchange_arguments(model):
+    """Wrong nx, NULL arrays, event indicators that do not exist, a NaN time, non-finite states."""
+    api, c, nx = model.api, model.c, model.fmu.nx
+    assert api.EnterContinuousTimeMode(c) == OK
+    assert api.GetDerivatives(c, doubles(nx + 1), nx + 1) == ERROR
+    model.log.expect(ERROR, "fmi2GetDerivatives", f"nx = {nx + 1}", f"has {nx} continuous states")
+    assert api.GetNominalsOfContinuousStates(c, None, nx) == ERROR
+    model.log.expect(ERROR, "fmi2GetNominalsOfContinuousStates", "argument x_nominal is NULL")
+    assert api.GetEventIndicators(c, None, 0) == OK
+    assert api.GetEventIndicators(c, doubles(1), 1) == ERROR
+    model.log.expect(ERROR, "fmi2GetEventIndicators", "no event indicators")
+    assert api.SetTime(c, math.nan) == ERROR
+    model.log.expect(ERROR, "fmi2SetTime", "not finite")
+    assert api.CompletedIntegratorStep(c, 1, None, None) == ERROR
+    model.log.expect(ERROR, "fmi2CompletedIntegratorStep", "argument enterEventMode is NULL")
+    x = doubles(nx)
+    assert api.GetContinuousStates(c, x, nx) == OK
+    x[3] = math.inf
+    assert api.SetContinuousStates(c, x, nx) == ERROR
+    model.log.expect(ERROR, "fmi2SetContinuousStates", "Q1_1", "must be finite")
+
+
+def test_model_exchange_refuses_the_transport_delay(fmu):
+    """tau_d > 0 needs the command history: refused at fmi2ExitInitializationMode in Model
+    Exchange, with the reason; Co-Simulation runs it."""
+    for fmu_type, status in ((MODEL_EXCHANGE, ERROR), (CO_SIMULATION, OK)):
+        s = Slave(fmu, fmu_type=fmu_type)
+        assert s.set("tau_d", 1e-3) == OK
+        assert s.api.SetupExperiment(s.c, 0, 0.0, 0.0, 0, 0.0) == OK
+        assert s.api.EnterInitializationMode(s.c) == OK
+        assert s.api.ExitInitializationMode(s.c) == status
+        if status == ERROR:
+            s.log.expect(ERROR, "fmi2ExitInitializationMode", "tau_d", "history", "Co-Simulation")
+        s.free()
+
+
+def test_directional_derivative_arguments(model):
+    """Knowns must be states or inputs, unknowns state derivatives or outputs; NULL arrays, unknown
+    references and NaN seeds are errors naming what is wrong."""
+    vr = model.fmu.vr
+    api, c = model.api, model.c
+
+    def dd(unknowns, knowns, seed, out=True):
+        u = (C.c_uint * len(unknowns))(*unknowns)
+        k = (C.c_uint * len(knowns))(*knowns)
+        result = doubles(len(unknowns)) if out else None
+        return api.GetDirectionalDerivative(c, u, len(unknowns), k, len(knowns), doubles(len(knowns), seed), result)
+
+    assert dd([vr["der(p_1)"], vr["h1"]], [vr["theta_1"], vr["U1"]], 1.0) == OK
+    assert dd([vr["der(p_1)"]], [vr["Kb_1"]], 1.0) == ERROR
+    model.log.expect(ERROR, "fmi2GetDirectionalDerivative", "known Kb_1", "is not a continuous state or an input")
+    assert dd([vr["theta_1"]], [vr["U1"]], 1.0) == ERROR
+    model.log.expect(ERROR, "unknown theta_1", "neither a state derivative nor an output")
+    assert dd([vr["h1"]], [123456], 1.0) == ERROR
+    model.log.expect(ERROR, "unknown value reference 123456")
+    assert dd([vr["h1"]], [vr["U1"]], math.nan) == ERROR
+    model.log.expect(ERROR, "dvKnown for U1 is NaN")
+    assert dd([vr["h1"]], [vr["U1"]], 1.0, out=False) == ERROR
+    model.log.expect(ERROR, "argument dvUnknown is NULL")
+
+
+def test_model_exchange_state_replays_through_bytes(fmu, model):
+    """An FMU state taken in Continuous-Time Mode, serialized, restored in a second Model Exchange
+    instance: the same states and derivatives; a Co-Simulation instance refuses the bytes."""
+    api, c, nx = model.api, model.c, model.fmu.nx
+    assert api.EnterContinuousTimeMode(c) == OK
+    assert model.set("U2", 80.0) == OK
+    x = doubles(nx)
+    assert api.GetContinuousStates(c, x, nx) == OK
+    x[9] *= 1.01  # theta_2 away from rest
+    assert api.SetContinuousStates(c, x, nx) == OK and api.SetTime(c, 0.25) == OK
+    state = C.c_void_p()
+    assert api.GetFMUstate(c, C.byref(state)) == OK
+    size = C.c_size_t()
+    assert api.SerializedFMUstateSize(c, state, C.byref(size)) == OK
+    buf = C.create_string_buffer(size.value)
+    assert api.SerializeFMUstate(c, state, buf, size) == OK
+    dx = doubles(nx)
+    assert api.GetDerivatives(c, dx, nx) == OK
+    other = Slave(fmu, fmu_type=MODEL_EXCHANGE)
+    restored = C.c_void_p()
+    assert api.DeSerializeFMUstate(other.c, buf, size, C.byref(restored)) == OK
+    assert api.SetFMUstate(other.c, restored) == OK
+    y, dy = doubles(nx), doubles(nx)
+    assert api.GetContinuousStates(other.c, y, nx) == OK and api.GetDerivatives(other.c, dy, nx) == OK
+    assert list(y) == list(x) and list(dy) == list(dx) and other.get("U2") == (OK, [80.0])
+    cs = Slave(fmu)
+    into_cs = C.c_void_p()
+    assert api.DeSerializeFMUstate(cs.c, buf, size, C.byref(into_cs)) == ERROR
+    cs.log.expect(ERROR, "fmi2DeSerializeFMUstate", "ModelExchange")
+    for s, st in ((model, state), (other, restored)):
+        assert api.FreeFMUstate(s.c, C.byref(st)) == OK
+    other.free()
+    cs.free()

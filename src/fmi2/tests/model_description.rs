@@ -44,7 +44,10 @@ fn attr<'a>(attrs: &'a [(String, String)], key: &str) -> Option<&'a str> {
 fn toy_xml() -> String {
     model_description_xml(
         &LagCore::model_info(),
-        &LagCore::instantiate(None).unwrap().variables(),
+        &LagCore::instantiate(InstanceKind::CoSimulation, None)
+            .unwrap()
+            .variables(),
+        &LagCore::model_structure(),
     )
     .unwrap()
 }
@@ -74,7 +77,7 @@ fn xml_is_well_formed_and_complete() {
     assert_eq!(attr(cs, "canGetAndSetFMUstate"), Some("true"));
     assert_eq!(attr(cs, "canRunAsynchronuously"), Some("false"));
     let vars = find("ScalarVariable");
-    assert_eq!(vars.len(), 7);
+    assert_eq!(vars.len(), 8);
     assert_eq!(attr(&vars[0], "initial"), Some("exact"));
     assert_eq!(attr(&vars[4], "initial"), None, "inputs have no initial");
     assert_eq!(attr(&vars[5], "initial"), Some("calculated"));
@@ -100,68 +103,97 @@ fn xml_is_well_formed_and_complete() {
         attr(&find("DefaultExperiment")[0], "stepSize"),
         Some("0.01")
     );
-    // ModelStructure: Outputs then InitialUnknowns
-    let unknowns = find("Unknown");
-    assert_eq!(unknowns.len(), 3);
+    let me = &find("ModelExchange")[0];
+    assert_eq!(attr(me, "modelIdentifier"), Some("Lag"), "one binary");
+    for interface in [me, cs] {
+        assert_eq!(
+            attr(interface, "providesDirectionalDerivative"),
+            Some("true")
+        );
+    }
+    // der(y) names y (index 6) as its state
+    assert_eq!(attr(&reals[7], "derivative"), Some("6"));
+    // ModelStructure: Outputs (y on y), Derivatives (der(y) on u, y), InitialUnknowns (y,
+    // rate, der(y): outputs, calculated parameters, states and derivatives)
+    let unknown_elements = find("Unknown");
+    let unknowns: Vec<(Option<&str>, Option<&str>)> = unknown_elements
+        .iter()
+        .map(|a| (attr(a, "index"), attr(a, "dependencies")))
+        .collect();
     assert_eq!(
-        (
-            attr(&unknowns[0], "index"),
-            attr(&unknowns[0], "dependencies")
-        ),
-        (Some("6"), Some(""))
+        unknowns,
+        [
+            (Some("6"), Some("6")),
+            (Some("8"), Some("5 6")),
+            (Some("6"), None),
+            (Some("7"), None),
+            (Some("8"), None),
+        ]
     );
-    assert_eq!(
-        (
-            attr(&unknowns[1], "index"),
-            attr(&unknowns[1], "dependencies")
-        ),
-        (Some("6"), None)
-    );
-    assert_eq!(attr(&unknowns[2], "index"), Some("7"));
 }
 
 #[test]
 fn guid_is_stable_and_follows_every_change() {
     let info = LagCore::model_info();
-    let vars = LagCore::instantiate(None).unwrap().variables();
-    let guid = guid_for(&info, &vars).unwrap();
-    assert_eq!(guid, guid_for(&info, &vars).unwrap());
+    let vars = LagCore::instantiate(InstanceKind::CoSimulation, None)
+        .unwrap()
+        .variables();
+    let guid = guid_for(&info, &vars, &LagCore::model_structure()).unwrap();
+    assert_eq!(
+        guid,
+        guid_for(&info, &vars, &LagCore::model_structure()).unwrap()
+    );
     assert_eq!(guid.len(), 38);
     assert!(guid.starts_with('{') && guid.ends_with('}') && guid.as_bytes()[15] == b'8');
     let mut changed = vars.clone();
     changed[1].start = Some(1e-300);
-    assert_ne!(guid_for(&info, &changed).unwrap(), guid);
+    assert_ne!(
+        guid_for(&info, &changed, &LagCore::model_structure()).unwrap(),
+        guid
+    );
     let mut changed = vars.clone();
     changed[4].description.push('.');
-    assert_ne!(guid_for(&info, &changed).unwrap(), guid);
+    assert_ne!(
+        guid_for(&info, &changed, &LagCore::model_structure()).unwrap(),
+        guid
+    );
     let mut info2 = info.clone();
     info2.default_experiment.stop_time = 11.0;
-    assert_ne!(guid_for(&info2, &vars).unwrap(), guid);
+    assert_ne!(
+        guid_for(&info2, &vars, &LagCore::model_structure()).unwrap(),
+        guid
+    );
 }
 
 #[test]
 fn invalid_tables_and_infos_are_rejected() {
     let info = LagCore::model_info();
-    let mut vars = LagCore::instantiate(None).unwrap().variables();
+    let mut vars = LagCore::instantiate(InstanceKind::CoSimulation, None)
+        .unwrap()
+        .variables();
     vars[1].value_reference = vars[0].value_reference;
     assert!(
-        model_description_xml(&info, &vars)
+        model_description_xml(&info, &vars, &LagCore::model_structure())
             .unwrap_err()
             .contains("used twice")
     );
-    let vars = LagCore::instantiate(None).unwrap().variables();
+    let vars = LagCore::instantiate(InstanceKind::CoSimulation, None)
+        .unwrap()
+        .variables();
     let mut bad = info.clone();
     bad.default_experiment.tolerance = f64::INFINITY;
-    assert!(model_description_xml(&bad, &vars).is_err());
+    assert!(model_description_xml(&bad, &vars, &LagCore::model_structure()).is_err());
     let mut bad = info;
     bad.model_identifier = "my model".into();
-    assert!(model_description_xml(&bad, &vars).is_err());
+    assert!(model_description_xml(&bad, &vars, &LagCore::model_structure()).is_err());
 }
 
 #[test]
 fn floats_round_trip_exactly() {
     let info = LagCore::model_info();
-    let mut vars = LagCore::instantiate(None).unwrap().variables();
+    let mut vars = LagCore::instantiate(InstanceKind::CoSimulation, None)
+        .unwrap()
+        .variables();
     let values = [
         0.1,
         1.0 / 3.0,
@@ -174,7 +206,7 @@ fn floats_round_trip_exactly() {
     for (v, x) in vars.iter_mut().zip(values.iter().take(4)) {
         v.start = Some(*x);
     }
-    let xml = model_description_xml(&info, &vars).unwrap();
+    let xml = model_description_xml(&info, &vars, &LagCore::model_structure()).unwrap();
     let starts: Vec<f64> = elements(&xml)
         .iter()
         .filter(|(n, _)| n == "Real")

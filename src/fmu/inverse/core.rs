@@ -12,12 +12,15 @@ use serde::{Deserialize, Serialize};
 
 use super::model_info;
 use super::variables::{Slot, rows, variables};
-use crate::fmi_common::model_api::FmuCore;
+use crate::fmi_common::model_api::{FmuCore, InstanceKind, ModelStructure, OutputDependency};
 use crate::fmi_common::variables::{ModelInfo, Variable};
 use crate::fmu::hasel_core::{resource_params, restored_params, saved_params};
 use crate::model::kinematics::Inverse;
 use crate::model::statics::feedforward;
 use crate::model::{Params, Platform};
+
+/// Why the Model Exchange calls are refused.
+const NOT_ME: &str = "HaselInverse has no continuous states: Co-Simulation only";
 
 /// Heights [m] and voltages [V] of one tip position.
 type Outputs = ([f64; 3], [f64; 3]);
@@ -57,7 +60,30 @@ impl FmuCore for InverseCore {
         model_info()
     }
 
-    fn instantiate(resource_dir: Option<&Path>) -> Result<Self, String> {
+    /// No states; the outputs change at communication points only (no direct feedthrough).
+    fn model_structure() -> ModelStructure {
+        ModelStructure {
+            derivatives: vec![],
+            outputs: rows()
+                .iter()
+                .enumerate()
+                .filter(|(_, r)| matches!(r.slot, Slot::Height(_) | Slot::Voltage(_)))
+                .map(|(vr, _)| OutputDependency {
+                    output: vr as u32,
+                    dependencies: vec![],
+                })
+                .collect(),
+        }
+    }
+
+    fn instantiate(kind: InstanceKind, resource_dir: Option<&Path>) -> Result<Self, String> {
+        if kind == InstanceKind::ModelExchange {
+            return Err(
+                "HaselInverse is a Co-Simulation FMU only: it has no dynamics for an \
+                        importer to integrate, its outputs map the inputs held over a step"
+                    .into(),
+            );
+        }
         Ok(InverseCore {
             params: resource_params(resource_dir)?,
             inputs: super::variables::START,
@@ -132,6 +158,48 @@ impl FmuCore for InverseCore {
         self.t
     }
 
+    fn set_time(&mut self, _time: f64) -> Result<(), String> {
+        Err(NOT_ME.into())
+    }
+
+    fn continuous_states(&mut self, x: &mut [f64]) -> Result<(), String> {
+        // no states: the empty vector
+        if x.is_empty() {
+            Ok(())
+        } else {
+            Err(NOT_ME.into())
+        }
+    }
+
+    fn set_continuous_states(&mut self, _x: &[f64]) -> Result<(), String> {
+        Err(NOT_ME.into())
+    }
+
+    fn derivatives(&mut self, _dx: &mut [f64]) -> Result<(), String> {
+        Err(NOT_ME.into())
+    }
+
+    fn nominals(&self, nominal: &mut [f64]) -> Result<(), String> {
+        if nominal.is_empty() {
+            Ok(())
+        } else {
+            Err(NOT_ME.into())
+        }
+    }
+
+    fn directional_derivative(
+        &mut self,
+        _unknowns: &[u32],
+        _knowns: &[u32],
+        _seed: &[f64],
+        _result: &mut [f64],
+    ) -> Result<(), String> {
+        Err(
+            "HaselInverse provides no directional derivatives (its modelDescription says so)"
+                .into(),
+        )
+    }
+
     fn serialize_state(&self) -> Vec<u8> {
         let state = State {
             params: saved_params(&self.params),
@@ -171,7 +239,7 @@ mod tests {
 
     #[test]
     fn a_step_gives_the_feedforward_of_the_inputs_held_over_it() {
-        let mut core = InverseCore::instantiate(None).unwrap();
+        let mut core = InverseCore::instantiate(InstanceKind::CoSimulation, None).unwrap();
         core.enter_initialization(0.0, None, None).unwrap();
         core.exit_initialization().unwrap();
         let (x, y, mean) = (20e-6, -10e-6, 70e-6);
@@ -192,7 +260,7 @@ mod tests {
 
     #[test]
     fn a_tip_out_of_reach_fails_the_step_and_leaves_the_core_as_it_was() {
-        let mut core = InverseCore::instantiate(None).unwrap();
+        let mut core = InverseCore::instantiate(InstanceKind::CoSimulation, None).unwrap();
         core.enter_initialization(0.0, None, None).unwrap();
         core.exit_initialization().unwrap();
         let before = outputs(&mut core);
@@ -207,7 +275,7 @@ mod tests {
 
     #[test]
     fn a_restored_state_is_the_same_core() {
-        let mut core = InverseCore::instantiate(None).unwrap();
+        let mut core = InverseCore::instantiate(InstanceKind::CoSimulation, None).unwrap();
         core.set_real(vr("Kb_1"), 0.31).unwrap();
         core.enter_initialization(0.0, None, None).unwrap();
         core.exit_initialization().unwrap();

@@ -15,6 +15,7 @@ use crate::simulation::DEFAULT_RTOL;
 
 use super::model_info_of;
 use super::pack::Spec;
+use crate::fmi_common::model_api::FmuCore;
 
 /// `modelIdentifier` and the shared library's name in `binaries/linux64/`.
 pub const MODEL_IDENTIFIER: &str = "HaselInverse";
@@ -28,6 +29,8 @@ pub fn model_info() -> ModelInfo {
          height [m] to the actuator heights h1..h3 [m] and the constant voltages U1..U3 [V] that \
          hold them at equilibrium",
         DEFAULT_RTOL,
+        // a static map: Co-Simulation only, no directional derivatives
+        false,
     )
 }
 
@@ -36,6 +39,7 @@ pub fn spec(params: &Params) -> Spec {
     Spec {
         info: model_info(),
         variables: variables::variables(params),
+        structure: InverseCore::model_structure(),
         about: "The inverse of the HaselPlatform FMU, for feedforward: each communication step \
                 maps the inputs held over it (the antenna tip's x and y and the platform's mean \
                 height, which x and y leave open) to the actuator heights by the inverse \
