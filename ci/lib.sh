@@ -6,6 +6,9 @@ cd "$ROOT"
 VENV="$ROOT/.venv"
 FMU_TARGET=x86_64-unknown-linux-gnu
 FMU_LIB="$ROOT/target/$FMU_TARGET/release/libhasel_fmu.so"
+# the FMI 3.0 build (--features fmi3) in a target folder of its own: the cdylib's file name
+# carries no feature hash, so the two builds would otherwise overwrite each other and rebuild
+FMU3_LIB="$ROOT/target/fmi3/$FMU_TARGET/release/libhasel_fmu.so"
 
 step() { printf '\n== %s\n' "$*"; }
 
@@ -39,15 +42,17 @@ ensure_zigbuild() {
     fi
 }
 
-# Builds the FMU's shared library against glibc 2.17 (so it loads on older hosts), the CLI,
-# and packs fmu/HaselPlatform.fmu.
+# Builds the FMUs' shared libraries (FMI 2.0 and 3.0) against glibc 2.17 (so they load on
+# older hosts), the CLI, and packs fmu/HaselPlatform.fmu and fmu/HaselPlatform-fmi3.fmu.
 build_fmu() {
     ensure_venv
     ensure_zigbuild
     step "build the FMU library against glibc 2.17 (cargo zigbuild)"
     cargo zigbuild --release --lib --target "$FMU_TARGET.2.17"
+    step "build the FMI 3.0 library against glibc 2.17 (cargo zigbuild --features fmi3)"
+    cargo zigbuild --release --lib --target "$FMU_TARGET.2.17" --features fmi3 --target-dir target/fmi3
     step "build the hasel command"
     cargo build --release --bin hasel
-    step "pack fmu/HaselPlatform.fmu"
-    ./target/release/hasel fmu --lib "$FMU_LIB"
+    step "pack fmu/HaselPlatform.fmu and fmu/HaselPlatform-fmi3.fmu"
+    ./target/release/hasel fmu --lib "$FMU_LIB" --lib-fmi3 "$FMU3_LIB"
 }

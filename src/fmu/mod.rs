@@ -41,8 +41,15 @@ pub fn model_info() -> ModelInfo {
     }
 }
 
-/// The 44 C functions of the FMU binary, around [`HaselCore`]; in a module of their own, as
-/// the macro imports the C types where it is invoked.
+/// The 44 C functions of the FMI 2.0 binary, around [`HaselCore`]; in a module of their own,
+/// as the macro imports the C types where it is invoked.
+#[cfg(not(feature = "fmi3"))]
 mod fmi2_functions {
     crate::export_fmi2!(super::HaselCore);
+}
+
+/// The C functions of the FMI 3.0 binary (`--features fmi3`), around the same core.
+#[cfg(feature = "fmi3")]
+mod fmi3_functions {
+    crate::export_fmi3!(super::HaselCore);
 }

@@ -1,4 +1,5 @@
-//! Packs the FMU archive: `modelDescription.xml`, `binaries/linux64/HaselPlatform.so`,
+//! Packs the FMU archives, FMI 2.0 and FMI 3.0: `modelDescription.xml`, the shared library
+//! (`binaries/linux64/HaselPlatform.so`, FMI 3.0: `binaries/x86_64-linux/HaselPlatform.so`),
 //! `documentation/index.html` and `resources/parameters.toml`, all generated from the one
 //! variable table of [`super::variables`] and one parameter set.
 
@@ -9,6 +10,7 @@ use super::variables::variables;
 use super::{MODEL_IDENTIFIER, RESOURCE_PARAMS, model_info};
 use crate::fmi_common::variables::{Causality, Variable};
 use crate::fmi2::model_description::{guid_for, model_description_xml};
+use crate::fmi3::model_description as fmi3_description;
 use crate::io::file::{FileError, write_bytes_atomic};
 use crate::io::params_file;
 use crate::model::Params;
@@ -24,6 +26,63 @@ pub fn model_description(params: &Params) -> String {
 pub fn guid(params: &Params) -> String {
     guid_for(&model_info(), &variables(params, DEFAULT_RTOL))
         .expect("the variable table is valid (tested)")
+}
+
+/// The FMI version of an FMU archive: which description, library folder and C functions.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum FmiVersion {
+    V2,
+    V3,
+}
+
+impl FmiVersion {
+    /// The version as the standard writes it.
+    pub fn name(self) -> &'static str {
+        match self {
+            FmiVersion::V2 => "FMI 2.0",
+            FmiVersion::V3 => "FMI 3.0",
+        }
+    }
+
+    /// The platform folder under `binaries/` (FMI 2.0 section 2.3, FMI 3.0 section 2.5.1.1).
+    fn platform(self) -> &'static str {
+        match self {
+            FmiVersion::V2 => "linux64",
+            FmiVersion::V3 => "x86_64-linux",
+        }
+    }
+
+    /// A function every library of this version exports, and one none does.
+    fn marker_symbols(self) -> (&'static str, &'static str) {
+        match self {
+            FmiVersion::V2 => ("fmi2Instantiate", "fmi3InstantiateCoSimulation"),
+            FmiVersion::V3 => ("fmi3InstantiateCoSimulation", "fmi2Instantiate"),
+        }
+    }
+
+    /// The `modelDescription.xml` of an FMU of this version whose start values are `params`.
+    pub fn model_description(self, params: &Params) -> String {
+        match self {
+            FmiVersion::V2 => model_description(params),
+            FmiVersion::V3 => {
+                let vars = fmi3_description::with_time(variables(params, DEFAULT_RTOL));
+                fmi3_description::model_description_xml(&model_info(), &vars)
+                    .expect("the variable table is valid (tested)")
+            }
+        }
+    }
+
+    /// The GUID (FMI 2.0) or instantiationToken (FMI 3.0) of that description.
+    pub fn token(self, params: &Params) -> String {
+        match self {
+            FmiVersion::V2 => guid(params),
+            FmiVersion::V3 => {
+                let vars = fmi3_description::with_time(variables(params, DEFAULT_RTOL));
+                fmi3_description::instantiation_token(&model_info(), &vars)
+                    .expect("the variable table is valid (tested)")
+            }
+        }
+    }
 }
 
 fn escape(s: &str) -> String {
@@ -43,7 +102,7 @@ fn group(v: &Variable) -> &'static str {
 
 /// `documentation/index.html`: the model, its interface and every variable with its unit,
 /// start value and description.
-pub fn documentation(params: &Params) -> String {
+pub fn documentation(params: &Params, version: FmiVersion) -> String {
     let vars = variables(params, DEFAULT_RTOL);
     let info = model_info();
     let mut html = format!(
@@ -51,17 +110,22 @@ pub fn documentation(params: &Params) -> String {
          <style>body{{font-family:sans-serif;max-width:60em;margin:2em auto}}table{{border-collapse:collapse}}\
          td,th{{border:1px solid #ccc;padding:2px 6px;text-align:left}}</style></head><body>\n\
          <h1>{id}</h1>\n<p>{desc}</p>\n\
-         <p>FMI 2.0 Co-Simulation, GUID <code>{guid}</code>. Each actuator is the port-Hamiltonian \
+         <p>{version} Co-Simulation, {token_name} <code>{guid}</code>. Each actuator is the port-Hamiltonian \
          system of Feregrino et al.: state (theta, l_p, p, Q1, Q2), energy H, dynamics \
          dx/dt = (J - R) grad H + g U; the heights h_i = 1/2 Lv sin(theta_i) drive the 3PS platform, \
          whose forward kinematics gives the antenna tip. The inputs are held constant over each \
          communication step; the internal solver is a Radau IIA method of order 5 with error \
-         control (relative tolerance from fmi2SetupExperiment, else the parameter <code>rtol</code>). \
+         control (relative tolerance from the importer, else the parameter <code>rtol</code>). \
          The simulation starts from the U = 0 equilibrium under gravity.</p>\n\
          <p>Default experiment: 0 to {stop} s, step {step} s, tolerance {tol}.</p>\n",
         id = MODEL_IDENTIFIER,
         desc = escape(&info.description),
-        guid = guid(params),
+        version = version.name(),
+        token_name = match version {
+            FmiVersion::V2 => "GUID",
+            FmiVersion::V3 => "instantiationToken",
+        },
+        guid = version.token(params),
         stop = info.default_experiment.stop_time,
         step = info.default_experiment.step_size,
         tol = info.default_experiment.tolerance,
@@ -86,25 +150,59 @@ pub fn documentation(params: &Params) -> String {
     html
 }
 
-/// Writes the FMU to `out` (atomically) from the shared library at `library`.
-pub fn pack(library: &Path, params: &Params, out: &Path) -> Result<(), FileError> {
+/// Whether `bytes` contain `text`.
+fn contains(bytes: &[u8], text: &str) -> bool {
+    bytes.windows(text.len()).any(|w| w == text.as_bytes())
+}
+
+/// Reads the shared library at `library`, which must be the build of `version`
+/// (`--features fmi3` for FMI 3.0).
+pub fn read_library(library: &Path, version: FmiVersion) -> Result<Vec<u8>, FileError> {
     let so = std::fs::read(library)
         .map_err(|e| FileError::new(library, format!("cannot read the FMU library: {e}")))?;
     if !so.starts_with(b"\x7fELF") {
         return Err(FileError::new(library, "not an ELF shared library"));
     }
+    let (needed, foreign) = version.marker_symbols();
+    if !contains(&so, needed) || contains(&so, foreign) {
+        let build = match version {
+            FmiVersion::V2 => "cargo build --release --lib",
+            FmiVersion::V3 => "cargo build --release --lib --features fmi3",
+        };
+        return Err(FileError::new(
+            library,
+            format!(
+                "not the {} build of the library (it must export {needed} and not {foreign}; build it with `{build}`)",
+                version.name()
+            ),
+        ));
+    }
+    Ok(so)
+}
+
+/// Writes the FMU of `version` to `out` (atomically) with the library `so` of
+/// [`read_library`].
+pub fn pack(
+    so: Vec<u8>,
+    params: &Params,
+    out: &Path,
+    version: FmiVersion,
+) -> Result<(), FileError> {
     let mut zip = zip::ZipWriter::new(std::io::Cursor::new(Vec::new()));
     let options = zip::write::SimpleFileOptions::default()
         .compression_method(zip::CompressionMethod::Deflated);
     let entries: [(String, Vec<u8>); 4] = [
         (
             "modelDescription.xml".into(),
-            model_description(params).into_bytes(),
+            version.model_description(params).into_bytes(),
         ),
-        (format!("binaries/linux64/{MODEL_IDENTIFIER}.so"), so),
+        (
+            format!("binaries/{}/{MODEL_IDENTIFIER}.so", version.platform()),
+            so,
+        ),
         (
             "documentation/index.html".into(),
-            documentation(params).into_bytes(),
+            documentation(params, version).into_bytes(),
         ),
         (
             format!("resources/{RESOURCE_PARAMS}"),
@@ -156,8 +254,52 @@ mod tests {
     }
 
     #[test]
+    fn a_library_of_the_other_version_is_refused() {
+        let dir = std::env::temp_dir().join(format!("hasel_pack_{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let lib = dir.join("lib.so");
+        std::fs::write(&lib, b"\x7fELF ... fmi2Instantiate ...").unwrap();
+        assert!(read_library(&lib, FmiVersion::V2).is_ok());
+        let e = read_library(&lib, FmiVersion::V3).unwrap_err().to_string();
+        assert!(
+            e.contains("not the FMI 3.0 build") && e.contains("--features fmi3"),
+            "{e}"
+        );
+        std::fs::write(&lib, b"\x7fELF fmi3InstantiateCoSimulation").unwrap();
+        assert!(read_library(&lib, FmiVersion::V2).is_err());
+        assert!(read_library(&lib, FmiVersion::V3).is_ok());
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn the_fmi3_description_has_the_variables_of_the_fmi2_one_and_time() {
+        let p = Params::default();
+        let (v2, v3) = (
+            FmiVersion::V2.model_description(&p),
+            FmiVersion::V3.model_description(&p),
+        );
+        assert!(v3.contains("fmiVersion=\"3.0\"") && v3.contains(&FmiVersion::V3.token(&p)));
+        for v in variables(&p, DEFAULT_RTOL) {
+            let declared = format!(
+                "name=\"{}\" valueReference=\"{}\"",
+                v.name, v.value_reference
+            );
+            assert!(
+                v2.contains(&declared) && v3.contains(&declared),
+                "{}",
+                v.name
+            );
+        }
+        assert!(v3.contains("<Float64 name=\"time\""));
+        let mut stiffer = p.clone();
+        stiffer.set("Kb_1", 0.31).unwrap();
+        assert_ne!(FmiVersion::V3.token(&p), FmiVersion::V3.token(&stiffer));
+    }
+
+    #[test]
     fn documentation_lists_every_variable() {
-        let doc = documentation(&Params::default());
+        let doc = documentation(&Params::default(), FmiVersion::V3);
+        assert!(doc.contains(&FmiVersion::V3.token(&Params::default())));
         for v in variables(&Params::default(), DEFAULT_RTOL) {
             assert!(
                 doc.contains(&format!("<code>{}</code>", v.name)),
