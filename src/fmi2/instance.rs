@@ -22,7 +22,7 @@ use super::types::{
     Fmi2Status, fmi2CallbackFunctions, fmi2StatusKind,
 };
 use super::uri::path_from_file_uri;
-use crate::fmi_common::model_api::FmuCore;
+use crate::fmi_common::model_api::{FmuCore, InstanceKind};
 use crate::fmi_common::variables::{Variable, check_variable_table};
 
 use Phase::*;
@@ -49,7 +49,7 @@ struct Built<M> {
 }
 
 fn build<M: FmuCore>(resource_dir: Option<&Path>) -> Result<Built<M>, String> {
-    let core = M::instantiate(resource_dir)?;
+    let core = M::instantiate(InstanceKind::CoSimulation, resource_dir)?;
     let variables = core.variables();
     check_variable_table(&variables).map_err(|e| format!("invalid variable table: {e}"))?;
     let guid = guid_for(&M::model_info(), &variables)?;

@@ -1,11 +1,50 @@
 //! The interface between a generic FMI wrapper (the FMI 2.0 one: [`crate::fmi2`]) and one
 //! model ("core"). The core knows nothing of FMI: no C types, no state machine, no logging.
 //! Errors are plain messages that the wrapper logs together with the function name. The FMI
-//! functions named below are the FMI 2.0 ones the wrapper maps onto each method.
+//! functions named below are the FMI 2.0 ones the wrapper maps onto each method; the methods
+//! themselves are the same for any FMI version, Co-Simulation and Model Exchange.
 
 use std::path::Path;
 
 use super::variables::{ModelInfo, Variable};
+
+/// The interface an instance is created for, fixed for its life.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum InstanceKind {
+    /// The importer integrates: it sets time and states and asks for derivatives.
+    ModelExchange,
+    /// The core integrates over each communication step.
+    CoSimulation,
+}
+
+/// One continuous state of the model's state vector and what its derivative depends on.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct StateDerivative {
+    /// Value reference of the state.
+    pub state: u32,
+    /// Value reference of its derivative (a variable whose `derivative` is `state`).
+    pub derivative: u32,
+    /// Value references of the states and inputs the derivative can depend on, ascending.
+    pub dependencies: Vec<u32>,
+}
+
+/// One output and what it can depend on.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct OutputDependency {
+    pub output: u32,
+    /// Value references of the states and inputs the output can depend on, ascending.
+    pub dependencies: Vec<u32>,
+}
+
+/// The model's structure (FMI's `<ModelStructure>` before any FMI version's format): the
+/// continuous states in the order of the state vector and the dependencies of their
+/// derivatives and of the outputs. A dependency is listed if some parameter values can make
+/// it nonzero, so the lists hold for every instance.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct ModelStructure {
+    pub derivatives: Vec<StateDerivative>,
+    pub outputs: Vec<OutputDependency>,
+}
 
 /// One simulation model as seen by the FMI wrapper ([`crate::fmi2::instance::Instance`]).
 ///
@@ -21,9 +60,13 @@ pub trait FmuCore: Clone + Send + 'static {
     /// Model-level data of `modelDescription.xml`; must not depend on the instance.
     fn model_info() -> ModelInfo;
 
-    /// Creates an instance with its start values; `resource_dir` is the FMU's resources
-    /// folder when the importer gave one (`fmi2Instantiate`, section 2.1.6).
-    fn instantiate(resource_dir: Option<&Path>) -> Result<Self, String>;
+    /// The continuous states and the dependencies; must not depend on the instance. Every
+    /// value reference in it is one of [`FmuCore::variables`].
+    fn model_structure() -> ModelStructure;
+
+    /// Creates an instance of `kind` with its start values; `resource_dir` is the FMU's
+    /// resources folder when the importer gave one (`fmi2Instantiate`, section 2.1.6).
+    fn instantiate(kind: InstanceKind, resource_dir: Option<&Path>) -> Result<Self, String>;
 
     /// The variable table with this instance's start values (the start values can come from
     /// `resources/`, so it is per instance). The GUID is computed from it, and the wrapper
@@ -48,7 +91,9 @@ pub trait FmuCore: Clone + Send + 'static {
     ) -> Result<(), String>;
 
     /// End of Initialization Mode (`fmi2ExitInitializationMode`): the parameters are final,
-    /// the initial state is computed; stepping follows.
+    /// the initial state is computed; stepping (Co-Simulation) or the importer's integration
+    /// (Model Exchange) follows. A configuration the instance's kind cannot run is refused
+    /// here, with the reason.
     fn exit_initialization(&mut self) -> Result<(), String>;
 
     /// Integrates from the internal time over `step` seconds (`step > 0`, finite) with the
@@ -56,8 +101,41 @@ pub trait FmuCore: Clone + Send + 'static {
     /// the wrapper returns `fmi2Discard` and logs the reason.
     fn do_step(&mut self, step: f64) -> Result<(), String>;
 
-    /// The internal time: the end of the last successful step.
+    /// The internal time: the end of the last successful step, or the time last set in Model
+    /// Exchange.
     fn time(&self) -> f64;
+
+    /// Model Exchange, after initialization: the time of the next evaluations (`fmi2SetTime`;
+    /// finite, checked by the wrapper).
+    fn set_time(&mut self, time: f64) -> Result<(), String>;
+
+    /// The continuous states, in the order of [`ModelStructure::derivatives`], into `x` (of
+    /// that length): from Initialization Mode on (`fmi2GetContinuousStates`).
+    fn continuous_states(&mut self, x: &mut [f64]) -> Result<(), String>;
+
+    /// Model Exchange, after initialization: sets the continuous states (`fmi2SetContinuous
+    /// States`); the core rejects values it cannot evaluate (not finite) with a message.
+    fn set_continuous_states(&mut self, x: &[f64]) -> Result<(), String>;
+
+    /// The state derivatives at the current time, states and inputs, in state order
+    /// (`fmi2GetDerivatives`); `Err` where the model cannot be evaluated there.
+    fn derivatives(&mut self, dx: &mut [f64]) -> Result<(), String>;
+
+    /// The nominal value of each continuous state, its typical magnitude, in state order
+    /// (`fmi2GetNominalsOfContinuousStates`); from the current parameters.
+    fn nominals(&self, nominal: &mut [f64]) -> Result<(), String>;
+
+    /// The directional derivative `Σ_j ∂unknown_i/∂known_j · seed_j` of state derivatives or
+    /// outputs (`unknowns`) in the direction `seed` of states or inputs (`knowns`), at the
+    /// current states and inputs, into `result` (`fmi2GetDirectionalDerivative`). The wrapper
+    /// has checked that the references are of those kinds and the lengths agree.
+    fn directional_derivative(
+        &mut self,
+        unknowns: &[u32],
+        knowns: &[u32],
+        seed: &[f64],
+        result: &mut [f64],
+    ) -> Result<(), String>;
 
     /// The complete dynamic state as bytes (everything `deserialize_state` needs beyond what
     /// `instantiate` gives), for `fmi2SerializeFMUstate`.

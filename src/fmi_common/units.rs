@@ -58,6 +58,14 @@ pub fn base_unit(unit: &str) -> Option<Exponents> {
         .map(|(_, e)| *e)
 }
 
+/// The unit of the table for the time derivative of a quantity in `unit` (the first one with
+/// the same base units divided by a second), e.g. `C` gives `A`.
+pub fn per_second(unit: &str) -> Option<&'static str> {
+    let mut e = base_unit(unit)?;
+    e[2] -= 1;
+    UNITS.iter().find(|(_, x)| *x == e).map(|(name, _)| *name)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -132,5 +140,14 @@ mod tests {
     fn lookup() {
         assert_eq!(base_unit("V"), Some([1, 2, -3, -1, 0, 0, 0, 0]));
         assert_eq!(base_unit("furlong"), None);
+    }
+
+    #[test]
+    fn rates() {
+        for (unit, rate) in [("rad", "rad/s"), ("m", "m/s"), ("C", "A"), ("kg.m/s", "N")] {
+            assert_eq!(per_second(unit), Some(rate), "{unit}");
+        }
+        assert_eq!(per_second("furlong"), None);
+        assert_eq!(per_second("F/m"), None);
     }
 }

@@ -48,6 +48,8 @@ pub struct Variable {
     pub description: String,
     /// Required for inputs and for `initial` exact/approx, forbidden otherwise.
     pub start: Option<f64>,
+    /// For a state derivative: the value reference of its state (`derivative` attribute).
+    pub derivative: Option<u32>,
 }
 
 /// `<DefaultExperiment>` (section 2.2.5).
@@ -161,7 +163,12 @@ impl Variable {
     }
 }
 
+/// `[A-Za-z_][A-Za-z0-9_]*`, or `der(name)` of such a name for a state derivative.
 fn valid_name(name: &str) -> bool {
+    let name = name
+        .strip_prefix("der(")
+        .and_then(|n| n.strip_suffix(')'))
+        .unwrap_or(name);
     let mut chars = name.chars();
     chars
         .next()
@@ -174,7 +181,7 @@ fn check_variable(v: &Variable) -> Result<(), String> {
     let name = &v.name;
     if !valid_name(name) {
         return Err(format!(
-            "variable name {name:?} does not match [A-Za-z_][A-Za-z0-9_]*"
+            "variable name {name:?} does not match [A-Za-z_][A-Za-z0-9_]* or der(...) of it"
         ));
     }
     if !combination_allowed(v.causality, v.variability) {
@@ -220,7 +227,8 @@ fn check_variable(v: &Variable) -> Result<(), String> {
 
 /// Checks a variable table: unique names and value references, valid names, allowed
 /// causality/variability/initial combinations, start values where required and only there,
-/// finite starts, known units, at most one independent variable.
+/// finite starts, known units, at most one independent variable, derivatives of continuous
+/// variables of the table.
 pub fn check_variable_table(vars: &[Variable]) -> Result<(), String> {
     let mut names = std::collections::HashSet::new();
     let mut refs = std::collections::HashSet::new();
@@ -244,6 +252,19 @@ pub fn check_variable_table(vars: &[Variable]) -> Result<(), String> {
     {
         return Err("more than one independent variable".into());
     }
+    for v in vars {
+        let Some(state) = v.derivative else { continue };
+        let of = vars.iter().find(|s| s.value_reference == state);
+        if !of.is_some_and(|s| s.variability == Variability::Continuous)
+            || v.variability != Variability::Continuous
+        {
+            return Err(format!(
+                "variable {} is the derivative of value reference {state}, which is not a \
+                 continuous variable of the table, or is not continuous itself",
+                v.name
+            ));
+        }
+    }
     Ok(())
 }
 
@@ -261,6 +282,7 @@ mod tests {
             unit: Some("m".into()),
             description: String::new(),
             start,
+            derivative: None,
         }
     }
 
@@ -297,11 +319,30 @@ mod tests {
 
     #[test]
     fn rejects_bad_names() {
-        for bad in ["", "1x", "a.b", "a b", "x[1]", "ä"] {
+        for bad in [
+            "", "1x", "a.b", "a b", "x[1]", "ä", "der(1x)", "der(u", "der()",
+        ] {
             let mut t = table();
             t[0].name = bad.into();
             assert!(check_variable_table(&t).is_err(), "{bad:?} accepted");
         }
+    }
+
+    #[test]
+    fn derivatives_name_a_continuous_variable() {
+        let mut t = table();
+        let mut der = var("der(y)", 3, Causality::Local, Variability::Continuous, None);
+        der.derivative = Some(2);
+        t.push(der);
+        check_variable_table(&t).unwrap();
+        t[3].derivative = Some(0);
+        assert!(check_variable_table(&t).unwrap_err().contains("der(y)"));
+        t[3].derivative = Some(7);
+        assert!(
+            check_variable_table(&t)
+                .unwrap_err()
+                .contains("reference 7")
+        );
     }
 
     #[test]

@@ -1,17 +1,20 @@
-//! The HaselPlatform model core: the mapping of FMI calls onto a [`Simulator`], parameters
-//! until initialization ends, then a running simulation. The generic FMI shell does every
-//! check of the standard around it; the variable table says what each value reference is.
+//! The HaselPlatform model core: the mapping of FMI calls onto the model, parameters until
+//! initialization ends, then a running simulation (Co-Simulation) or the importer's time and
+//! states (Model Exchange). The generic FMI shell does every check of the standard around it;
+//! the variable table says what each value reference is.
 
 use std::path::Path;
 
 use serde::{Deserialize, Serialize};
 
+use super::structure::model_structure;
 use super::variables::{Slot, rows, variables};
 use super::{RESOURCE_PARAMS, model_info};
-use crate::fmi_common::model_api::FmuCore;
+use crate::fmi_common::model_api::{FmuCore, InstanceKind, ModelStructure};
 use crate::fmi_common::variables::{ModelInfo, Variable};
 use crate::io::params_file;
 use crate::model::params::{ParamDef, parameters};
+use crate::model::platform::BlockState;
 use crate::model::{Params, Platform};
 use crate::simulation::{DEFAULT_RTOL, Simulator, Snapshot, check_rtol};
 
@@ -26,43 +29,162 @@ pub fn resource_params(resource_dir: Option<&Path>) -> Result<Params, String> {
     }
 }
 
-/// The core: parameters until initialization ends, then a running simulation.
+/// The core: parameters until initialization ends, then a run.
 #[derive(Clone, Debug)]
 pub struct HaselCore {
+    kind: InstanceKind,
     params: Params,
     rtol: f64,
     /// Tolerance from fmi2SetupExperiment, which takes precedence over `rtol`.
     tolerance: Option<f64>,
     u: [f64; 3],
     t_start: f64,
-    sim: Option<Simulator>,
+    run: Option<Run>,
+}
+
+/// The model after initialization.
+#[derive(Clone, Debug)]
+enum Run {
+    /// Co-Simulation: the core integrates.
+    Steps(Box<Simulator>),
+    /// Model Exchange: the importer's time and states, `x` in the model's layout.
+    Importer {
+        model: Box<Platform>,
+        t: f64,
+        x: Vec<f64>,
+    },
 }
 
 /// The serialized dynamic state.
 #[derive(Serialize, Deserialize)]
 struct State {
+    model_exchange: bool,
     params: Vec<f64>,
     rtol: f64,
     tolerance: Option<f64>,
     u: [f64; 3],
     t_start: f64,
-    sim: Option<Snapshot>,
+    run: Option<SavedRun>,
+}
+
+#[derive(Serialize, Deserialize)]
+enum SavedRun {
+    Steps(Box<Snapshot>),
+    Importer { t: f64, x: Vec<f64> },
+}
+
+/// The continuous states in the order of the state vector: the table's state variables, in
+/// value-reference order ([`model_structure`]).
+fn table_states() -> impl Iterator<Item = (usize, BlockState)> {
+    rows().iter().filter_map(|r| match r.slot {
+        Slot::State { actuator, state } => Some((actuator, state)),
+        _ => None,
+    })
+}
+
+/// The outputs' index in [`Platform::outputs`].
+fn output_index(slot: Slot) -> Option<usize> {
+    match slot {
+        Slot::Height(i) => Some(i),
+        Slot::Tip(i) => Some(3 + i),
+        _ => None,
+    }
+}
+
+/// The analytic Jacobians at one point: A = ∂f/∂x, B = ∂f/∂U, C = ∂y/∂x (column-major, the
+/// model's layout) and D = ∂y/∂U.
+struct Jacobians<'m> {
+    model: &'m Platform,
+    a: Vec<f64>,
+    b: Vec<f64>,
+    c: Vec<f64>,
+    d: [[f64; 3]; 6],
+}
+
+impl<'m> Jacobians<'m> {
+    fn at(model: &'m Platform, x: &[f64], u: [f64; 3]) -> Result<Self, String> {
+        let n = model.n_states();
+        let (mut a, mut b, mut c) = (vec![0.0; n * n], vec![0.0; n * 3], vec![0.0; 6 * n]);
+        model.jacobian(x, u, &mut a).map_err(|e| e.to_string())?;
+        model
+            .input_jacobian(x, u, &mut b)
+            .map_err(|e| e.to_string())?;
+        model.output_jacobian(x, &mut c);
+        Ok(Jacobians {
+            model,
+            a,
+            b,
+            c,
+            d: model.output_input_jacobian(),
+        })
+    }
+
+    /// ∂unknown/∂known for an unknown (state derivative or output) and a known (state or
+    /// input) of the table; a state of an effect that is off neither moves nor is moved.
+    fn partial(&self, unknown: Slot, known: Slot) -> Result<f64, String> {
+        let n = self.model.n_states();
+        let position = |actuator, state| self.model.state_position(actuator, state);
+        Ok(match (unknown, known) {
+            (Slot::Derivative { actuator, state }, Slot::State { actuator: a, state: s }) => {
+                match (position(actuator, state), position(a, s)) {
+                    (Some(r), Some(c)) => self.a[c * n + r],
+                    _ => 0.0,
+                }
+            }
+            (Slot::Derivative { actuator, state }, Slot::Input(j)) => {
+                position(actuator, state).map_or(0.0, |r| self.b[j * n + r])
+            }
+            (output, Slot::State { actuator, state }) if output_index(output).is_some() => {
+                let o = output_index(output).unwrap_or_default();
+                position(actuator, state).map_or(0.0, |c| self.c[c * 6 + o])
+            }
+            (output, Slot::Input(j)) if output_index(output).is_some() => {
+                self.d[output_index(output).unwrap_or_default()][j]
+            }
+            _ => return Err("not a pair of an unknown (state derivative or output) and a known (state or input)".into()),
+        })
+    }
 }
 
 impl HaselCore {
-    /// A simulator at the start values, for outputs asked for in Initialization Mode.
-    fn preview(&self) -> Result<Simulator, String> {
+    /// The model at the current parameters and its rest state: the initial state, and what
+    /// outputs show in Initialization Mode.
+    fn at_rest(&self) -> Result<(Platform, Vec<f64>), String> {
         let model = Platform::new(self.params.clone()).map_err(|e| e.to_string())?;
-        Simulator::new(model, self.t_start, self.effective_rtol()).map_err(|e| e.to_string())
+        let x = model.rest_state().map_err(|e| e.to_string())?;
+        Ok((model, x))
     }
 
     fn effective_rtol(&self) -> f64 {
         self.tolerance.unwrap_or(self.rtol)
     }
 
-    fn value(&self, slot: Slot, sim: &Simulator) -> Result<f64, String> {
-        let x = sim.state();
-        let model = sim.model();
+    /// `f` of the model and its current state (the rest state before initialization ends).
+    fn evaluate<T>(
+        &self,
+        f: impl FnOnce(&Platform, &[f64]) -> Result<T, String>,
+    ) -> Result<T, String> {
+        match &self.run {
+            Some(Run::Steps(sim)) => f(sim.model(), sim.state()),
+            Some(Run::Importer { model, x, .. }) => f(model, x),
+            None => {
+                let (model, x) = self.at_rest()?;
+                f(&model, &x)
+            }
+        }
+    }
+
+    /// The importer's states, Model Exchange after initialization only.
+    fn importer_states(&mut self) -> Result<(&Platform, &mut f64, &mut Vec<f64>), String> {
+        match &mut self.run {
+            Some(Run::Importer { model, t, x }) => Ok((model, t, x)),
+            _ => {
+                Err("only a Model Exchange instance after initialization has its states set".into())
+            }
+        }
+    }
+
+    fn value(&self, slot: Slot, model: &Platform, x: &[f64]) -> Result<f64, String> {
         let ok = |r: Result<f64, crate::model::ModelError>| r.map_err(|e| e.to_string());
         Ok(match slot {
             Slot::Input(i) => self.u[i],
@@ -73,6 +195,14 @@ impl HaselCore {
             Slot::State { actuator, state } => {
                 model.state_position(actuator, state).map_or(0.0, |k| x[k])
             }
+            Slot::Derivative { actuator, state } => match model.state_position(actuator, state) {
+                Some(k) => {
+                    let mut dx = vec![0.0; model.n_states()];
+                    model.rhs(x, self.u, &mut dx).map_err(|e| e.to_string())?;
+                    dx[k]
+                }
+                None => 0.0,
+            },
             Slot::Energy => ok(model.energy(x))?,
             Slot::SuppliedPower => ok(model.supplied_power(x, self.u))?,
             Slot::DissipatedPower => ok(model.dissipated_power(x))?,
@@ -85,14 +215,19 @@ impl FmuCore for HaselCore {
         model_info()
     }
 
-    fn instantiate(resource_dir: Option<&Path>) -> Result<Self, String> {
+    fn model_structure() -> ModelStructure {
+        model_structure()
+    }
+
+    fn instantiate(kind: InstanceKind, resource_dir: Option<&Path>) -> Result<Self, String> {
         Ok(HaselCore {
+            kind,
             params: resource_params(resource_dir)?,
             rtol: DEFAULT_RTOL,
             tolerance: None,
             u: [0.0; 3],
             t_start: 0.0,
-            sim: None,
+            run: None,
         })
     }
 
@@ -108,13 +243,7 @@ impl FmuCore for HaselCore {
             Slot::Rtol => return Ok(self.rtol),
             _ => {}
         }
-        match &self.sim {
-            Some(sim) => self.value(row.slot, sim),
-            None => {
-                let sim = self.preview()?;
-                self.value(row.slot, &sim)
-            }
-        }
+        self.evaluate(|model, x| self.value(row.slot, model, x))
     }
 
     fn set_real(&mut self, vr: u32, value: f64) -> Result<(), String> {
@@ -156,31 +285,140 @@ impl FmuCore for HaselCore {
     }
 
     fn exit_initialization(&mut self) -> Result<(), String> {
-        self.sim = Some(self.preview()?);
+        let (model, x) = self.at_rest()?;
+        self.run = Some(match self.kind {
+            InstanceKind::CoSimulation => Run::Steps(Box::new(
+                Simulator::from_state(model, self.t_start, &x, self.effective_rtol())
+                    .map_err(|e| e.to_string())?,
+            )),
+            InstanceKind::ModelExchange => {
+                let tau_d = model.params().effects.delay.tau_d;
+                if tau_d > 0.0 {
+                    return Err(format!(
+                        "the transport delay (tau_d = {tau_d:e} s) cannot run in Model Exchange: \
+                         it needs the history of the command, which only the FMU's own \
+                         integrator keeps; use Co-Simulation, or set tau_d = 0"
+                    ));
+                }
+                Run::Importer {
+                    model: Box::new(model),
+                    t: self.t_start,
+                    x,
+                }
+            }
+        });
         Ok(())
     }
 
     fn do_step(&mut self, step: f64) -> Result<(), String> {
-        let sim = self
-            .sim
-            .as_mut()
-            .ok_or("the simulation has not been initialized")?;
+        let Some(Run::Steps(sim)) = self.run.as_mut() else {
+            return Err("the simulation has not been initialized for Co-Simulation".into());
+        };
         let t_end = sim.t() + step;
         sim.step_held(self.u, t_end).map_err(|e| e.to_string())
     }
 
     fn time(&self) -> f64 {
-        self.sim.as_ref().map_or(self.t_start, Simulator::t)
+        match &self.run {
+            Some(Run::Steps(sim)) => sim.t(),
+            Some(Run::Importer { t, .. }) => *t,
+            None => self.t_start,
+        }
+    }
+
+    fn set_time(&mut self, time: f64) -> Result<(), String> {
+        *self.importer_states()?.1 = time;
+        Ok(())
+    }
+
+    fn continuous_states(&mut self, out: &mut [f64]) -> Result<(), String> {
+        self.evaluate(|model, x| {
+            for (v, (actuator, state)) in out.iter_mut().zip(table_states()) {
+                *v = model.state_position(actuator, state).map_or(0.0, |k| x[k]);
+            }
+            Ok(())
+        })
+    }
+
+    fn set_continuous_states(&mut self, values: &[f64]) -> Result<(), String> {
+        if let Some((v, k)) = values.iter().zip(0..).find(|(v, _)| !v.is_finite()) {
+            let name = &rows()[model_structure().derivatives[k].state as usize].name;
+            return Err(format!("state {name} = {v}: must be finite"));
+        }
+        let (model, _, x) = self.importer_states()?;
+        for (&v, (actuator, state)) in values.iter().zip(table_states()) {
+            // an effect that is off keeps its state at 0
+            if let Some(k) = model.state_position(actuator, state) {
+                x[k] = v;
+            }
+        }
+        Ok(())
+    }
+
+    fn derivatives(&mut self, out: &mut [f64]) -> Result<(), String> {
+        let u = self.u;
+        self.evaluate(|model, x| {
+            let mut dx = vec![0.0; model.n_states()];
+            model.rhs(x, u, &mut dx).map_err(|e| e.to_string())?;
+            for (v, (actuator, state)) in out.iter_mut().zip(table_states()) {
+                *v = model.state_position(actuator, state).map_or(0.0, |k| dx[k]);
+            }
+            Ok(())
+        })
+    }
+
+    /// The model's state scales; 1 for the state of an effect that is off (it stays 0).
+    fn nominals(&self, out: &mut [f64]) -> Result<(), String> {
+        let model = Platform::new(self.params.clone()).map_err(|e| e.to_string())?;
+        let scales = model.state_scales();
+        for (v, (actuator, state)) in out.iter_mut().zip(table_states()) {
+            *v = model
+                .state_position(actuator, state)
+                .map_or(1.0, |k| scales[k]);
+        }
+        Ok(())
+    }
+
+    fn directional_derivative(
+        &mut self,
+        unknowns: &[u32],
+        knowns: &[u32],
+        seed: &[f64],
+        result: &mut [f64],
+    ) -> Result<(), String> {
+        let u = self.u;
+        self.evaluate(|model, x| {
+            let jac = Jacobians::at(model, x, u)?;
+            for (r, &unknown) in result.iter_mut().zip(unknowns) {
+                let row = &rows()[unknown as usize];
+                *r = 0.0;
+                for (&known, &s) in knowns.iter().zip(seed) {
+                    let col = &rows()[known as usize];
+                    *r += jac
+                        .partial(row.slot, col.slot)
+                        .map_err(|e| format!("d {} / d {}: {e}", row.name, col.name))?
+                        * s;
+                }
+            }
+            Ok(())
+        })
     }
 
     fn serialize_state(&self) -> Vec<u8> {
         let state = State {
+            model_exchange: self.kind == InstanceKind::ModelExchange,
             params: parameters().map(|d| (d.get)(&self.params)).collect(),
             rtol: self.rtol,
             tolerance: self.tolerance,
             u: self.u,
             t_start: self.t_start,
-            sim: self.sim.as_ref().map(Simulator::snapshot),
+            run: self.run.as_ref().map(|run| match run {
+                Run::Steps(sim) => SavedRun::Steps(Box::new(sim.snapshot())),
+                Run::Importer { t, x, .. } => SavedRun::Importer {
+                    t: *t,
+                    x: x.clone(),
+                },
+            }),
         };
         postcard::to_stdvec(&state).expect("serializing to memory cannot fail")
     }
@@ -188,6 +426,17 @@ impl FmuCore for HaselCore {
     fn deserialize_state(&self, bytes: &[u8]) -> Result<Self, String> {
         let state: State =
             postcard::from_bytes(bytes).map_err(|e| format!("not a HaselPlatform state: {e}"))?;
+        let kind = if state.model_exchange {
+            InstanceKind::ModelExchange
+        } else {
+            InstanceKind::CoSimulation
+        };
+        if kind != self.kind {
+            return Err(format!(
+                "the state is of a {kind:?} instance, this one is {:?}",
+                self.kind
+            ));
+        }
         let defs: Vec<&ParamDef> = parameters().collect();
         if state.params.len() != defs.len() {
             return Err(format!(
@@ -200,20 +449,40 @@ impl FmuCore for HaselCore {
         for (d, v) in defs.iter().zip(&state.params) {
             params.set_param(d, *v).map_err(|e| format!("state: {e}"))?;
         }
-        let sim = match state.sim {
-            Some(snapshot) => {
+        let run = match state.run {
+            Some(saved) => {
                 let model = Platform::new(params.clone()).map_err(|e| format!("state: {e}"))?;
-                Some(Simulator::from_snapshot(model, snapshot).map_err(|e| format!("state: {e}"))?)
+                Some(match saved {
+                    SavedRun::Steps(snapshot) => Run::Steps(Box::new(
+                        Simulator::from_snapshot(model, *snapshot)
+                            .map_err(|e| format!("state: {e}"))?,
+                    )),
+                    SavedRun::Importer { t, x } => {
+                        if x.len() != model.n_states() {
+                            return Err(format!(
+                                "state: {} states, the model has {}",
+                                x.len(),
+                                model.n_states()
+                            ));
+                        }
+                        Run::Importer {
+                            model: Box::new(model),
+                            t,
+                            x,
+                        }
+                    }
+                })
             }
             None => None,
         };
         Ok(HaselCore {
+            kind,
             params,
             rtol: state.rtol,
             tolerance: state.tolerance,
             u: state.u,
             t_start: state.t_start,
-            sim,
+            run,
         })
     }
 }
@@ -227,10 +496,9 @@ mod tests {
         rows().iter().position(|r| r.name == name).unwrap() as u32
     }
 
-    #[test]
-    fn state_variables_read_the_model_state_of_their_name() {
-        let mut core = HaselCore::instantiate(None).unwrap();
-        // the effects with states on, two stages each where an effect has a choice
+    /// The effects with states on (two stages each where an effect has a choice, when
+    /// `other_forms`), and the coupling that links the actuators.
+    fn effects_on(core: &mut HaselCore, other_forms: bool) {
         let effects = [
             ("R3", 2e4),
             ("tau3", 0.5),
@@ -239,17 +507,59 @@ mod tests {
             ("k_h", 0.04),
             ("theta_h", 2e-3),
             ("tau_a", 0.02),
+            ("k_c", 40.0),
+            ("k3", 30.0),
         ];
         for (name, value) in effects {
             core.set_real(vr(name), value).unwrap();
         }
-        core.params.effects.charge_drift.two_stages = true;
-        core.params.effects.amplifier_lag.order = 2;
+        core.params.effects.charge_drift.two_stages = other_forms;
+        core.params.effects.amplifier_lag.order = if other_forms { 2 } else { 1 };
+    }
+
+    /// A core of `kind` past initialization.
+    fn started(kind: InstanceKind, effects: bool) -> HaselCore {
+        let mut core = HaselCore::instantiate(kind, None).unwrap();
+        if effects {
+            effects_on(&mut core, false);
+        }
+        core.enter_initialization(0.0, None, None).unwrap();
+        core.exit_initialization().unwrap();
+        core
+    }
+
+    fn n_states() -> usize {
+        model_structure().derivatives.len()
+    }
+
+    /// A Co-Simulation core in motion, 0.5 ms after the commands changed, and its states
+    /// (in motion: the hysteresis has a kink where θ̇ = 0).
+    fn simulated(effects: bool) -> (HaselCore, Vec<f64>) {
+        let mut core = started(InstanceKind::CoSimulation, effects);
+        for (k, name) in ["U1", "U2", "U3"].iter().enumerate() {
+            core.set_real(vr(name), 30.0 + 10.0 * k as f64).unwrap();
+        }
+        core.do_step(0.01).unwrap();
+        for (name, u) in [("U1", 45.0), ("U2", -20.0), ("U3", 10.0)] {
+            core.set_real(vr(name), u).unwrap();
+        }
+        core.do_step(5e-4).unwrap();
+        let mut x = vec![0.0; n_states()];
+        core.continuous_states(&mut x).unwrap();
+        (core, x)
+    }
+
+    #[test]
+    fn state_variables_read_the_model_state_of_their_name() {
+        let mut core = HaselCore::instantiate(InstanceKind::CoSimulation, None).unwrap();
+        effects_on(&mut core, true);
         core.set_real(vr("U2"), 80.0).unwrap();
         core.enter_initialization(0.0, None, None).unwrap();
         core.exit_initialization().unwrap();
         core.do_step(0.01).unwrap();
-        let sim = core.sim.clone().unwrap();
+        let Some(Run::Steps(sim)) = core.run.clone() else {
+            panic!("a Co-Simulation run")
+        };
         let mut states = 0;
         for (k, row) in rows().iter().enumerate() {
             if let Slot::State { .. } = row.slot {
@@ -264,11 +574,287 @@ mod tests {
 
     #[test]
     fn states_of_effects_that_are_off_read_zero() {
-        let mut core = HaselCore::instantiate(None).unwrap();
+        let mut core = HaselCore::instantiate(InstanceKind::CoSimulation, None).unwrap();
         core.enter_initialization(0.0, None, None).unwrap();
         for name in ["Q3_1", "z_v_2", "z_h_3", "U_amp_1"] {
             assert_eq!(core.get_real(vr(name)), Ok(0.0), "{name}");
         }
         assert_ne!(core.get_real(vr("theta_1")), Ok(0.0), "the rest angle");
+    }
+
+    #[test]
+    fn the_state_vector_is_the_table_states_with_their_derivatives() {
+        let structure = model_structure();
+        assert_eq!(structure.derivatives.len(), 3 * 9);
+        for d in &structure.derivatives {
+            let (state, der) = (&rows()[d.state as usize], &rows()[d.derivative as usize]);
+            assert_eq!(der.name, format!("der({})", state.name));
+        }
+        // ME and CS agree: the same states give the same derivatives as the variables
+        let (mut cs, x) = simulated(true);
+        let mut me = started(InstanceKind::ModelExchange, true);
+        me.u = cs.u;
+        me.set_continuous_states(&x).unwrap();
+        let mut back = vec![0.0; x.len()];
+        me.continuous_states(&mut back).unwrap();
+        assert_eq!(back, x);
+        let (mut dx_me, mut dx_cs) = (vec![0.0; x.len()], vec![0.0; x.len()]);
+        me.derivatives(&mut dx_me).unwrap();
+        cs.derivatives(&mut dx_cs).unwrap();
+        assert_eq!(dx_me, dx_cs);
+        for (d, v) in structure.derivatives.iter().zip(&dx_me) {
+            assert_eq!(me.get_real(d.derivative), Ok(*v));
+        }
+        for name in ["h1", "tip_z"] {
+            assert_eq!(me.get_real(vr(name)), cs.get_real(vr(name)), "{name}");
+        }
+    }
+
+    #[test]
+    fn an_effect_that_is_off_keeps_its_state_at_zero() {
+        let mut me = started(InstanceKind::ModelExchange, false);
+        let mut x = vec![0.0; n_states()];
+        me.continuous_states(&mut x).unwrap();
+        let k = model_structure()
+            .derivatives
+            .iter()
+            .position(|d| d.state == vr("Q3_2"))
+            .unwrap();
+        x[k] = 1e-9;
+        me.set_continuous_states(&x).unwrap();
+        let (mut back, mut dx) = (vec![0.0; x.len()], vec![0.0; x.len()]);
+        me.continuous_states(&mut back).unwrap();
+        me.derivatives(&mut dx).unwrap();
+        assert_eq!((back[k], dx[k]), (0.0, 0.0));
+    }
+
+    #[test]
+    fn nominals_are_the_model_scales() {
+        let me = started(InstanceKind::ModelExchange, false);
+        let mut nominal = vec![0.0; n_states()];
+        me.nominals(&mut nominal).unwrap();
+        let at = |name: &str| {
+            let k = model_structure()
+                .derivatives
+                .iter()
+                .position(|d| d.state == vr(name));
+            nominal[k.unwrap()]
+        };
+        assert!((1e-3..1e-1).contains(&at("theta_1")), "{}", at("theta_1"));
+        assert!((1e-11..1e-7).contains(&at("Q2_3")), "{}", at("Q2_3"));
+        assert_eq!(at("z_h_2"), 1.0, "an effect that is off");
+    }
+
+    #[test]
+    fn model_exchange_refuses_the_transport_delay_at_initialization() {
+        let mut me = HaselCore::instantiate(InstanceKind::ModelExchange, None).unwrap();
+        me.set_real(vr("tau_d"), 1e-3).unwrap();
+        me.enter_initialization(0.0, None, None).unwrap();
+        let e = me.exit_initialization().unwrap_err();
+        assert!(e.contains("tau_d") && e.contains("history"), "{e}");
+        let mut cs = HaselCore::instantiate(InstanceKind::CoSimulation, None).unwrap();
+        cs.set_real(vr("tau_d"), 1e-3).unwrap();
+        cs.enter_initialization(0.0, None, None).unwrap();
+        cs.exit_initialization().unwrap();
+    }
+
+    #[test]
+    fn model_exchange_states_survive_serialization() {
+        let (_, x) = simulated(true);
+        let mut me = started(InstanceKind::ModelExchange, true);
+        me.set_continuous_states(&x).unwrap();
+        me.set_time(0.02).unwrap();
+        let restored = me.deserialize_state(&me.serialize_state()).unwrap();
+        let mut back = restored.clone();
+        let mut y = vec![0.0; x.len()];
+        back.continuous_states(&mut y).unwrap();
+        assert_eq!((y, back.time()), (x, 0.02));
+        let cs = HaselCore::instantiate(InstanceKind::CoSimulation, None).unwrap();
+        assert!(cs.deserialize_state(&me.serialize_state()).is_err());
+    }
+
+    /// Every column of the directional derivatives of all state derivatives and outputs
+    /// against central differences of the derivatives and outputs, each row relative to its
+    /// scale: the state's nominal per second for a derivative, 1 µm for an output.
+    /// `nonzero` columns must be nonzero (the others are the states of effects that are off).
+    fn check_directional_derivatives(core: &mut HaselCore, nonzero: usize) {
+        let structure = model_structure();
+        let outputs: Vec<u32> = structure.outputs.iter().map(|o| o.output).collect();
+        let unknowns: Vec<u32> = structure
+            .derivatives
+            .iter()
+            .map(|d| d.derivative)
+            .chain(outputs.iter().copied())
+            .collect();
+        let n = structure.derivatives.len();
+        let mut nominal = vec![0.0; n];
+        core.nominals(&mut nominal).unwrap();
+        let row_scale: Vec<f64> = nominal.iter().copied().chain([1e-6; 6]).collect();
+        let inputs = [vr("U1"), vr("U2"), vr("U3")];
+        let knowns: Vec<(u32, f64)> = structure
+            .derivatives
+            .iter()
+            .zip(&nominal)
+            .map(|(d, &s)| (d.state, s))
+            .chain(inputs.iter().map(|&u| (u, 1.0)))
+            .collect();
+        let mut x = vec![0.0; n];
+        core.continuous_states(&mut x).unwrap();
+        // the derivatives and outputs at the states and inputs moved along `known` by `h`
+        let evaluate = |core: &mut HaselCore, known: usize, h: f64| -> Vec<f64> {
+            let mut c = core.clone();
+            if let Some(Run::Steps(sim)) = &core.run {
+                // a Co-Simulation core is moved through its Model Exchange twin
+                c.run = Some(Run::Importer {
+                    model: Box::new(sim.model().clone()),
+                    t: sim.t(),
+                    x: sim.state().to_vec(),
+                });
+            }
+            if known < n {
+                let mut xh = x.clone();
+                xh[known] += h;
+                c.set_continuous_states(&xh).unwrap();
+            } else {
+                let u = knowns[known].0;
+                let v = c.get_real(u).unwrap();
+                c.set_real(u, v + h).unwrap();
+            }
+            let mut f = vec![0.0; n];
+            c.derivatives(&mut f).unwrap();
+            f.extend(outputs.iter().map(|&o| c.get_real(o).unwrap()));
+            f
+        };
+        let mut checked = 0;
+        for (j, &(known, scale)) in knowns.iter().enumerate() {
+            let mut dd = vec![0.0; unknowns.len()];
+            core.directional_derivative(&unknowns, &[known], &[1.0], &mut dd)
+                .unwrap();
+            // within a hundredth of the state itself: the hysteresis has kinks at θ̇ = 0, z = 0
+            let at = if j < n { x[j].abs() } else { 0.0 };
+            let h = if at > 0.0 {
+                (1e-6 * scale).min(1e-2 * at)
+            } else {
+                1e-6 * scale
+            };
+            let (fp, fm) = (evaluate(core, j, h), evaluate(core, j, -h));
+            let fd: Vec<f64> = fp
+                .iter()
+                .zip(&fm)
+                .map(|(p, m)| (p - m) / (2.0 * h))
+                .collect();
+            let size = dd
+                .iter()
+                .zip(&row_scale)
+                .map(|(d, s)| (d * scale / s).abs())
+                .fold(0.0, f64::max);
+            for (r, ((a, f), s)) in dd.iter().zip(&fd).zip(&row_scale).enumerate() {
+                let name = &rows()[unknowns[r] as usize].name;
+                let known_name = &rows()[known as usize].name;
+                assert!(
+                    ((a - f) * scale / s).abs() <= 1e-6 * size,
+                    "d {name} / d {known_name}: analytic {a:e}, central differences {f:e}"
+                );
+            }
+            checked += usize::from(size > 0.0);
+        }
+        assert_eq!(checked, nonzero, "nonzero columns");
+    }
+
+    #[test]
+    fn directional_derivatives_match_central_differences_at_a_simulated_state() {
+        // 15 states and 3 inputs; with the effects, 27 states
+        for (effects, nonzero) in [(false, 18), (true, 30)] {
+            let (mut cs, x) = simulated(effects);
+            check_directional_derivatives(&mut cs, nonzero);
+            let mut me = started(InstanceKind::ModelExchange, effects);
+            me.u = cs.u;
+            me.set_continuous_states(&x).unwrap();
+            check_directional_derivatives(&mut me, nonzero);
+        }
+    }
+
+    #[test]
+    fn directional_derivatives_combine_columns_linearly() {
+        let (mut cs, _) = simulated(true);
+        let unknowns = [vr("der(p_1)"), vr("der(Q1_2)"), vr("tip_x")];
+        let knowns = [vr("theta_1"), vr("U2"), vr("theta_3")];
+        let seed = [2.0, -0.5, 3.0];
+        let mut both = [0.0; 3];
+        cs.directional_derivative(&unknowns, &knowns, &seed, &mut both)
+            .unwrap();
+        let mut sum = [0.0; 3];
+        for (k, s) in knowns.iter().zip(seed) {
+            let mut one = [0.0; 3];
+            cs.directional_derivative(&unknowns, &[*k], &[s], &mut one)
+                .unwrap();
+            for (t, o) in sum.iter_mut().zip(one) {
+                *t += o;
+            }
+        }
+        for (a, b) in both.iter().zip(sum) {
+            assert!((a - b).abs() <= 1e-12 * a.abs().max(b.abs()), "{a} vs {b}");
+        }
+        let e = cs
+            .directional_derivative(&[vr("h1")], &[vr("k_c")], &[1.0], &mut both[..1])
+            .unwrap_err();
+        assert!(e.contains("k_c"), "{e}");
+    }
+
+    #[test]
+    fn the_structure_is_the_block_structure_with_the_coupling() {
+        let structure = model_structure();
+        let actuator_of = |vr: u32| match rows()[vr as usize].slot {
+            Slot::State { actuator, .. } | Slot::Input(actuator) => actuator,
+            ref other => panic!(
+                "dependency on {}",
+                rows()[vr as usize].name.clone() + &format!("{:?}", std::mem::discriminant(other))
+            ),
+        };
+        for d in &structure.derivatives {
+            let (own, name) = (actuator_of(d.state), &rows()[d.state as usize].name);
+            assert!(
+                d.dependencies.contains(&d.state) || name.starts_with("theta"),
+                "{name}"
+            );
+            for &on in &d.dependencies {
+                let on_name = &rows()[on as usize].name;
+                // only the coupling's torque on p reaches across, through the angles
+                assert!(
+                    actuator_of(on) == own
+                        || (name.starts_with("p_") && on_name.starts_with("theta_")),
+                    "der({name}) depends on {on_name}"
+                );
+            }
+        }
+        let deps = |name: &str| {
+            let d = structure
+                .derivatives
+                .iter()
+                .find(|d| d.state == vr(name))
+                .unwrap();
+            d.dependencies
+                .iter()
+                .map(|&v| rows()[v as usize].name.as_str())
+                .collect::<Vec<_>>()
+        };
+        assert_eq!(deps("theta_1"), ["p_1"]);
+        assert!(deps("p_2").contains(&"theta_3"));
+        assert!(deps("U_amp_3").contains(&"U3") && deps("Q1_3").contains(&"U3"));
+        for o in &structure.outputs {
+            let name = &rows()[o.output as usize].name;
+            let on: Vec<&str> = o
+                .dependencies
+                .iter()
+                .map(|&v| rows()[v as usize].name.as_str())
+                .collect();
+            match name.as_str() {
+                "h2" => assert_eq!(on, ["theta_2"]),
+                _ if name.starts_with("tip") => {
+                    assert_eq!(on, ["theta_1", "theta_2", "theta_3"], "{name}")
+                }
+                _ => assert_eq!(on.len(), 1, "{name}"),
+            }
+        }
     }
 }

@@ -5,6 +5,7 @@
 
 pub mod hasel_core;
 pub mod pack;
+pub mod structure;
 pub mod variables;
 
 pub use hasel_core::HaselCore;

@@ -5,6 +5,7 @@
 
 use std::sync::OnceLock;
 
+use crate::fmi_common::units;
 use crate::fmi_common::variables::{Causality, Initial, Variability, Variable};
 use crate::model::Params;
 use crate::model::actuator;
@@ -28,6 +29,11 @@ pub enum Slot {
     Energy,
     SuppliedPower,
     DissipatedPower,
+    /// The time derivative of a state (0 while its effect is off).
+    Derivative {
+        actuator: usize,
+        state: BlockState,
+    },
 }
 
 /// One row of the variable table.
@@ -116,8 +122,23 @@ pub fn rows() -> &'static [Row] {
             "W",
             desc.into(),
         );
+        for actuator in 0..3 {
+            for state in fmu_states() {
+                let name = format!("der({}_{})", state.name(), actuator + 1);
+                let unit = units::per_second(state.info().unit)
+                    .expect("the unit table has the rate of every state's unit");
+                let desc = format!("Time derivative of {}_{}", state.name(), actuator + 1);
+                add(name, Slot::Derivative { actuator, state }, unit, desc);
+            }
+        }
         rows
     })
+}
+
+/// The value reference of actuator `actuator`'s (0-based) state `state`.
+pub fn state_vr(actuator: usize, state: BlockState) -> Option<u32> {
+    let is = |r: &Row| matches!(r.slot, Slot::State { actuator: a, state: s } if a == actuator && s == state);
+    rows().iter().position(is).map(|k| k as u32)
 }
 
 /// The FMI variables with the start values of `params` and `rtol`.
@@ -146,14 +167,16 @@ pub fn variables(params: &Params, rtol: f64) -> Vec<Variable> {
                     Some(Initial::Exact),
                     Some(rtol),
                 ),
-                Slot::State { .. } | Slot::Energy | Slot::SuppliedPower | Slot::DissipatedPower => {
-                    (
-                        Causality::Local,
-                        Variability::Continuous,
-                        Some(Initial::Calculated),
-                        None,
-                    )
-                }
+                Slot::State { .. }
+                | Slot::Derivative { .. }
+                | Slot::Energy
+                | Slot::SuppliedPower
+                | Slot::DissipatedPower => (
+                    Causality::Local,
+                    Variability::Continuous,
+                    Some(Initial::Calculated),
+                    None,
+                ),
             };
             Variable {
                 name: row.name.clone(),
@@ -164,6 +187,10 @@ pub fn variables(params: &Params, rtol: f64) -> Vec<Variable> {
                 unit: Some(row.unit.to_string()),
                 description: row.description.clone(),
                 start,
+                derivative: match row.slot {
+                    Slot::Derivative { actuator, state } => state_vr(actuator, state),
+                    _ => None,
+                },
             }
         })
         .collect()

@@ -178,24 +178,37 @@ impl Platform {
 
     /// ∂f/∂x into `jac`, column-major `n_states × n_states`.
     pub fn jacobian(&self, x: &[f64], u: [f64; 3], jac: &mut [f64]) -> Result<(), ModelError> {
-        let (nb, dim) = (self.nb, self.n_states());
+        let dim = self.n_states();
+        jac.fill(0.0);
+        self.jacobian_entries(x, u, |r, c, v| jac[c * dim + r] += v)
+    }
+
+    /// The entries of ∂f/∂x through `add(row, col, value)` (an entry may come in parts that add
+    /// up): each actuator's own, at the voltage its port receives, then the effects' terms.
+    /// Every entry the equations can make nonzero is given, whatever its value here, so the
+    /// positions given are the Jacobian's structure for this configuration of effects.
+    pub fn jacobian_entries(
+        &self,
+        x: &[f64],
+        u: [f64; 3],
+        mut add: impl FnMut(usize, usize, f64),
+    ) -> Result<(), ModelError> {
+        let nb = self.nb;
         let xs = self.blocks(x);
         let refs = self.refs();
         let offset = [0, nb, 2 * nb];
-        jac.fill(0.0);
-
         self.each(|i, a| {
             let o = offset[i];
             a.jacobian(
                 &xs[i][..actuator::N],
                 self.port_voltage(xs[i], u[i]),
-                |r, c, v| jac[(o + c) * dim + o + r] = v,
+                |r, c, v| add(o + r, o + c, v),
             )?;
             if self.terms.neutral {
                 return Ok(());
             }
             self.terms
-                .add_jacobian(&refs, xs, u[i], i, offset, |r, c, v| jac[c * dim + r] += v)
+                .add_jacobian(&refs, xs, u[i], i, offset, &mut add)
         })?;
         Ok(())
     }
@@ -210,17 +223,31 @@ impl Platform {
         u: [f64; 3],
         jac: &mut [f64],
     ) -> Result<(), ModelError> {
-        let (nb, dim) = (self.nb, self.n_states());
-        let xs = self.blocks(x);
+        let dim = self.n_states();
         jac.fill(0.0);
+        self.input_jacobian_entries(x, u, |r, j, v| jac[j * dim + r] += v)
+    }
+
+    /// The entries of ∂f/∂U through `add(row, j, value)` (column j: the command U_j), every
+    /// entry the equations can make nonzero, as in [`Platform::jacobian_entries`].
+    pub fn input_jacobian_entries(
+        &self,
+        x: &[f64],
+        u: [f64; 3],
+        mut add: impl FnMut(usize, usize, f64),
+    ) -> Result<(), ModelError> {
+        let nb = self.nb;
+        let xs = self.blocks(x);
         self.each(|i, a| {
-            let column = &mut jac[i * dim + nb * i..i * dim + nb * (i + 1)];
+            let o = nb * i;
             if self.terms.neutral {
+                // g(x) = G0 ga(θ) (e_Q1 + e_Q2)
                 let g = a.structure(&xs[i][..actuator::N])?.g;
-                column[..actuator::N].copy_from_slice(&g);
+                add(o + actuator::Q1, i, g[actuator::Q1]);
+                add(o + actuator::Q2, i, g[actuator::Q2]);
             } else {
                 self.terms
-                    .add_input_jacobian(a, xs[i], u[i], |r, v| column[r] += v);
+                    .add_input_jacobian(a, xs[i], u[i], |r, v| add(o + r, i, v));
             }
             Ok(())
         })?;
@@ -239,15 +266,20 @@ impl Platform {
     /// ∂Tip/∂h_i · ∂h_i/∂θ_i with ∂Tip/∂h from [`Kinematics::tip_jacobian`]. No other state
     /// moves an output.
     pub fn output_jacobian(&self, x: &[f64], jac: &mut [f64]) {
-        let dim = self.n_states();
-        jac[..6 * dim].fill(0.0);
+        jac[..6 * self.n_states()].fill(0.0);
+        self.output_jacobian_entries(x, |r, c, v| jac[c * 6 + r] = v);
+    }
+
+    /// The entries of ∂y/∂x through `set(output, state, value)`, each once: the structure of
+    /// ∂y/∂x, whatever the values (see [`Platform::output_jacobian`]).
+    pub fn output_jacobian_entries(&self, x: &[f64], mut set: impl FnMut(usize, usize, f64)) {
         let tip = self.kinematics.tip_jacobian(self.heights(x));
         for i in 0..3 {
             let col = self.nb * i + actuator::THETA;
             let slope = self.actuators[i].height_slope(self.block(x, i)[actuator::THETA]);
-            jac[col * 6 + i] = slope;
+            set(i, col, slope);
             for k in 0..3 {
-                jac[col * 6 + 3 + k] = tip[(k, i)] * slope;
+                set(3 + k, col, tip[(k, i)] * slope);
             }
         }
     }

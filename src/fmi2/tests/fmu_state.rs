@@ -137,7 +137,9 @@ fn corrupted_or_foreign_buffers_are_rejected() {
     std::fs::write(dir.join("tau.txt"), "2.5").unwrap();
     let guid = guid_for(
         &LagCore::model_info(),
-        &LagCore::instantiate(Some(&dir)).unwrap().variables(),
+        &LagCore::instantiate(InstanceKind::CoSimulation, Some(&dir))
+            .unwrap()
+            .variables(),
     )
     .unwrap();
     let foreign = Fmu::with_guid(&guid, Some(&format!("file://{}", dir.display())));

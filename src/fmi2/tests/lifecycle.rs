@@ -235,7 +235,7 @@ fn resources_reach_the_core_and_change_the_guid() {
         "the start value of tau changed, so the GUID must differ"
     );
     log.assert_error(&["does not match"]);
-    let core = LagCore::instantiate(Some(&dir)).unwrap();
+    let core = LagCore::instantiate(InstanceKind::CoSimulation, Some(&dir)).unwrap();
     let guid = guid_for(&LagCore::model_info(), &core.variables()).unwrap();
     assert_ne!(guid, toy_guid());
     let fmu = Fmu::with_guid(&guid, Some(&uri));

@@ -15,7 +15,9 @@ use std::sync::Mutex;
 
 use super::model_description::guid_for;
 use super::types::*;
-use crate::fmi_common::model_api::FmuCore;
+use crate::fmi_common::model_api::{
+    FmuCore, InstanceKind, ModelStructure, OutputDependency, StateDerivative,
+};
 use crate::fmi_common::variables::{
     Causality, DefaultExperiment, Initial, ModelInfo, Variability, Variable,
 };
@@ -23,6 +25,7 @@ use crate::fmi_common::variables::{
 /// y' = (u - y) / tau, solved exactly over each step with u held.
 #[derive(Clone, Debug)]
 pub struct LagCore {
+    kind: InstanceKind,
     tau: f64,
     y_start: f64,
     max_step: f64,
@@ -42,6 +45,7 @@ pub const EXPLODE: u32 = 3;
 pub const U: u32 = 4;
 pub const Y: u32 = 5;
 pub const RATE: u32 = 6;
+pub const DER_Y: u32 = 7;
 
 fn var(
     name: &str,
@@ -60,6 +64,7 @@ fn var(
         unit: Some(unit.into()),
         description: format!("the {name}"),
         start,
+        derivative: None,
     }
 }
 
@@ -82,7 +87,21 @@ impl FmuCore for LagCore {
         }
     }
 
-    fn instantiate(resource_dir: Option<&Path>) -> Result<Self, String> {
+    fn model_structure() -> ModelStructure {
+        ModelStructure {
+            derivatives: vec![StateDerivative {
+                state: Y,
+                derivative: DER_Y,
+                dependencies: vec![U, Y],
+            }],
+            outputs: vec![OutputDependency {
+                output: Y,
+                dependencies: vec![Y],
+            }],
+        }
+    }
+
+    fn instantiate(kind: InstanceKind, resource_dir: Option<&Path>) -> Result<Self, String> {
         let tau_start = match resource_dir.map(|d| std::fs::read_to_string(d.join("tau.txt"))) {
             Some(Ok(text)) => text
                 .trim()
@@ -91,6 +110,7 @@ impl FmuCore for LagCore {
             _ => 1.0,
         };
         Ok(LagCore {
+            kind,
             tau: tau_start,
             y_start: 0.0,
             max_step: 1.0,
@@ -108,6 +128,8 @@ impl FmuCore for LagCore {
         use Variability::*;
         let mut rate = var("rate", RATE, CalculatedParameter, Fixed, "Hz", None);
         rate.initial = Some(Initial::Calculated);
+        let mut der_y = var("der(y)", DER_Y, Local, Continuous, "Hz", None);
+        der_y.derivative = Some(Y);
         vec![
             var("tau", TAU, Parameter, Fixed, "s", Some(self.tau_start)),
             var("y_start", Y_START, Parameter, Fixed, "1", Some(0.0)),
@@ -116,6 +138,7 @@ impl FmuCore for LagCore {
             var("u", U, Input, Continuous, "1", Some(0.0)),
             var("y", Y, Output, Continuous, "1", None),
             rate,
+            der_y,
         ]
     }
 
@@ -129,6 +152,7 @@ impl FmuCore for LagCore {
             Y if self.initialized => self.y,
             Y => self.y_start,
             RATE => 1.0 / self.tau,
+            DER_Y => (self.u - self.get_real(Y)?) / self.tau,
             _ => return Err(format!("no variable {vr}")),
         })
     }
@@ -179,6 +203,56 @@ impl FmuCore for LagCore {
         self.t
     }
 
+    fn set_time(&mut self, time: f64) -> Result<(), String> {
+        self.t = time;
+        Ok(())
+    }
+
+    fn continuous_states(&mut self, x: &mut [f64]) -> Result<(), String> {
+        x[0] = self.get_real(Y)?;
+        Ok(())
+    }
+
+    fn set_continuous_states(&mut self, x: &[f64]) -> Result<(), String> {
+        if !x[0].is_finite() {
+            return Err(format!("y = {} must be finite", x[0]));
+        }
+        self.y = x[0];
+        Ok(())
+    }
+
+    fn derivatives(&mut self, dx: &mut [f64]) -> Result<(), String> {
+        dx[0] = self.get_real(DER_Y)?;
+        Ok(())
+    }
+
+    fn nominals(&self, nominal: &mut [f64]) -> Result<(), String> {
+        nominal[0] = 1.0;
+        Ok(())
+    }
+
+    fn directional_derivative(
+        &mut self,
+        unknowns: &[u32],
+        knowns: &[u32],
+        seed: &[f64],
+        result: &mut [f64],
+    ) -> Result<(), String> {
+        for (r, &unknown) in result.iter_mut().zip(unknowns) {
+            *r = 0.0;
+            for (&known, &s) in knowns.iter().zip(seed) {
+                *r += s * match (unknown, known) {
+                    (DER_Y, Y) => -1.0 / self.tau,
+                    (DER_Y, U) => 1.0 / self.tau,
+                    (Y, Y) => 1.0,
+                    (Y, U) => 0.0,
+                    _ => return Err(format!("no partial derivative d{unknown}/d{known}")),
+                };
+            }
+        }
+        Ok(())
+    }
+
     fn serialize_state(&self) -> Vec<u8> {
         [
             self.tau,
@@ -204,6 +278,7 @@ impl FmuCore for LagCore {
             .map(|c| f64::from_le_bytes(c.try_into().unwrap()))
             .collect();
         Ok(LagCore {
+            kind: self.kind,
             tau: x[0],
             y_start: x[1],
             max_step: x[2],
@@ -322,7 +397,9 @@ pub fn logger() -> fmi2CallbackLogger {
 pub fn toy_guid() -> String {
     guid_for(
         &LagCore::model_info(),
-        &LagCore::instantiate(None).unwrap().variables(),
+        &LagCore::instantiate(InstanceKind::CoSimulation, None)
+            .unwrap()
+            .variables(),
     )
     .unwrap()
 }

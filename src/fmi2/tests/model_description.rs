@@ -44,7 +44,9 @@ fn attr<'a>(attrs: &'a [(String, String)], key: &str) -> Option<&'a str> {
 fn toy_xml() -> String {
     model_description_xml(
         &LagCore::model_info(),
-        &LagCore::instantiate(None).unwrap().variables(),
+        &LagCore::instantiate(InstanceKind::CoSimulation, None)
+            .unwrap()
+            .variables(),
     )
     .unwrap()
 }
@@ -74,7 +76,7 @@ fn xml_is_well_formed_and_complete() {
     assert_eq!(attr(cs, "canGetAndSetFMUstate"), Some("true"));
     assert_eq!(attr(cs, "canRunAsynchronuously"), Some("false"));
     let vars = find("ScalarVariable");
-    assert_eq!(vars.len(), 7);
+    assert_eq!(vars.len(), 8);
     assert_eq!(attr(&vars[0], "initial"), Some("exact"));
     assert_eq!(attr(&vars[4], "initial"), None, "inputs have no initial");
     assert_eq!(attr(&vars[5], "initial"), Some("calculated"));
@@ -123,7 +125,9 @@ fn xml_is_well_formed_and_complete() {
 #[test]
 fn guid_is_stable_and_follows_every_change() {
     let info = LagCore::model_info();
-    let vars = LagCore::instantiate(None).unwrap().variables();
+    let vars = LagCore::instantiate(InstanceKind::CoSimulation, None)
+        .unwrap()
+        .variables();
     let guid = guid_for(&info, &vars).unwrap();
     assert_eq!(guid, guid_for(&info, &vars).unwrap());
     assert_eq!(guid.len(), 38);
@@ -142,14 +146,18 @@ fn guid_is_stable_and_follows_every_change() {
 #[test]
 fn invalid_tables_and_infos_are_rejected() {
     let info = LagCore::model_info();
-    let mut vars = LagCore::instantiate(None).unwrap().variables();
+    let mut vars = LagCore::instantiate(InstanceKind::CoSimulation, None)
+        .unwrap()
+        .variables();
     vars[1].value_reference = vars[0].value_reference;
     assert!(
         model_description_xml(&info, &vars)
             .unwrap_err()
             .contains("used twice")
     );
-    let vars = LagCore::instantiate(None).unwrap().variables();
+    let vars = LagCore::instantiate(InstanceKind::CoSimulation, None)
+        .unwrap()
+        .variables();
     let mut bad = info.clone();
     bad.default_experiment.tolerance = f64::INFINITY;
     assert!(model_description_xml(&bad, &vars).is_err());
@@ -161,7 +169,9 @@ fn invalid_tables_and_infos_are_rejected() {
 #[test]
 fn floats_round_trip_exactly() {
     let info = LagCore::model_info();
-    let mut vars = LagCore::instantiate(None).unwrap().variables();
+    let mut vars = LagCore::instantiate(InstanceKind::CoSimulation, None)
+        .unwrap()
+        .variables();
     let values = [
         0.1,
         1.0 / 3.0,
