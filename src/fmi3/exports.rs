@@ -73,7 +73,7 @@ unsafe fn with_instance<M: FmuCore>(
 
 /// The strings and flags of `fmi3Instantiate…`, as received.
 pub struct CRequest {
-    pub interface: Interface,
+    pub interface: InstanceKind,
     pub name: fmi3String,
     pub token: fmi3String,
     pub resource_path: fmi3String,
@@ -117,8 +117,8 @@ pub unsafe fn instantiate<M: FmuCore>(r: CRequest) -> fmi3Instance {
     }
 }
 
-/// `fmi3InstantiateScheduledExecution` and `fmi3InstantiateModelExchange` while Model Exchange
-/// is not offered: no instance, and the reason logged.
+/// `fmi3InstantiateScheduledExecution`, which is not offered: no instance, and the reason
+/// logged.
 pub unsafe fn instantiate_not_offered(
     func: &str,
     what: &str,
@@ -459,6 +459,136 @@ pub unsafe fn do_step<M: FmuCore>(
             let (status, t) = inst.do_step(tc, h);
             *last_successful_time = t;
             status
+        })
+    }
+}
+
+pub unsafe fn completed_integrator_step<M: FmuCore>(
+    c: fmi3Instance,
+    enter_event_mode: *mut fmi3Boolean,
+    terminate_simulation: *mut fmi3Boolean,
+) -> Fmi3Status {
+    const F: &str = "fmi3CompletedIntegratorStep";
+    unsafe {
+        with_instance::<M>(c, F, |inst| {
+            let flags = [
+                ("enterEventMode", enter_event_mode),
+                ("terminateSimulation", terminate_simulation),
+            ];
+            if let Some((name, _)) = flags.iter().find(|(_, p)| p.is_null()) {
+                return inst.null_argument(F, name);
+            }
+            let status = inst.completed_integrator_step();
+            if status == Fmi3Status::Ok
+                && let Err(s) = set_flags(inst, F, &flags, FMI3_FALSE)
+            {
+                return s;
+            }
+            status
+        })
+    }
+}
+
+pub unsafe fn set_time<M: FmuCore>(c: fmi3Instance, time: f64) -> Fmi3Status {
+    unsafe { with_instance::<M>(c, "fmi3SetTime", |inst| inst.set_time(time)) }
+}
+
+pub unsafe fn set_continuous_states<M: FmuCore>(
+    c: fmi3Instance,
+    x: *const f64,
+    nx: usize,
+) -> Fmi3Status {
+    const F: &str = "fmi3SetContinuousStates";
+    unsafe {
+        with_instance::<M>(c, F, |inst| match in_slice(x, nx) {
+            Some(x) => inst.set_continuous_states(x),
+            None => inst.null_argument(F, "continuousStates"),
+        })
+    }
+}
+
+/// `fmi3GetContinuousStates`, `fmi3GetContinuousStateDerivatives`,
+/// `fmi3GetNominalsOfContinuousStates` (`func`): `call` is the core's method.
+pub unsafe fn state_vector<M: FmuCore>(
+    c: fmi3Instance,
+    func: &'static str,
+    out: *mut f64,
+    n: usize,
+    call: fn(&mut M, &mut [f64]) -> Result<(), String>,
+) -> Fmi3Status {
+    unsafe {
+        with_instance::<M>(c, func, |inst| match out_slice(out, n) {
+            Some(out) => inst.state_vector(func, out, call),
+            None => inst.null_argument(func, "the output array"),
+        })
+    }
+}
+
+pub unsafe fn get_event_indicators<M: FmuCore>(
+    c: fmi3Instance,
+    z: *mut f64,
+    nz: usize,
+) -> Fmi3Status {
+    const F: &str = "fmi3GetEventIndicators";
+    unsafe {
+        with_instance::<M>(c, F, |inst| match out_slice(z, nz) {
+            Some(_) => inst.event_indicators(nz),
+            None => inst.null_argument(F, "eventIndicators"),
+        })
+    }
+}
+
+/// `fmi3GetNumberOfContinuousStates` and `fmi3GetNumberOfEventIndicators` (`func`): `count`
+/// gives the number.
+pub unsafe fn get_number_of<M: FmuCore>(
+    c: fmi3Instance,
+    func: &'static str,
+    n: *mut usize,
+    count: fn(&Instance<M>) -> usize,
+) -> Fmi3Status {
+    unsafe {
+        with_instance::<M>(c, func, |inst| {
+            if n.is_null() {
+                return inst.null_argument(func, "the output argument");
+            }
+            match inst.number_of(func, count(inst)) {
+                Ok(value) => {
+                    *n = value;
+                    Fmi3Status::Ok
+                }
+                Err(s) => s,
+            }
+        })
+    }
+}
+
+#[allow(clippy::too_many_arguments)]
+pub unsafe fn get_directional_derivative<M: FmuCore>(
+    c: fmi3Instance,
+    unknowns: *const fmi3ValueReference,
+    n_unknowns: usize,
+    knowns: *const fmi3ValueReference,
+    n_knowns: usize,
+    seed: *const f64,
+    n_seed: usize,
+    sensitivity: *mut f64,
+    n_sensitivity: usize,
+) -> Fmi3Status {
+    const F: &str = "fmi3GetDirectionalDerivative";
+    unsafe {
+        with_instance::<M>(c, F, |inst| {
+            let (Some(u), Some(k)) = (in_slice(unknowns, n_unknowns), in_slice(knowns, n_knowns))
+            else {
+                return inst.null_argument(F, "unknowns or knowns");
+            };
+            match (
+                in_slice(seed, n_seed),
+                out_slice(sensitivity, n_sensitivity),
+            ) {
+                (Some(s), Some(out)) => inst.directional_derivative(u, k, s, out),
+                (None, _) => inst.null_argument(F, "seed"),
+                (_, None) => inst.null_argument(F, "sensitivity"),
+            }
         })
     }
 }

@@ -10,7 +10,7 @@ use serde::{Deserialize, Serialize};
 use sha2::{Digest, Sha256};
 
 use super::state_machine::{Experiment, Phase};
-use super::types::Interface;
+use super::types::{InstanceKind, kind_name};
 use crate::fmi_common::model_api::FmuCore;
 
 const MAGIC: &[u8; 8] = b"FMI3HSST";
@@ -22,7 +22,7 @@ const CHECKSUM_LEN: usize = 8;
 pub struct Snapshot<M> {
     /// Token of the instance it was taken from; only instances with that token accept it.
     pub token: String,
-    pub interface: Interface,
+    pub interface: InstanceKind,
     pub phase: Phase,
     pub experiment: Option<Experiment>,
     pub core: M,
@@ -51,7 +51,7 @@ impl<M: FmuCore> Snapshot<M> {
         let record = Record {
             version: FORMAT_VERSION,
             token: self.token.clone(),
-            model_exchange: self.interface == Interface::ModelExchange,
+            model_exchange: self.interface == InstanceKind::ModelExchange,
             phase: self.phase,
             experiment: self.experiment,
             core: self.core.serialize_state(),
@@ -68,7 +68,7 @@ impl<M: FmuCore> Snapshot<M> {
     pub fn from_bytes(
         bytes: &[u8],
         token: &str,
-        interface: Interface,
+        interface: InstanceKind,
         core: &M,
     ) -> Result<Self, String> {
         if !bytes.starts_with(MAGIC) {
@@ -99,15 +99,15 @@ impl<M: FmuCore> Snapshot<M> {
             ));
         }
         let state_interface = if record.model_exchange {
-            Interface::ModelExchange
+            InstanceKind::ModelExchange
         } else {
-            Interface::CoSimulation
+            InstanceKind::CoSimulation
         };
         if state_interface != interface || !record.phase.belongs_to(interface) {
             return Err(format!(
                 "the serialized FMU state is of a {} instance, this one is {}",
-                state_interface.name(),
-                interface.name()
+                kind_name(state_interface),
+                kind_name(interface)
             ));
         }
         Ok(Snapshot {

@@ -22,6 +22,7 @@ macro_rules! __fmi3_functions {
     ([$($attr:tt)*] $core:ty) => {
         use $crate::fmi3::exports as shell;
         use $crate::fmi3::instance::Instance;
+        use $crate::fmi_common::model_api::FmuCore as _;
         use $crate::fmi3::types::*;
 
         // Inquire version number and set debug logging (section 2.3.1)
@@ -45,16 +46,26 @@ macro_rules! __fmi3_functions {
 
         $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)]
         pub unsafe extern "C" fn fmi3InstantiateModelExchange(
-            _name: fmi3String,
-            _token: fmi3String,
-            _resource_path: fmi3String,
-            _visible: fmi3Boolean,
-            _logging_on: fmi3Boolean,
+            name: fmi3String,
+            token: fmi3String,
+            resource_path: fmi3String,
+            _visible: fmi3Boolean, // no user interface to show
+            logging_on: fmi3Boolean,
             environment: fmi3InstanceEnvironment,
             log_message: fmi3LogMessageCallback,
         ) -> fmi3Instance {
-            let (f, what) = ("fmi3InstantiateModelExchange", "Model Exchange");
-            unsafe { shell::instantiate_not_offered(f, what, environment, log_message) }
+            unsafe {
+                shell::instantiate::<$core>(shell::CRequest {
+                    interface: InstanceKind::ModelExchange,
+                    name,
+                    token,
+                    resource_path,
+                    logging_on,
+                    event_mode_used: FMI3_TRUE,
+                    environment,
+                    log_message,
+                })
+            }
         }
 
         $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)]
@@ -74,7 +85,7 @@ macro_rules! __fmi3_functions {
         ) -> fmi3Instance {
             unsafe {
                 shell::instantiate::<$core>(shell::CRequest {
-                    interface: Interface::CoSimulation,
+                    interface: InstanceKind::CoSimulation,
                     name,
                     token,
                     resource_path,
@@ -282,11 +293,24 @@ macro_rules! __fmi3_functions {
 
         // Partial derivatives (section 2.3.8)
 
-        $crate::__fmi3_not_offered!([$($attr)*] $core, fmi3GetDirectionalDerivative, "providesDirectionalDerivatives",
-            (_unknowns: *const fmi3ValueReference, _n_unknowns: usize,
-             _knowns: *const fmi3ValueReference, _n_knowns: usize,
-             _seed: *const fmi3Float64, _n_seed: usize,
-             _sensitivity: *mut fmi3Float64, _n_sensitivity: usize));
+        $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)]
+        pub unsafe extern "C" fn fmi3GetDirectionalDerivative(
+            c: fmi3Instance,
+            unknowns: *const fmi3ValueReference,
+            n_unknowns: usize,
+            knowns: *const fmi3ValueReference,
+            n_knowns: usize,
+            seed: *const fmi3Float64,
+            n_seed: usize,
+            sensitivity: *mut fmi3Float64,
+            n_sensitivity: usize,
+        ) -> fmi3Status {
+            unsafe {
+                shell::get_directional_derivative::<$core>(
+                    c, unknowns, n_unknowns, knowns, n_knowns, seed, n_seed, sensitivity, n_sensitivity,
+                )
+            }
+        }
         $crate::__fmi3_not_offered!([$($attr)*] $core, fmi3GetAdjointDerivative, "providesAdjointDerivatives",
             (_unknowns: *const fmi3ValueReference, _n_unknowns: usize,
              _knowns: *const fmi3ValueReference, _n_knowns: usize,
@@ -394,23 +418,92 @@ macro_rules! __fmi3_functions {
 #[macro_export]
 macro_rules! __fmi3_model_exchange {
     ([$($attr:tt)*] $core:ty) => {
-        $crate::__fmi3_not_offered!([$($attr)*] $core, fmi3EnterContinuousTimeMode, "Model Exchange", ());
-        $crate::__fmi3_not_offered!([$($attr)*] $core, fmi3CompletedIntegratorStep, "Model Exchange",
-            (_no_set_fmu_state_prior: fmi3Boolean, _enter_event_mode: *mut fmi3Boolean,
-             _terminate_simulation: *mut fmi3Boolean));
-        $crate::__fmi3_not_offered!([$($attr)*] $core, fmi3SetTime, "Model Exchange", (_time: fmi3Float64));
-        $crate::__fmi3_not_offered!([$($attr)*] $core, fmi3SetContinuousStates, "Model Exchange",
-            (_x: *const fmi3Float64, _nx: usize));
-        $crate::__fmi3_not_offered!([$($attr)*] $core, fmi3GetContinuousStateDerivatives, "Model Exchange",
-            (_dx: *mut fmi3Float64, _nx: usize));
-        $crate::__fmi3_not_offered!([$($attr)*] $core, fmi3GetEventIndicators, "Model Exchange",
-            (_z: *mut fmi3Float64, _nz: usize));
-        $crate::__fmi3_not_offered!([$($attr)*] $core, fmi3GetContinuousStates, "Model Exchange",
-            (_x: *mut fmi3Float64, _nx: usize));
-        $crate::__fmi3_not_offered!([$($attr)*] $core, fmi3GetNominalsOfContinuousStates, "Model Exchange",
-            (_nominals: *mut fmi3Float64, _nx: usize));
-        $crate::__fmi3_not_offered!([$($attr)*] $core, fmi3GetNumberOfEventIndicators, "Model Exchange", (_n: *mut usize));
-        $crate::__fmi3_not_offered!([$($attr)*] $core, fmi3GetNumberOfContinuousStates, "Model Exchange", (_n: *mut usize));
+        $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)]
+        pub unsafe extern "C" fn fmi3EnterContinuousTimeMode(c: fmi3Instance) -> fmi3Status {
+            let f = "fmi3EnterContinuousTimeMode";
+            unsafe { shell::simple::<$core>(c, f, Instance::enter_continuous_time_mode) }
+        }
+
+        $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)]
+        pub unsafe extern "C" fn fmi3CompletedIntegratorStep(
+            c: fmi3Instance,
+            _no_set_fmu_state_prior: fmi3Boolean, // states are kept whole either way
+            enter_event_mode: *mut fmi3Boolean,
+            terminate_simulation: *mut fmi3Boolean,
+        ) -> fmi3Status {
+            unsafe { shell::completed_integrator_step::<$core>(c, enter_event_mode, terminate_simulation) }
+        }
+
+        $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)]
+        pub unsafe extern "C" fn fmi3SetTime(c: fmi3Instance, time: fmi3Float64) -> fmi3Status {
+            unsafe { shell::set_time::<$core>(c, time) }
+        }
+
+        $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)]
+        pub unsafe extern "C" fn fmi3SetContinuousStates(
+            c: fmi3Instance,
+            x: *const fmi3Float64,
+            nx: usize,
+        ) -> fmi3Status {
+            unsafe { shell::set_continuous_states::<$core>(c, x, nx) }
+        }
+
+        $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)]
+        pub unsafe extern "C" fn fmi3GetContinuousStateDerivatives(
+            c: fmi3Instance,
+            dx: *mut fmi3Float64,
+            nx: usize,
+        ) -> fmi3Status {
+            let f = "fmi3GetContinuousStateDerivatives";
+            unsafe { shell::state_vector::<$core>(c, f, dx, nx, |m, out| m.derivatives(out)) }
+        }
+
+        $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)]
+        pub unsafe extern "C" fn fmi3GetEventIndicators(
+            c: fmi3Instance,
+            z: *mut fmi3Float64,
+            nz: usize,
+        ) -> fmi3Status {
+            unsafe { shell::get_event_indicators::<$core>(c, z, nz) }
+        }
+
+        $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)]
+        pub unsafe extern "C" fn fmi3GetContinuousStates(
+            c: fmi3Instance,
+            x: *mut fmi3Float64,
+            nx: usize,
+        ) -> fmi3Status {
+            let f = "fmi3GetContinuousStates";
+            unsafe { shell::state_vector::<$core>(c, f, x, nx, |m, out| m.continuous_states(out)) }
+        }
+
+        $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)]
+        pub unsafe extern "C" fn fmi3GetNominalsOfContinuousStates(
+            c: fmi3Instance,
+            nominals: *mut fmi3Float64,
+            nx: usize,
+        ) -> fmi3Status {
+            let f = "fmi3GetNominalsOfContinuousStates";
+            unsafe { shell::state_vector::<$core>(c, f, nominals, nx, |m, out| m.nominals(out)) }
+        }
+
+        $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)]
+        pub unsafe extern "C" fn fmi3GetNumberOfEventIndicators(
+            c: fmi3Instance,
+            n: *mut usize,
+        ) -> fmi3Status {
+            let f = "fmi3GetNumberOfEventIndicators";
+            unsafe { shell::get_number_of::<$core>(c, f, n, |_| 0) }
+        }
+
+        $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)]
+        pub unsafe extern "C" fn fmi3GetNumberOfContinuousStates(
+            c: fmi3Instance,
+            n: *mut usize,
+        ) -> fmi3Status {
+            let f = "fmi3GetNumberOfContinuousStates";
+            unsafe { shell::get_number_of::<$core>(c, f, n, Instance::number_of_states) }
+        }
     };
 }
 

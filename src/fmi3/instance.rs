@@ -15,10 +15,10 @@ use std::path::PathBuf;
 
 use super::fmu_state::Snapshot;
 use super::logging::Logger;
-use super::model_description::{instantiation_token, log_categories, with_time};
+use super::model_description::{Model, instantiation_token, log_categories, with_time};
 use super::state_machine::{self, Experiment, Mask, Phase, allowed, settable};
-use super::types::{Fmi3Status, Interface};
-use crate::fmi_common::model_api::FmuCore;
+use super::types::{Fmi3Status, InstanceKind, kind_name};
+use crate::fmi_common::model_api::{FmuCore, ModelStructure};
 use crate::fmi_common::shell::same_time;
 use crate::fmi_common::variables::{Causality, Variable};
 
@@ -26,7 +26,7 @@ use Phase::*;
 
 /// What `fmi3Instantiate…` is asked for beyond the logger.
 pub struct Request<'a> {
-    pub interface: Interface,
+    pub interface: InstanceKind,
     pub name: &'a str,
     pub token: &'a str,
     /// `resourcePath`: the FMU's `resources` folder, an absolute path (section 2.3.1).
@@ -38,7 +38,7 @@ pub struct Request<'a> {
 /// One FMU instance: the shell state around a core `M`.
 pub struct Instance<M: FmuCore> {
     token: String,
-    interface: Interface,
+    interface: InstanceKind,
     event_mode_used: bool,
     resource_dir: Option<PathBuf>,
     logger: Logger,
@@ -49,6 +49,8 @@ pub struct Instance<M: FmuCore> {
     core: M,
     /// The FMI 3.0 variables (with `time`), sorted by value reference for lookups.
     variables: Vec<Variable>,
+    /// The continuous states and the dependencies.
+    structure: ModelStructure,
 }
 
 /// A fresh core with its sorted variable table and token.
@@ -58,10 +60,17 @@ struct Built<M> {
     token: String,
 }
 
-fn build<M: FmuCore>(resource_dir: Option<&std::path::Path>) -> Result<Built<M>, String> {
-    let core = M::instantiate(resource_dir)?;
+fn build<M: FmuCore>(
+    kind: InstanceKind,
+    resource_dir: Option<&std::path::Path>,
+) -> Result<Built<M>, String> {
+    let core = M::instantiate(kind, resource_dir)?;
     let mut variables = with_time(core.variables());
-    let token = instantiation_token(&M::model_info(), &variables)?;
+    let token = instantiation_token(&Model {
+        info: &M::model_info(),
+        vars: &variables,
+        structure: &M::model_structure(),
+    })?;
     variables.sort_by_key(|v| v.value_reference);
     Ok(Built {
         core,
@@ -81,8 +90,8 @@ impl<M: FmuCore> Instance<M> {
     /// computed for this core. Errors are logged and give `None`.
     pub fn instantiate(request: Request, logger: Logger) -> Option<Self> {
         let func = match request.interface {
-            Interface::ModelExchange => "fmi3InstantiateModelExchange",
-            Interface::CoSimulation => "fmi3InstantiateCoSimulation",
+            InstanceKind::ModelExchange => "fmi3InstantiateModelExchange",
+            InstanceKind::CoSimulation => "fmi3InstantiateCoSimulation",
         };
         let fail = |msg: String| {
             logger.log(Fmi3Status::Error, &format!("{func}: {msg}"));
@@ -101,7 +110,7 @@ impl<M: FmuCore> Instance<M> {
                 dir.display()
             ));
         }
-        let built = match build::<M>(resource_dir.as_deref()) {
+        let built = match build::<M>(request.interface, resource_dir.as_deref()) {
             Ok(b) => b,
             Err(e) => return fail(format!("cannot create the model: {e}")),
         };
@@ -126,11 +135,12 @@ impl<M: FmuCore> Instance<M> {
             experiment: None,
             core: built.core,
             variables: built.variables,
+            structure: M::model_structure(),
         };
         instance.trace(|| {
             format!(
                 "{func}: {} instance {:?} created",
-                request.interface.name(),
+                kind_name(request.interface),
                 request.name
             )
         });
@@ -172,7 +182,7 @@ impl<M: FmuCore> Instance<M> {
     }
 
     /// Checks that the instance is of `interface`, for the functions of one interface only.
-    fn require_interface(&self, func: &str, interface: Interface) -> Result<(), Fmi3Status> {
+    fn require_interface(&self, func: &str, interface: InstanceKind) -> Result<(), Fmi3Status> {
         if self.interface == interface {
             return Ok(());
         }
@@ -180,8 +190,8 @@ impl<M: FmuCore> Instance<M> {
             func,
             format_args!(
                 "a function of {}, but this instance was created for {}",
-                interface.name(),
-                self.interface.name()
+                kind_name(interface),
+                kind_name(self.interface)
             ),
         ))
     }
@@ -276,7 +286,7 @@ impl<M: FmuCore> Instance<M> {
         match self.core.exit_initialization() {
             Ok(()) => {
                 self.phase = match self.interface {
-                    Interface::CoSimulation if !self.event_mode_used => StepMode,
+                    InstanceKind::CoSimulation if !self.event_mode_used => StepMode,
                     _ => EventMode,
                 };
                 Fmi3Status::Ok
@@ -293,7 +303,7 @@ impl<M: FmuCore> Instance<M> {
         if let Err(s) = self.require(F, allowed::ENTER_EVENT_MODE) {
             return s;
         }
-        if self.interface == Interface::CoSimulation && !self.event_mode_used {
+        if self.interface == InstanceKind::CoSimulation && !self.event_mode_used {
             return self.error(
                 F,
                 "the instance was created with eventModeUsed = false (section 4.2.2)",
@@ -318,7 +328,7 @@ impl<M: FmuCore> Instance<M> {
         const F: &str = "fmi3EnterStepMode";
         self.trace(|| F.into());
         if let Err(s) = self
-            .require_interface(F, Interface::CoSimulation)
+            .require_interface(F, InstanceKind::CoSimulation)
             .and_then(|()| self.require(F, allowed::ENTER_STEP_MODE))
         {
             return s;
@@ -343,7 +353,7 @@ impl<M: FmuCore> Instance<M> {
     pub fn reset(&mut self) -> Fmi3Status {
         const F: &str = "fmi3Reset";
         self.trace(|| F.into());
-        let built = match build::<M>(self.resource_dir.as_deref()) {
+        let built = match build::<M>(self.interface, self.resource_dir.as_deref()) {
             Ok(b) => b,
             Err(e) => {
                 self.phase = Error;
@@ -540,6 +550,198 @@ impl<M: FmuCore> Instance<M> {
         }
     }
 
+    /// The number of continuous states (`fmi3GetNumberOfContinuousStates`, section 3.2.1).
+    pub fn number_of_states(&self) -> usize {
+        self.structure.derivatives.len()
+    }
+
+    /// The checks of a Model Exchange call: the instance's kind and the state table.
+    fn require_me(&self, func: &str, mask: Mask) -> Result<(), Fmi3Status> {
+        self.require_interface(func, InstanceKind::ModelExchange)
+            .and_then(|()| self.require(func, mask))
+    }
+
+    /// Checks that an array of `n` elements has one per continuous state.
+    fn check_states(&self, func: &str, what: &str, n: usize) -> Result<(), Fmi3Status> {
+        let nx = self.number_of_states();
+        if n == nx {
+            return Ok(());
+        }
+        Err(self.error(
+            func,
+            format_args!(
+                "{what} = {n}, but the FMU has {nx} continuous states (modelDescription.xml)"
+            ),
+        ))
+    }
+
+    /// `fmi3GetNumberOfContinuousStates` / `fmi3GetNumberOfEventIndicators` (`func`).
+    pub fn number_of(&self, func: &str, what: usize) -> Result<usize, Fmi3Status> {
+        self.require_me(func, allowed::GET_NUMBER_OF).map(|()| what)
+    }
+
+    /// `fmi3EnterContinuousTimeMode` (section 3.2.2).
+    pub fn enter_continuous_time_mode(&mut self) -> Fmi3Status {
+        const F: &str = "fmi3EnterContinuousTimeMode";
+        self.trace(|| F.into());
+        if let Err(s) = self.require_me(F, allowed::ENTER_CONTINUOUS_TIME_MODE) {
+            return s;
+        }
+        self.phase = ContinuousTimeMode;
+        Fmi3Status::Ok
+    }
+
+    /// `fmi3CompletedIntegratorStep` (section 3.2.2): no step events, no termination.
+    pub fn completed_integrator_step(&mut self) -> Fmi3Status {
+        const F: &str = "fmi3CompletedIntegratorStep";
+        self.require_me(F, allowed::COMPLETED_INTEGRATOR_STEP)
+            .err()
+            .unwrap_or(Fmi3Status::Ok)
+    }
+
+    /// `fmi3SetTime` (section 3.2.1).
+    pub fn set_time(&mut self, time: f64) -> Fmi3Status {
+        const F: &str = "fmi3SetTime";
+        if let Err(s) = self.require_me(F, allowed::SET_TIME) {
+            return s;
+        }
+        if !time.is_finite() {
+            return self.error(F, format_args!("time = {time:?} is not finite"));
+        }
+        match self.core.set_time(time) {
+            Ok(()) => Fmi3Status::Ok,
+            Err(msg) => self.error(F, format_args!("time = {time:?}: {msg}")),
+        }
+    }
+
+    /// `fmi3SetContinuousStates` (section 3.2.1); a NaN is refused with its state named.
+    pub fn set_continuous_states(&mut self, x: &[f64]) -> Fmi3Status {
+        const F: &str = "fmi3SetContinuousStates";
+        if let Err(s) = self
+            .require_me(F, allowed::SET_CONTINUOUS_STATES)
+            .and_then(|()| self.check_states(F, "nContinuousStates", x.len()))
+        {
+            return s;
+        }
+        if let Some(k) = x.iter().position(|v| v.is_nan()) {
+            let vr = self.structure.derivatives[k].state;
+            let name = self.find(vr).map_or("", |v| v.name.as_str());
+            return self.error(F, format_args!("continuousStates[{k}] ({name}) is NaN"));
+        }
+        match self.core.set_continuous_states(x) {
+            Ok(()) => Fmi3Status::Ok,
+            Err(msg) => self.error(F, msg),
+        }
+    }
+
+    /// `fmi3GetContinuousStates`, `fmi3GetContinuousStateDerivatives` and
+    /// `fmi3GetNominalsOfContinuousStates` (`func`, section 3.2.1): one value per state from
+    /// `call`. Where the model cannot be evaluated (a state outside its domain), the
+    /// derivatives give `fmi3Discard` (the importer may retry with a smaller step).
+    pub fn state_vector(
+        &mut self,
+        func: &str,
+        out: &mut [f64],
+        call: fn(&mut M, &mut [f64]) -> Result<(), String>,
+    ) -> Fmi3Status {
+        if let Err(s) = self
+            .require_me(func, allowed::GET_MODEL_EQUATIONS)
+            .and_then(|()| self.check_states(func, "nContinuousStates", out.len()))
+        {
+            return s;
+        }
+        match call(&mut self.core, out) {
+            Ok(()) => Fmi3Status::Ok,
+            Err(msg) if func == "fmi3GetContinuousStateDerivatives" => {
+                self.logger
+                    .log(Fmi3Status::Discard, &format!("{func}: {msg}"));
+                Fmi3Status::Discard
+            }
+            Err(msg) => self.error(func, msg),
+        }
+    }
+
+    /// `fmi3GetEventIndicators` (section 3.2.1): the FMU has none.
+    pub fn event_indicators(&self, n: usize) -> Fmi3Status {
+        const F: &str = "fmi3GetEventIndicators";
+        if let Err(s) = self.require_me(F, allowed::GET_MODEL_EQUATIONS) {
+            return s;
+        }
+        if n != 0 {
+            return self.error(
+                F,
+                format_args!("nEventIndicators = {n}, but the FMU has none"),
+            );
+        }
+        Fmi3Status::Ok
+    }
+
+    /// `fmi3GetDirectionalDerivative` (section 2.3.8): ∂unknowns/∂knowns · seed, with state
+    /// derivatives and outputs as unknowns, states and inputs as knowns.
+    pub fn directional_derivative(
+        &mut self,
+        unknowns: &[u32],
+        knowns: &[u32],
+        seed: &[f64],
+        sensitivity: &mut [f64],
+    ) -> Fmi3Status {
+        const F: &str = "fmi3GetDirectionalDerivative";
+        if let Err(s) = self.require(F, allowed::DIRECTIONAL_DERIVATIVE) {
+            return s;
+        }
+        let sizes = [
+            ("nSeed", seed.len(), "nKnowns", knowns.len()),
+            (
+                "nSensitivity",
+                sensitivity.len(),
+                "nUnknowns",
+                unknowns.len(),
+            ),
+        ];
+        if let Some((a, n, b, m)) = sizes.into_iter().find(|(_, n, _, m)| n != m) {
+            return self.error(F, format_args!("{a} = {n} must equal {b} = {m}"));
+        }
+        let s = &self.structure;
+        let is_unknown = |vr: &u32| {
+            s.derivatives.iter().any(|d| d.derivative == *vr)
+                || s.outputs.iter().any(|o| o.output == *vr)
+        };
+        let is_known = |vr: &u32| {
+            s.derivatives.iter().any(|d| d.state == *vr)
+                || self
+                    .find(*vr)
+                    .is_some_and(|v| v.causality == Causality::Input)
+        };
+        let name = |vr: u32| {
+            self.find(vr)
+                .map_or(String::new(), |v| format!(" ({})", v.name))
+        };
+        if let Some(&vr) = unknowns.iter().find(|vr| !is_unknown(vr)) {
+            let msg = format!(
+                "unknowns: value reference {vr}{} is neither a state derivative nor an output",
+                name(vr)
+            );
+            return self.error(F, msg);
+        }
+        if let Some(&vr) = knowns.iter().find(|vr| !is_known(vr)) {
+            let msg = format!(
+                "knowns: value reference {vr}{} is neither a continuous state nor an input",
+                name(vr)
+            );
+            return self.error(F, msg);
+        }
+        if let Some(k) = seed.iter().position(|x| !x.is_finite()) {
+            return self.error(F, format_args!("seed[{k}] = {:?} is not finite", seed[k]));
+        }
+        match self
+            .core
+            .directional_derivative(unknowns, knowns, seed, sensitivity)
+        {
+            Ok(()) => Fmi3Status::Ok,
+            Err(msg) => self.error(F, msg),
+        }
+    }
+
     /// `fmi3GetFMUState` (section 2.3.6): allowed in every state.
     pub fn get_fmu_state(&self) -> Snapshot<M> {
         self.trace(|| {
@@ -575,8 +777,8 @@ impl<M: FmuCore> Instance<M> {
                 F,
                 format_args!(
                     "the state is of a {} instance, this one is {}",
-                    state.interface.name(),
-                    self.interface.name()
+                    kind_name(state.interface),
+                    kind_name(self.interface)
                 ),
             );
         }

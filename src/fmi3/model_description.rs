@@ -9,6 +9,7 @@ use quick_xml::events::{BytesDecl, Event};
 use sha2::{Digest, Sha256};
 
 use super::logging::SHELL_CATEGORIES;
+use crate::fmi_common::model_api::ModelStructure;
 use crate::fmi_common::variables::{
     Causality, Initial, ModelInfo, Variability, Variable, check_variable_table,
 };
@@ -35,23 +36,31 @@ pub fn with_time(mut vars: Vec<Variable>) -> Vec<Variable> {
                 unit: Some("s".into()),
                 description: "Simulation time".into(),
                 start: None,
+                derivative: None,
             },
         );
     }
     vars
 }
 
-/// The complete `modelDescription.xml` for `vars` (already with [`with_time`]), with the
-/// token of [`instantiation_token`].
-pub fn model_description_xml(info: &ModelInfo, vars: &[Variable]) -> Result<String, String> {
-    write_xml(info, vars, &instantiation_token(info, vars)?)
+/// What a description is written from: the model information, the variables (already with
+/// [`with_time`]) and the model structure.
+pub struct Model<'a> {
+    pub info: &'a ModelInfo,
+    pub vars: &'a [Variable],
+    pub structure: &'a ModelStructure,
+}
+
+/// The complete `modelDescription.xml`, with the token of [`instantiation_token`].
+pub fn model_description_xml(model: &Model) -> Result<String, String> {
+    write_xml(model, &instantiation_token(model)?)
 }
 
 /// The `instantiationToken` (section 2.4.1): the SHA-256 of the description written with an
 /// empty token, in braces, so that any change of the description (a variable, a start value,
 /// a unit, a capability) changes it.
-pub fn instantiation_token(info: &ModelInfo, vars: &[Variable]) -> Result<String, String> {
-    let hash = Sha256::digest(write_xml(info, vars, "")?.as_bytes());
+pub fn instantiation_token(model: &Model) -> Result<String, String> {
+    let hash = Sha256::digest(write_xml(model, "")?.as_bytes());
     let hex: String = hash.iter().map(|b| format!("{b:02x}")).collect();
     Ok(format!("{{{hex}}}"))
 }
@@ -70,7 +79,8 @@ pub fn log_categories(info: &ModelInfo) -> Vec<(String, String)> {
     all
 }
 
-fn write_xml(info: &ModelInfo, vars: &[Variable], token: &str) -> Result<String, String> {
+fn write_xml(model: &Model, token: &str) -> Result<String, String> {
+    let vars = model.vars;
     check_variable_table(vars)?;
     if vars
         .iter()
@@ -80,18 +90,30 @@ fn write_xml(info: &ModelInfo, vars: &[Variable], token: &str) -> Result<String,
     {
         return Err("FMI 3.0 needs exactly one independent variable (section 2.4.7.4)".into());
     }
+    let known = |vr: &u32| vars.iter().any(|v| v.value_reference == *vr);
+    let s = model.structure;
+    let all_refs = s
+        .derivatives
+        .iter()
+        .flat_map(|d| {
+            [d.state, d.derivative]
+                .into_iter()
+                .chain(d.dependencies.clone())
+        })
+        .chain(s.outputs.iter().flat_map(|o| o.dependencies.clone()));
+    if let Some(vr) = all_refs.filter(|vr| !known(vr)).min() {
+        return Err(format!(
+            "the model structure names value reference {vr}, which is no variable"
+        ));
+    }
     let mut w = Writer::new_with_indent(Vec::new(), b' ', 2);
-    write_document(&mut w, info, vars, token)
+    write_document(&mut w, model, token)
         .map_err(|e| format!("writing modelDescription.xml: {e}"))?;
     String::from_utf8(w.into_inner()).map_err(|e| e.to_string())
 }
 
-fn write_document(
-    w: &mut Writer<Vec<u8>>,
-    info: &ModelInfo,
-    vars: &[Variable],
-    token: &str,
-) -> io::Result<()> {
+fn write_document(w: &mut Writer<Vec<u8>>, model: &Model, token: &str) -> io::Result<()> {
+    let (info, vars) = (model.info, model.vars);
     w.write_event(Event::Decl(BytesDecl::new("1.0", Some("UTF-8"), None)))?;
     let mut root = w.create_element("fmiModelDescription").with_attributes([
         ("fmiVersion", "3.0"),
@@ -110,12 +132,13 @@ fn write_document(
     }
     root.with_attribute(("variableNamingConvention", "flat"))
         .write_inner_content(|w| {
+            write_model_exchange(w, info)?;
             write_co_simulation(w, info)?;
             write_unit_definitions(w, vars)?;
             write_log_categories(w, info)?;
             write_default_experiment(w, info)?;
             write_variables(w, vars)?;
-            write_model_structure(w, vars)
+            write_model_structure(w, model)
         })?;
     Ok(())
 }
@@ -126,9 +149,23 @@ const COMMON_CAPABILITIES: [(&str, &str); 6] = [
     ("canBeInstantiatedOnlyOncePerProcess", "false"),
     ("canGetAndSetFMUState", "true"),
     ("canSerializeFMUState", "true"),
-    ("providesDirectionalDerivatives", "false"),
+    ("providesDirectionalDerivatives", "true"),
     ("providesAdjointDerivatives", "false"),
 ];
+
+/// `<ModelExchange>` (section 3.4): no need for `fmi3CompletedIntegratorStep`, no
+/// `fmi3EvaluateDiscreteStates` (no discrete states).
+fn write_model_exchange(w: &mut Writer<Vec<u8>>, info: &ModelInfo) -> io::Result<()> {
+    w.create_element("ModelExchange")
+        .with_attribute(("modelIdentifier", info.model_identifier.as_str()))
+        .with_attributes(COMMON_CAPABILITIES)
+        .with_attributes([
+            ("needsCompletedIntegratorStep", "false"),
+            ("providesEvaluateDiscreteStates", "false"),
+        ])
+        .write_empty()?;
+    Ok(())
+}
 
 /// `<CoSimulation>` (section 4.4): variable steps, no event mode of its own, no early return,
 /// no intermediate update, no output derivatives.
@@ -207,6 +244,10 @@ fn write_variables(w: &mut Writer<Vec<u8>>, vars: &[Variable]) -> io::Result<()>
                 if let Some(start) = &start {
                     el = el.with_attribute(("start", start.as_str()));
                 }
+                let state = v.derivative.map(|vr| vr.to_string());
+                if let Some(state) = &state {
+                    el = el.with_attribute(("derivative", state.as_str()));
+                }
                 el.write_empty()?;
             }
             Ok(())
@@ -214,35 +255,57 @@ fn write_variables(w: &mut Writer<Vec<u8>>, vars: &[Variable]) -> io::Result<()>
     Ok(())
 }
 
-/// `<ModelStructure>` (section 2.4.8), by value reference.
+/// A list of value references as an attribute value.
+fn refs(vrs: &[u32]) -> String {
+    let text: Vec<String> = vrs.iter().map(u32::to_string).collect();
+    text.join(" ")
+}
+
+/// `<ModelStructure>` (section 2.4.8), by value reference, from the core's structure.
 ///
-/// * `<Output>`: every output with `dependencies=""`: outputs are functions of the internal
-///   state only (the core contract of [`crate::fmi_common::model_api::FmuCore`]), and
-///   without continuous states in the description there is no state to list.
+/// * `<Output>`: every output with the states and inputs it depends on.
+/// * `<ContinuousStateDerivative>`: the state vector's order, with the dependencies of each
+///   derivative.
 /// * `<InitialUnknown>`: exactly the list the standard prescribes: outputs with initial
-///   approx or calculated and all calculated parameters, without `dependencies` ("depends on
-///   all knowns": always correct without the shell knowing the physics).
-fn write_model_structure(w: &mut Writer<Vec<u8>>, vars: &[Variable]) -> io::Result<()> {
-    let refs = |keep: &dyn Fn(&Variable) -> bool| -> Vec<String> {
-        vars.iter()
-            .filter(|v| keep(v))
-            .map(|v| v.value_reference.to_string())
-            .collect()
+///   approx or calculated, calculated parameters, and states and derivatives with initial
+///   approx or calculated, without `dependencies` ("depends on all knowns": always correct
+///   without the shell knowing the physics).
+fn write_model_structure(w: &mut Writer<Vec<u8>>, model: &Model) -> io::Result<()> {
+    let structure = model.structure;
+    let in_structure = |vr: u32| {
+        structure
+            .derivatives
+            .iter()
+            .any(|d| d.state == vr || d.derivative == vr)
     };
-    let outputs = refs(&|v| v.causality == Causality::Output);
-    let initial_unknowns = refs(&|v| match v.causality {
-        Causality::Output => matches!(
-            v.effective_initial(),
-            Some(Initial::Approx | Initial::Calculated)
-        ),
-        Causality::CalculatedParameter => true,
-        _ => false,
-    });
+    let initial_unknowns: Vec<String> = model
+        .vars
+        .iter()
+        .filter(|v| {
+            let calculated = matches!(
+                v.effective_initial(),
+                Some(Initial::Approx | Initial::Calculated)
+            );
+            match v.causality {
+                Causality::Output => calculated,
+                Causality::CalculatedParameter => true,
+                _ => calculated && in_structure(v.value_reference),
+            }
+        })
+        .map(|v| v.value_reference.to_string())
+        .collect();
     w.create_element("ModelStructure")
         .write_inner_content(|w| {
-            for vr in &outputs {
+            for o in &structure.outputs {
+                let (vr, deps) = (o.output.to_string(), refs(&o.dependencies));
                 w.create_element("Output")
-                    .with_attributes([("valueReference", vr.as_str()), ("dependencies", "")])
+                    .with_attributes([("valueReference", vr.as_str()), ("dependencies", &deps)])
+                    .write_empty()?;
+            }
+            for d in &structure.derivatives {
+                let (vr, deps) = (d.derivative.to_string(), refs(&d.dependencies));
+                w.create_element("ContinuousStateDerivative")
+                    .with_attributes([("valueReference", vr.as_str()), ("dependencies", &deps)])
                     .write_empty()?;
             }
             for vr in &initial_unknowns {

@@ -5,7 +5,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use super::types::Interface;
+use super::types::InstanceKind;
 use crate::fmi_common::variables::{Causality, Initial, Variability, Variable};
 
 /// The states this FMU can be in. Configuration, Reconfiguration, Clock Activation and
@@ -67,10 +67,10 @@ impl Phase {
     }
 
     /// Whether an instance of `interface` can be in this state.
-    pub fn belongs_to(self, interface: Interface) -> bool {
+    pub fn belongs_to(self, interface: InstanceKind) -> bool {
         match self {
-            Phase::ContinuousTimeMode => interface == Interface::ModelExchange,
-            Phase::StepMode | Phase::StepDiscarded => interface == Interface::CoSimulation,
+            Phase::ContinuousTimeMode => interface == InstanceKind::ModelExchange,
+            Phase::StepMode | Phase::StepDiscarded => interface == InstanceKind::CoSimulation,
             _ => true,
         }
     }
@@ -177,8 +177,8 @@ mod tests {
         for (i, p) in Phase::ALL.into_iter().enumerate() {
             assert_eq!(p.bit(), 1 << i);
         }
-        assert!(!Phase::StepMode.belongs_to(Interface::ModelExchange));
-        assert!(!Phase::ContinuousTimeMode.belongs_to(Interface::CoSimulation));
+        assert!(!Phase::StepMode.belongs_to(InstanceKind::ModelExchange));
+        assert!(!Phase::ContinuousTimeMode.belongs_to(InstanceKind::CoSimulation));
         assert_eq!(
             names(allowed::TERMINATE),
             "Event Mode, Continuous-Time Mode, Step Mode, Step Discarded"

@@ -8,6 +8,8 @@
 
 use std::ffi::{c_char, c_void};
 
+pub use crate::fmi_common::model_api::InstanceKind;
+
 /// Opaque pointer to an FMU instance.
 pub type fmi3Instance = *mut c_void;
 /// Opaque pointer the importer passes in and gets back unchanged in callbacks.
@@ -91,20 +93,10 @@ pub type fmi3ClockUpdateCallback =
 /// `fmi3LockPreemptionCallback` / `fmi3UnlockPreemptionCallback`, likewise.
 pub type fmi3PreemptionCallback = Option<unsafe extern "C" fn()>;
 
-/// The interface an instance was created for (`fmi3Instantiate…`).
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-#[repr(u8)]
-pub enum Interface {
-    ModelExchange = 0,
-    CoSimulation = 1,
-}
-
-impl Interface {
-    /// The name used in messages and in `modelDescription.xml`.
-    pub fn name(self) -> &'static str {
-        match self {
-            Interface::ModelExchange => "Model Exchange",
-            Interface::CoSimulation => "Co-Simulation",
-        }
+/// The name of an instance kind in messages.
+pub fn kind_name(kind: InstanceKind) -> &'static str {
+    match kind {
+        InstanceKind::ModelExchange => "Model Exchange",
+        InstanceKind::CoSimulation => "Co-Simulation",
     }
 }

@@ -7,7 +7,8 @@ use std::io::Write;
 use std::path::Path;
 
 use super::variables::variables;
-use super::{MODEL_IDENTIFIER, RESOURCE_PARAMS, model_info};
+use super::{HaselCore, MODEL_IDENTIFIER, RESOURCE_PARAMS, model_info};
+use crate::fmi_common::model_api::FmuCore;
 use crate::fmi_common::variables::{Causality, Variable};
 use crate::fmi2::model_description::{guid_for, model_description_xml};
 use crate::fmi3::model_description as fmi3_description;
@@ -26,6 +27,20 @@ pub fn model_description(params: &Params) -> String {
 pub fn guid(params: &Params) -> String {
     guid_for(&model_info(), &variables(params, DEFAULT_RTOL))
         .expect("the variable table is valid (tested)")
+}
+
+/// `write` (the FMI 3.0 description or its token) of the FMU whose start values are `params`.
+fn fmi3_model(
+    params: &Params,
+    write: fn(&fmi3_description::Model) -> Result<String, String>,
+) -> String {
+    let vars = fmi3_description::with_time(variables(params, DEFAULT_RTOL));
+    write(&fmi3_description::Model {
+        info: &model_info(),
+        vars: &vars,
+        structure: &HaselCore::model_structure(),
+    })
+    .expect("the variable table is valid (tested)")
 }
 
 /// The FMI version of an FMU archive: which description, library folder and C functions.
@@ -64,11 +79,7 @@ impl FmiVersion {
     pub fn model_description(self, params: &Params) -> String {
         match self {
             FmiVersion::V2 => model_description(params),
-            FmiVersion::V3 => {
-                let vars = fmi3_description::with_time(variables(params, DEFAULT_RTOL));
-                fmi3_description::model_description_xml(&model_info(), &vars)
-                    .expect("the variable table is valid (tested)")
-            }
+            FmiVersion::V3 => fmi3_model(params, fmi3_description::model_description_xml),
         }
     }
 
@@ -76,11 +87,7 @@ impl FmiVersion {
     pub fn token(self, params: &Params) -> String {
         match self {
             FmiVersion::V2 => guid(params),
-            FmiVersion::V3 => {
-                let vars = fmi3_description::with_time(variables(params, DEFAULT_RTOL));
-                fmi3_description::instantiation_token(&model_info(), &vars)
-                    .expect("the variable table is valid (tested)")
-            }
+            FmiVersion::V3 => fmi3_model(params, fmi3_description::instantiation_token),
         }
     }
 }

@@ -1,6 +1,6 @@
 """The FMI 3.0 FMU's C API under misuse, called through ctypes exactly as a C importer would:
 wrong states, NULL pointers, unknown references, sizes that do not match, NaN, the types the FMU
-has no variables of, and corrupted serialized states. Each call must return the right status and
+has no variables of, corrupted serialized states, in Co-Simulation and Model Exchange. Each call must return the right status and
 log the reason through the importer's callback (with a non-NULL category); the pytest process
 surviving is the check that nothing crashes. References and the token come from the packed
 modelDescription.xml."""
@@ -56,6 +56,12 @@ SIGNATURES = {
     "SerializeFMUState": (C.c_int, [vp, vp, C.c_char_p, sz]),
     "DeserializeFMUState": (C.c_int, [vp, C.c_char_p, sz, C.POINTER(vp)]),
     "GetAdjointDerivative": (C.c_int, [vp, uintp, sz, uintp, sz, dblp, sz, dblp, sz]),
+    "GetDirectionalDerivative": (C.c_int, [vp, uintp, sz, uintp, sz, dblp, sz, dblp, sz]),
+    "GetNumberOfContinuousStates": (C.c_int, [vp, C.POINTER(sz)]),
+    "EnterContinuousTimeMode": (C.c_int, [vp]),
+    "SetContinuousStates": (C.c_int, [vp, dblp, sz]),
+    "GetContinuousStateDerivatives": (C.c_int, [vp, dblp, sz]),
+    "SetTime": (C.c_int, [vp, d]),
 }
 
 
@@ -118,13 +124,60 @@ def inst(fmu):
     fmu.FreeInstance(i.c)
 
 
-def test_wrong_token_and_model_exchange_give_no_instance(fmu):
+def test_a_wrong_token_gives_no_instance(fmu):
     bad = Instance(fmu, token=b"{0}")
     assert not bad.c
     bad.log.expect(ERROR, "instantiationToken {0}", "does not match")
     log = Log()
-    assert not fmu.InstantiateModelExchange(b"me", fmu.token, None, False, False, None, log.callback)
-    log.expect(ERROR, "fmi3InstantiateModelExchange", "not offered")
+    assert not fmu.InstantiateModelExchange(b"me", b"{1}", None, False, False, None, log.callback)
+    log.expect(ERROR, "fmi3InstantiateModelExchange", "instantiationToken {1}")
+
+
+def test_model_exchange_misuse(fmu):
+    log = Log()
+    me = fmu.InstantiateModelExchange(b"me", fmu.token, fmu.resources.encode(), False, False, None, log.callback)
+    assert me
+    n = C.c_size_t()
+    assert fmu.GetNumberOfContinuousStates(me, C.byref(n)) == OK and n.value == 27
+    x = (C.c_double * n.value)()
+    assert fmu.SetContinuousStates(me, x, n.value) == ERROR  # still Instantiated
+    log.expect(ERROR, "fmi3SetContinuousStates", "Instantiated")
+    assert fmu.EnterInitializationMode(me, False, 0.0, 0.0, False, 0.0) == OK
+    assert fmu.ExitInitializationMode(me) == OK
+    assert fmu.SetContinuousStates(me, x, n.value) == ERROR  # Event Mode
+    log.expect(ERROR, "fmi3SetContinuousStates", "Event Mode")
+    assert fmu.EnterContinuousTimeMode(me) == OK
+    assert fmu.GetContinuousStates(me, x, n.value) == OK
+    assert fmu.SetContinuousStates(me, x, n.value - 1) == ERROR
+    log.expect(ERROR, "fmi3SetContinuousStates", f"nContinuousStates = {n.value - 1}")
+    assert fmu.SetContinuousStates(me, None, n.value) == ERROR
+    log.expect(ERROR, "fmi3SetContinuousStates", "NULL")
+    saved = list(x)
+    x[3] = math.nan
+    assert fmu.SetContinuousStates(me, x, n.value) == ERROR
+    log.expect(ERROR, "continuousStates[3]", "NaN")
+    assert fmu.SetTime(me, math.nan) == ERROR
+    log.expect(ERROR, "fmi3SetTime", "not finite")
+    dx = (C.c_double * n.value)()
+    assert fmu.GetContinuousStateDerivatives(me, dx, n.value + 1) == ERROR
+    log.expect(ERROR, "fmi3GetContinuousStateDerivatives", "27 continuous states")
+    assert fmu.GetContinuousStateDerivatives(me, dx, n.value) == OK
+    assert all(math.isfinite(v) for v in dx)
+    assert fmu.GetContinuousStates(me, x, n.value) == OK and list(x) == saved
+    flags = [C.c_bool() for _ in range(3)]
+    assert fmu.DoStep(me, 0.0, 1e-3, True, *map(C.byref, flags), C.byref(C.c_double())) == ERROR
+    log.expect(ERROR, "fmi3DoStep", "Continuous-Time Mode")
+    vr = {k: v for k, v in fmu.vr.items()}
+    unknowns, knowns = (C.c_uint * 1)(vr["der(theta_1)"]), (C.c_uint * 2)(vr["theta_1"], vr["U1"])
+    out = (C.c_double * 1)()
+    assert fmu.GetDirectionalDerivative(me, unknowns, 1, knowns, 2, (C.c_double * 1)(1.0), 1, out, 1) == ERROR
+    log.expect(ERROR, "fmi3GetDirectionalDerivative", "nSeed = 1 must equal nKnowns = 2")
+    assert fmu.GetDirectionalDerivative(me, unknowns, 1, knowns, 2, (C.c_double * 2)(math.nan, 0), 2, out, 1) == ERROR
+    log.expect(ERROR, "fmi3GetDirectionalDerivative", "seed[0] = NaN")
+    assert fmu.GetDirectionalDerivative(me, knowns, 1, knowns, 2, (C.c_double * 2)(1, 0), 2, out, 1) == ERROR
+    log.expect(ERROR, "theta_1", "neither a state derivative nor an output")
+    assert fmu.GetDirectionalDerivative(me, unknowns, 1, knowns, 2, (C.c_double * 2)(1, 0), 2, out, 1) == OK
+    fmu.FreeInstance(me)
 
 
 def test_calls_in_the_wrong_state(inst):

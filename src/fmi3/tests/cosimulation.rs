@@ -193,25 +193,35 @@ fn bad_arguments_are_named() {
     assert_eq!(s, Fmi3Status::Error);
     cs.log
         .assert_error(&["fmi3DoStep", "lastSuccessfulTime is NULL"]);
-    // not offered: named with the capability
-    let s = unsafe {
+    // directional derivatives: unknowns and knowns of the right kinds, sizes that agree
+    let seed = [1.0];
+    let dd = |unknown: u32, known: u32, n_seed: usize, dy: &mut [f64; 1]| unsafe {
         v3::fmi3GetDirectionalDerivative(
             cs.c,
-            std::ptr::null(),
-            0,
-            std::ptr::null(),
-            0,
-            std::ptr::null(),
-            0,
-            null_mut(),
-            0,
+            [unknown].as_ptr(),
+            1,
+            [known].as_ptr(),
+            1,
+            seed.as_ptr(),
+            n_seed,
+            dy.as_mut_ptr(),
+            1,
         )
     };
-    assert_eq!(s, Fmi3Status::Error);
+    let mut dy = [0.0];
+    assert_eq!(dd(vr("U1"), vr("theta_1"), 1, &mut dy), Fmi3Status::Error);
     cs.log.assert_error(&[
         "fmi3GetDirectionalDerivative",
-        "providesDirectionalDerivatives",
+        "U1",
+        "neither a state derivative nor an output",
     ]);
+    assert_eq!(dd(vr("h1"), vr("Kb_1"), 1, &mut dy), Fmi3Status::Error);
+    cs.log
+        .assert_error(&["Kb_1", "neither a continuous state nor an input"]);
+    assert_eq!(dd(vr("h1"), vr("theta_1"), 2, &mut dy), Fmi3Status::Error);
+    cs.log.assert_error(&["nSeed = 2 must equal nKnowns = 1"]);
+    assert_eq!(dd(vr("h1"), vr("theta_1"), 1, &mut dy), Fmi3Status::Ok);
+    assert!(dy[0] > 0.0, "h1 rises with theta_1");
     assert_eq!(
         unsafe { v3::fmi3SetDebugLogging(cs.c, 1, 1, [c"nope".as_ptr()].as_ptr()) },
         Fmi3Status::Error

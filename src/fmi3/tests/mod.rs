@@ -4,6 +4,7 @@
 
 mod cosimulation;
 mod fmu_state;
+mod model_exchange;
 
 use std::ffi::{CStr, CString, c_void};
 use std::ptr::null;
@@ -80,6 +81,24 @@ pub struct Cs {
 impl Cs {
     pub fn new(event_mode_used: bool) -> Cs {
         Cs::with_token(&token(), event_mode_used)
+    }
+
+    /// A Model Exchange instance (`t` unused), with the same helpers.
+    pub fn model_exchange() -> Cs {
+        let log = Box::<Log>::default();
+        let c = unsafe {
+            v3::fmi3InstantiateModelExchange(
+                c"me".as_ptr(),
+                token().as_ptr(),
+                null(),
+                FMI3_FALSE,
+                FMI3_FALSE,
+                &*log as *const Log as *mut c_void,
+                Some(log_message),
+            )
+        };
+        assert!(!c.is_null());
+        Cs { c, log, t: 0.0 }
     }
 
     pub fn with_token(token: &CStr, event_mode_used: bool) -> Cs {
@@ -181,21 +200,4 @@ fn the_version_is_3_0_and_the_token_guards_instantiation() {
     wrong
         .log
         .assert_error(&["instantiationToken {not the token}", "does not match"]);
-    let log = Box::<Log>::default();
-    let me = unsafe {
-        v3::fmi3InstantiateModelExchange(
-            c"me".as_ptr(),
-            token().as_ptr(),
-            null(),
-            0,
-            0,
-            &*log as *const Log as *mut c_void,
-            Some(log_message),
-        )
-    };
-    assert!(me.is_null());
-    log.assert_error(&[
-        "fmi3InstantiateModelExchange",
-        "Model Exchange is not offered",
-    ]);
 }
