@@ -14,8 +14,7 @@
 //! two threads at once.
 #![allow(clippy::missing_safety_doc)]
 
-use std::borrow::Cow;
-use std::ffi::{CStr, c_void};
+use std::ffi::c_void;
 use std::panic::{AssertUnwindSafe, catch_unwind};
 use std::ptr::null_mut;
 
@@ -25,30 +24,7 @@ use super::logging::Logger;
 use super::state_machine::Experiment;
 use super::types::*;
 use crate::fmi_common::model_api::FmuCore;
-use crate::fmi_common::shell::panic_message;
-
-/// A C string argument; `None` for NULL.
-unsafe fn opt_str<'a>(p: fmi3String) -> Option<Cow<'a, str>> {
-    (!p.is_null()).then(|| unsafe { CStr::from_ptr(p) }.to_string_lossy())
-}
-
-/// An input array of `n` elements; `None` if it is NULL although `n > 0`.
-unsafe fn in_slice<'a, T>(p: *const T, n: usize) -> Option<&'a [T]> {
-    match (n, p.is_null()) {
-        (0, _) => Some(&[]),
-        (_, true) => None,
-        _ => Some(unsafe { std::slice::from_raw_parts(p, n) }),
-    }
-}
-
-/// An output array of `n` elements; `None` if it is NULL although `n > 0`.
-unsafe fn out_slice<'a, T>(p: *mut T, n: usize) -> Option<&'a mut [T]> {
-    match (n, p.is_null()) {
-        (0, _) => Some(&mut []),
-        (_, true) => None,
-        _ => Some(unsafe { std::slice::from_raw_parts_mut(p, n) }),
-    }
-}
+use crate::fmi_common::shell::{in_slice, opt_str, out_slice, panic_message};
 
 /// Runs `f` on the instance behind `c`, catching panics.
 unsafe fn with_instance<M: FmuCore>(

@@ -5,10 +5,10 @@
 //! NULL; messages with status `fmi3OK` are debug logging and go out only when debug logging is
 //! on for their category; all other statuses go out whenever a callback exists.
 
-use std::collections::HashSet;
 use std::ffi::{CStr, CString};
 
 use super::types::{Fmi3Status, fmi3InstanceEnvironment, fmi3LogMessageCallback};
+use crate::fmi_common::shell::DebugLogging;
 
 const LOG_CALLS: &str = "logCalls";
 
@@ -37,9 +37,7 @@ fn category(status: Fmi3Status) -> &'static CStr {
 pub struct Logger {
     callback: fmi3LogMessageCallback,
     environment: fmi3InstanceEnvironment,
-    debug_on: bool,
-    /// Enabled categories; `None` means all.
-    enabled: Option<HashSet<String>>,
+    debug: DebugLogging,
 }
 
 impl Logger {
@@ -51,8 +49,7 @@ impl Logger {
         Logger {
             callback,
             environment,
-            debug_on,
-            enabled: None,
+            debug: DebugLogging::new(debug_on),
         }
     }
 
@@ -64,22 +61,12 @@ impl Logger {
         categories: &[String],
         known: &[String],
     ) -> Result<(), String> {
-        if let Some(bad) = categories.iter().find(|c| !known.contains(c)) {
-            return Err(bad.clone());
-        }
-        self.debug_on = on;
-        self.enabled = (!categories.is_empty()).then(|| categories.iter().cloned().collect());
-        Ok(())
+        self.debug.set(on, categories, known)
     }
 
     /// Whether call traces go out; callers skip building them otherwise.
     pub fn debug_enabled(&self) -> bool {
-        self.debug_on
-            && self.callback.is_some()
-            && self
-                .enabled
-                .as_ref()
-                .is_none_or(|set| set.contains(LOG_CALLS))
+        self.callback.is_some() && self.debug.enabled(LOG_CALLS)
     }
 
     /// Logs `message` with `status`, under the category of that status.

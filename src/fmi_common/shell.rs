@@ -1,5 +1,79 @@
-//! Helpers any FMI shell needs whatever the version: the message of a caught panic, and the
-//! comparison of an importer's communication point with the FMU's time.
+//! Helpers any FMI shell needs whatever the version: C strings and arrays received from the
+//! importer, the debug-logging switch, the message of a caught panic, and the comparison of an importer's communication
+//! point with the FMU's time.
+
+use std::borrow::Cow;
+use std::collections::HashSet;
+use std::ffi::{CStr, c_char};
+
+/// A C string argument; `None` for NULL.
+///
+/// # Safety
+/// `p` is NULL or a NUL-terminated string that outlives `'a`.
+pub unsafe fn opt_str<'a>(p: *const c_char) -> Option<Cow<'a, str>> {
+    (!p.is_null()).then(|| unsafe { CStr::from_ptr(p) }.to_string_lossy())
+}
+
+/// An input array of `n` elements; `None` if it is NULL although `n > 0`.
+///
+/// # Safety
+/// `p` is NULL or points to `n` elements that outlive `'a`.
+pub unsafe fn in_slice<'a, T>(p: *const T, n: usize) -> Option<&'a [T]> {
+    match (n, p.is_null()) {
+        (0, _) => Some(&[]),
+        (_, true) => None,
+        _ => Some(unsafe { std::slice::from_raw_parts(p, n) }),
+    }
+}
+
+/// An output array of `n` elements; `None` if it is NULL although `n > 0`.
+///
+/// # Safety
+/// `p` is NULL or points to `n` writable elements, used by no one else during `'a`.
+pub unsafe fn out_slice<'a, T>(p: *mut T, n: usize) -> Option<&'a mut [T]> {
+    match (n, p.is_null()) {
+        (0, _) => Some(&mut []),
+        (_, true) => None,
+        _ => Some(unsafe { std::slice::from_raw_parts_mut(p, n) }),
+    }
+}
+
+/// The debug-logging switch of `fmi2SetDebugLogging` / `fmi3SetDebugLogging`: on or off, for
+/// all categories or some.
+pub struct DebugLogging {
+    on: bool,
+    /// The categories switched; `None` means all.
+    categories: Option<HashSet<String>>,
+}
+
+impl DebugLogging {
+    pub fn new(on: bool) -> Self {
+        DebugLogging {
+            on,
+            categories: None,
+        }
+    }
+
+    /// Switches debug logging for `categories` (all when empty), which must be among `known`;
+    /// the first unknown name is the error, and nothing changes then.
+    pub fn set(&mut self, on: bool, categories: &[String], known: &[String]) -> Result<(), String> {
+        if let Some(bad) = categories.iter().find(|c| !known.contains(c)) {
+            return Err(bad.clone());
+        }
+        self.on = on;
+        self.categories = (!categories.is_empty()).then(|| categories.iter().cloned().collect());
+        Ok(())
+    }
+
+    /// Whether debug messages of `category` go out.
+    pub fn enabled(&self, category: &str) -> bool {
+        self.on
+            && self
+                .categories
+                .as_ref()
+                .is_none_or(|set| set.contains(category))
+    }
+}
 
 /// The message of a caught panic.
 pub fn panic_message(payload: &(dyn std::any::Any + Send)) -> String {
