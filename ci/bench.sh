@@ -9,8 +9,8 @@ step "solver: hasel bench, with the library solvers beside it (diffsol, native S
 cargo run -q --release --features compare --bin hasel -- bench
 step "identification: hasel bench --identify"
 ./target/release/hasel bench --identify
-step "FMU through the Rust fmi crate (Co-Simulation; Model Exchange derivatives and Jacobian)"
-cargo run -q --release --example bench_fmu -- fmu/HaselPlatform.fmu
+step "FMUs (FMI 2.0 and 3.0) through the Rust fmi crate (Co-Simulation; Model Exchange derivatives and Jacobian)"
+cargo run -q --release --example bench_fmu -- fmu/HaselPlatform.fmu fmu/HaselPlatform-fmi3.fmu
 step "FMU through fmpy (Python's per-call overhead dominates)"
 python ci/demo.py --fmu fmu/HaselPlatform.fmu --out out/fmu_demo.png
 step "fmpy: Model Exchange with CVode beside Co-Simulation"

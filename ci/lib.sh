@@ -10,6 +10,9 @@ FMU_LIB="$ROOT/target/$FMU_TARGET/release/libhasel_fmu.so"
 # so that neither build undoes the other
 INVERSE_TARGET_DIR="$ROOT/target/inverse"
 INVERSE_LIB="$INVERSE_TARGET_DIR/$FMU_TARGET/release/libhasel_fmu.so"
+# the FMI 3.0 build (--features fmi3), likewise in a target folder of its own
+FMU3_TARGET_DIR="$ROOT/target/fmi3"
+FMU3_LIB="$FMU3_TARGET_DIR/$FMU_TARGET/release/libhasel_fmu.so"
 
 step() { printf '\n== %s\n' "$*"; }
 
@@ -56,8 +59,6 @@ ensure_fmi_sim() {
     fi
 }
 
-# Builds the FMU's shared library against glibc 2.17 (so it loads on older hosts), the CLI,
-# and packs fmu/HaselPlatform.fmu; then the same for the inverse FMU, fmu/HaselInverse.fmu.
 # A cdylib built with other features needs a target folder of its own (its file name would
 # clash); seeded once from the main build's artifacts, so that only this crate compiles again,
 # not its dependencies (a cold build of them takes minutes on two cores).
@@ -72,15 +73,22 @@ seed_target_dir() {
     fi
 }
 
+# Builds the FMUs' shared libraries against glibc 2.17 (so they load on older hosts): the
+# platform's for FMI 2.0 and 3.0 and the inverse FMU's, the CLI, and packs fmu/HaselPlatform.fmu,
+# fmu/HaselPlatform-fmi3.fmu and fmu/HaselInverse.fmu.
 build_fmu() {
     ensure_venv
     ensure_zigbuild
     step "build the FMU library against glibc 2.17 (cargo zigbuild)"
     cargo zigbuild --release --lib --target "$FMU_TARGET.2.17"
+    step "build the FMI 3.0 library against glibc 2.17 (cargo zigbuild --features fmi3)"
+    seed_target_dir "$FMU3_TARGET_DIR"
+    cargo zigbuild --release --lib --target "$FMU_TARGET.2.17" --features fmi3 \
+        --target-dir "$FMU3_TARGET_DIR"
     step "build the hasel command"
     cargo build --release --bin hasel
-    step "pack fmu/HaselPlatform.fmu"
-    ./target/release/hasel fmu --lib "$FMU_LIB"
+    step "pack fmu/HaselPlatform.fmu and fmu/HaselPlatform-fmi3.fmu"
+    ./target/release/hasel fmu --lib "$FMU_LIB" --lib-fmi3 "$FMU3_LIB"
     step "build the inverse FMU's library (feature inverse-fmu) and pack fmu/HaselInverse.fmu"
     seed_target_dir "$INVERSE_TARGET_DIR"
     cargo zigbuild --release --lib --features inverse-fmu --target "$FMU_TARGET.2.17" \

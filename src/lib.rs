@@ -4,6 +4,7 @@
 pub mod control;
 pub mod diagnose;
 pub mod fmi2;
+pub mod fmi3;
 pub mod fmi_common;
 pub mod fmu;
 pub mod identify;

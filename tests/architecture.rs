@@ -13,10 +13,14 @@ const ROOMS: &[(&str, &[&str])] = &[
     ("solver", &[]),
     ("fmi_common", &[]),
     ("fmi2", &["fmi_common"]),
+    ("fmi3", &["fmi_common"]),
     ("simulation", &["model", "solver"]),
     ("io", &["model", "simulation"]),
     ("plot", &["io"]),
-    ("fmu", &["fmi_common", "fmi2", "io", "model", "simulation"]),
+    (
+        "fmu",
+        &["fmi_common", "fmi2", "fmi3", "io", "model", "simulation"],
+    ),
     ("identify", &["io", "model", "plot", "simulation"]),
     (
         "diagnose",

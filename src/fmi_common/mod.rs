@@ -1,9 +1,12 @@
 //! What an FMI shell and the model behind it share, whatever the FMI version: the model's
 //! side of the interface ([`model_api::FmuCore`]), its variable table with the rules on
-//! causality, variability, initial and start ([`variables`]), and the unit table
-//! ([`units`]). The FMI 2.0 shell is [`crate::fmi2`]; an FMI 3.0 shell would sit beside it
-//! over the same pieces.
+//! causality, variability, initial and start ([`variables`]), the unit table
+//! ([`units`]), what both versions write alike in `modelDescription.xml` ([`xml`]) and the
+//! shells' version-free helpers ([`shell`]). The FMI 2.0 shell is [`crate::fmi2`], the FMI 3.0 shell
+//! [`crate::fmi3`], over the same pieces.
 
 pub mod model_api;
+pub mod shell;
 pub mod units;
 pub mod variables;
+pub mod xml;

@@ -62,9 +62,16 @@ pub fn model_info_of(
     }
 }
 
-/// The 44 C functions of the FMU binary, around [`HaselCore`]; in a module of their own, as
-/// the macro imports the C types where it is invoked.
-#[cfg(not(feature = "inverse-fmu"))]
+/// The 44 C functions of the platform's FMI 2.0 binary, around [`HaselCore`]; in a module of
+/// their own, as the macro imports the C types where it is invoked. The features `fmi3` and
+/// `inverse-fmu` build the library of another FMU instead (a cdylib exports one set).
+#[cfg(not(any(feature = "fmi3", feature = "inverse-fmu")))]
 mod fmi2_functions {
     crate::export_fmi2!(super::HaselCore);
+}
+
+/// The C functions of the FMI 3.0 binary (`--features fmi3`), around the same core.
+#[cfg(feature = "fmi3")]
+mod fmi3_functions {
+    crate::export_fmi3!(super::HaselCore);
 }

@@ -1,7 +1,8 @@
-//! Packs an FMU archive: `modelDescription.xml`, `binaries/linux64/<modelIdentifier>.so`,
+//! Packs an FMU archive, FMI 2.0 or 3.0: `modelDescription.xml`, the shared library
+//! (`binaries/linux64/<modelIdentifier>.so`, FMI 3.0: `binaries/x86_64-linux/...`),
 //! `documentation/index.html` and `resources/parameters.toml`, all generated from one variable
 //! table and one parameter set: the platform's ([`platform`]) or the inverse's
-//! ([`super::inverse::spec`]).
+//! ([`super::inverse::spec`], FMI 2.0 only).
 
 use std::io::Write;
 use std::path::Path;
@@ -12,6 +13,7 @@ use super::{RESOURCE_PARAMS, model_info};
 use crate::fmi_common::model_api::ModelStructure;
 use crate::fmi_common::variables::{Causality, ModelInfo, Variable};
 use crate::fmi2::model_description::{guid_for, model_description_xml};
+use crate::fmi3::model_description as fmi3_description;
 use crate::io::file::{FileError, write_bytes_atomic};
 use crate::io::params_file;
 use crate::model::Params;
@@ -58,6 +60,69 @@ pub fn guid(spec: &Spec) -> String {
         .expect("the variable table is valid (tested)")
 }
 
+/// `write` (the FMI 3.0 description or its token) of `spec`.
+fn fmi3_model(
+    spec: &Spec,
+    write: fn(&fmi3_description::Model) -> Result<String, String>,
+) -> String {
+    let vars = fmi3_description::with_time(spec.variables.clone());
+    write(&fmi3_description::Model {
+        info: &spec.info,
+        vars: &vars,
+        structure: &spec.structure,
+    })
+    .expect("the variable table is valid (tested)")
+}
+
+/// The FMI version of an FMU archive: which description, library folder and C functions.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum FmiVersion {
+    V2,
+    V3,
+}
+
+impl FmiVersion {
+    /// The version as the standard writes it.
+    pub fn name(self) -> &'static str {
+        match self {
+            FmiVersion::V2 => "FMI 2.0",
+            FmiVersion::V3 => "FMI 3.0",
+        }
+    }
+
+    /// The platform folder under `binaries/` (FMI 2.0 section 2.3, FMI 3.0 section 2.5.1.1).
+    fn platform(self) -> &'static str {
+        match self {
+            FmiVersion::V2 => "linux64",
+            FmiVersion::V3 => "x86_64-linux",
+        }
+    }
+
+    /// A function every library of this version exports, and one none does.
+    fn marker_symbols(self) -> (&'static str, &'static str) {
+        match self {
+            FmiVersion::V2 => ("fmi2Instantiate", "fmi3InstantiateCoSimulation"),
+            FmiVersion::V3 => ("fmi3InstantiateCoSimulation", "fmi2Instantiate"),
+        }
+    }
+
+    /// The `modelDescription.xml` of `spec` in this version.
+    pub fn model_description(self, spec: &Spec) -> String {
+        match self {
+            FmiVersion::V2 => model_description(spec),
+            FmiVersion::V3 => fmi3_model(spec, fmi3_description::model_description_xml),
+        }
+    }
+
+    /// The GUID (FMI 2.0) or instantiationToken (FMI 3.0) of that description.
+    pub fn token(self, spec: &Spec) -> String {
+        match self {
+            FmiVersion::V2 => guid(spec),
+            FmiVersion::V3 => fmi3_model(spec, fmi3_description::instantiation_token),
+        }
+    }
+}
+
 fn escape(s: &str) -> String {
     s.replace('&', "&amp;")
         .replace('<', "&lt;")
@@ -75,18 +140,23 @@ fn group(v: &Variable) -> &'static str {
 
 /// `documentation/index.html`: the model, its interface and every variable with its unit,
 /// start value and description.
-pub fn documentation(spec: &Spec) -> String {
+pub fn documentation(spec: &Spec, version: FmiVersion) -> String {
     let info = &spec.info;
     let mut html = format!(
         "<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\"><title>{id}</title>\n\
          <style>body{{font-family:sans-serif;max-width:60em;margin:2em auto}}table{{border-collapse:collapse}}\
          td,th{{border:1px solid #ccc;padding:2px 6px;text-align:left}}</style></head><body>\n\
          <h1>{id}</h1>\n<p>{desc}</p>\n\
-         <p>FMI 2.0 {interfaces}, GUID <code>{guid}</code>. {about}</p>\n\
+         <p>{version} {interfaces}, {token_name} <code>{guid}</code>. {about}</p>\n\
          <p>Default experiment: 0 to {stop} s, step {step} s, tolerance {tol}.</p>\n",
         id = info.model_identifier,
         desc = escape(&info.description),
-        guid = guid(spec),
+        version = version.name(),
+        token_name = match version {
+            FmiVersion::V2 => "GUID",
+            FmiVersion::V3 => "instantiationToken",
+        },
+        guid = version.token(spec),
         about = spec.about,
         interfaces = if info.model_exchange {
             "Co-Simulation and Model Exchange (one binary)"
@@ -117,29 +187,64 @@ pub fn documentation(spec: &Spec) -> String {
     html
 }
 
-/// Writes the FMU of `spec` to `out` (atomically) from the shared library at `library`, with
-/// `params` as its resource file.
-pub fn pack(library: &Path, spec: &Spec, params: &Params, out: &Path) -> Result<(), FileError> {
+/// Whether `bytes` contain `text`.
+fn contains(bytes: &[u8], text: &str) -> bool {
+    bytes.windows(text.len()).any(|w| w == text.as_bytes())
+}
+
+/// Reads the shared library at `library`, which must be the build of `version`
+/// (`--features fmi3` for FMI 3.0).
+pub fn read_library(library: &Path, version: FmiVersion) -> Result<Vec<u8>, FileError> {
     let so = std::fs::read(library)
         .map_err(|e| FileError::new(library, format!("cannot read the FMU library: {e}")))?;
     if !so.starts_with(b"\x7fELF") {
         return Err(FileError::new(library, "not an ELF shared library"));
     }
+    let (needed, foreign) = version.marker_symbols();
+    if !contains(&so, needed) || contains(&so, foreign) {
+        let build = match version {
+            FmiVersion::V2 => "cargo build --release --lib",
+            FmiVersion::V3 => "cargo build --release --lib --features fmi3",
+        };
+        return Err(FileError::new(
+            library,
+            format!(
+                "not the {} build of the library (it must export {needed} and not {foreign}; build it with `{build}`)",
+                version.name()
+            ),
+        ));
+    }
+    Ok(so)
+}
+
+/// Writes the FMU of `spec` in `version` to `out` (atomically) with the library `so` of
+/// [`read_library`] and `params` as its resource file.
+pub fn pack(
+    so: Vec<u8>,
+    spec: &Spec,
+    params: &Params,
+    out: &Path,
+    version: FmiVersion,
+) -> Result<(), FileError> {
     let mut zip = zip::ZipWriter::new(std::io::Cursor::new(Vec::new()));
     let options = zip::write::SimpleFileOptions::default()
         .compression_method(zip::CompressionMethod::Deflated);
     let entries: [(String, Vec<u8>); 4] = [
         (
             "modelDescription.xml".into(),
-            model_description(spec).into_bytes(),
+            version.model_description(spec).into_bytes(),
         ),
         (
-            format!("binaries/linux64/{}.so", spec.info.model_identifier),
+            format!(
+                "binaries/{}/{}.so",
+                version.platform(),
+                spec.info.model_identifier
+            ),
             so,
         ),
         (
             "documentation/index.html".into(),
-            documentation(spec).into_bytes(),
+            documentation(spec, version).into_bytes(),
         ),
         (
             format!("resources/{RESOURCE_PARAMS}"),
@@ -202,9 +307,57 @@ mod tests {
     }
 
     #[test]
+    fn a_library_of_the_other_version_is_refused() {
+        let dir = std::env::temp_dir().join(format!("hasel_pack_{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let lib = dir.join("lib.so");
+        std::fs::write(&lib, b"\x7fELF ... fmi2Instantiate ...").unwrap();
+        assert!(read_library(&lib, FmiVersion::V2).is_ok());
+        let e = read_library(&lib, FmiVersion::V3).unwrap_err().to_string();
+        assert!(
+            e.contains("not the FMI 3.0 build") && e.contains("--features fmi3"),
+            "{e}"
+        );
+        std::fs::write(&lib, b"\x7fELF fmi3InstantiateCoSimulation").unwrap();
+        assert!(read_library(&lib, FmiVersion::V2).is_err());
+        assert!(read_library(&lib, FmiVersion::V3).is_ok());
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn the_fmi3_description_has_the_variables_of_the_fmi2_one_and_time() {
+        let p = Params::default();
+        let (v2, v3) = (
+            FmiVersion::V2.model_description(&platform(&p)),
+            FmiVersion::V3.model_description(&platform(&p)),
+        );
+        assert!(
+            v3.contains("fmiVersion=\"3.0\"") && v3.contains(&FmiVersion::V3.token(&platform(&p)))
+        );
+        for v in variables(&p, DEFAULT_RTOL) {
+            let declared = format!(
+                "name=\"{}\" valueReference=\"{}\"",
+                v.name, v.value_reference
+            );
+            assert!(
+                v2.contains(&declared) && v3.contains(&declared),
+                "{}",
+                v.name
+            );
+        }
+        assert!(v3.contains("<Float64 name=\"time\""));
+        let mut stiffer = p.clone();
+        stiffer.set("Kb_1", 0.31).unwrap();
+        assert_ne!(
+            FmiVersion::V3.token(&platform(&p)),
+            FmiVersion::V3.token(&platform(&stiffer))
+        );
+    }
+
+    #[test]
     fn documentation_lists_every_variable() {
         for spec in specs() {
-            let doc = documentation(&spec);
+            let doc = documentation(&spec, FmiVersion::V2);
             for v in &spec.variables {
                 assert!(
                     doc.contains(&format!("<code>{}</code>", v.name)),

@@ -1,4 +1,5 @@
-"""Shared fixtures: the packed FMUs, the hasel command and the reference data."""
+"""Shared fixtures: the packed FMUs (FMI 2.0, 3.0 and the inverse), the hasel command and the
+reference data."""
 import os
 import pathlib
 
@@ -18,6 +19,11 @@ def built(variable, default, how):
 @pytest.fixture(scope="session")
 def fmu_path():
     return built("HASEL_FMU", ROOT / "fmu" / "HaselPlatform.fmu", "`bash ci/main.sh` (or `hasel fmu`)")
+
+
+@pytest.fixture(scope="session")
+def fmu3_path():
+    return built("HASEL_FMU3", ROOT / "fmu" / "HaselPlatform-fmi3.fmu", "`bash ci/main.sh` (or `hasel fmu`)")
 
 
 @pytest.fixture(scope="session")

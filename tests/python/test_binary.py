@@ -1,5 +1,6 @@
-"""The shared object inside each FMU: exactly the 44 FMI 2.0 functions exported, and nothing
-but glibc (at most 2.17) and libgcc_s needed, so it loads in common hosts."""
+"""The shared objects inside the FMUs: exactly the 44 FMI 2.0 functions (the platform's and the
+inverse's), or exactly the 75 FMI 3.0 functions, exported, and nothing but glibc (at most 2.17) and
+libgcc_s needed, so they load in common hosts."""
 import re
 import subprocess
 import zipfile
@@ -21,31 +22,60 @@ FMI2_FUNCTIONS = {
     "fmi2GetRealStatus", "fmi2GetIntegerStatus", "fmi2GetBooleanStatus", "fmi2GetStringStatus",
 }
 
+# fmi3Functions.h: the common functions, Model Exchange, Co-Simulation and Scheduled Execution
+FMI3_FUNCTIONS = {"fmi3" + f for f in """
+    GetVersion SetDebugLogging InstantiateModelExchange InstantiateCoSimulation
+    InstantiateScheduledExecution FreeInstance EnterInitializationMode ExitInitializationMode
+    EnterEventMode Terminate Reset
+    GetFloat32 GetFloat64 GetInt8 GetUInt8 GetInt16 GetUInt16 GetInt32 GetUInt32 GetInt64 GetUInt64
+    GetBoolean GetString GetBinary GetClock
+    SetFloat32 SetFloat64 SetInt8 SetUInt8 SetInt16 SetUInt16 SetInt32 SetUInt32 SetInt64 SetUInt64
+    SetBoolean SetString SetBinary SetClock
+    GetNumberOfVariableDependencies GetVariableDependencies
+    GetFMUState SetFMUState FreeFMUState SerializedFMUStateSize SerializeFMUState DeserializeFMUState
+    GetDirectionalDerivative GetAdjointDerivative EnterConfigurationMode ExitConfigurationMode
+    GetIntervalDecimal GetIntervalFraction GetShiftDecimal GetShiftFraction
+    SetIntervalDecimal SetIntervalFraction SetShiftDecimal SetShiftFraction
+    EvaluateDiscreteStates UpdateDiscreteStates
+    EnterContinuousTimeMode CompletedIntegratorStep SetTime SetContinuousStates
+    GetContinuousStateDerivatives GetEventIndicators GetContinuousStates
+    GetNominalsOfContinuousStates GetNumberOfEventIndicators GetNumberOfContinuousStates
+    EnterStepMode GetOutputDerivatives DoStep ActivateModelPartition
+""".split()}
+
 # glibc's own libraries (before glibc 2.34 pthread, dl and rt were separate files) and libgcc_s
 ALLOWED_NEEDED = re.compile(r"^(libc|libm|libpthread|libdl|librt|libgcc_s|ld-linux-x86-64)\.so\.\d+$")
 
 
-@pytest.fixture(scope="module", params=["HaselPlatform", "HaselInverse"])
-def shared_object(request, tmp_path_factory):
-    """The binary of each FMU: the platform's and the inverse's (the same library built with
-    the feature inverse-fmu)."""
-    path = request.getfixturevalue("fmu_path" if request.param == "HaselPlatform" else "inverse_fmu_path")
-    with zipfile.ZipFile(path) as z:
+def extract(fmu, member, tmp_path_factory):
+    with zipfile.ZipFile(fmu) as z:
         names = z.namelist()
-        so = f"binaries/linux64/{request.param}.so"
-        assert so in names, names
+        assert member in names, names
         assert all("\\" not in n for n in names)
-        return z.extract(so, tmp_path_factory.mktemp("so"))
+        return z.extract(member, tmp_path_factory.mktemp("so"))
+
+
+@pytest.fixture(scope="module", params=["HaselPlatform 2.0", "HaselPlatform 3.0", "HaselInverse 2.0"])
+def shared_object(request, tmp_path_factory):
+    """The binary of each FMU: the platform's for FMI 2.0 and 3.0 and the inverse's (the same
+    library built with the feature fmi3 or inverse-fmu)."""
+    fixture, member = {
+        "HaselPlatform 2.0": ("fmu_path", "binaries/linux64/HaselPlatform.so"),
+        "HaselPlatform 3.0": ("fmu3_path", "binaries/x86_64-linux/HaselPlatform.so"),
+        "HaselInverse 2.0": ("inverse_fmu_path", "binaries/linux64/HaselInverse.so"),
+    }[request.param]
+    return extract(request.getfixturevalue(fixture), member, tmp_path_factory)
 
 
 def run(*cmd):
     return subprocess.run(cmd, capture_output=True, text=True, check=True).stdout
 
 
-def test_exports_exactly_the_44_fmi2_functions(shared_object):
-    assert len(FMI2_FUNCTIONS) == 44
+def test_exports_exactly_the_functions_of_its_version(shared_object):
+    assert len(FMI2_FUNCTIONS) == 44 and len(FMI3_FUNCTIONS) == 75
     exported = {line.split()[-1] for line in run("nm", "-D", "--defined-only", shared_object).splitlines()}
-    assert exported == FMI2_FUNCTIONS, (exported - FMI2_FUNCTIONS, FMI2_FUNCTIONS - exported)
+    expected = FMI3_FUNCTIONS if "x86_64-linux" in str(shared_object) else FMI2_FUNCTIONS
+    assert exported == expected, (exported - expected, expected - exported)
 
 
 def test_needs_only_glibc_and_libgcc(shared_object):

@@ -1,8 +1,8 @@
 //! `hasel fmu` and `hasel describe`.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
-use hasel_fmu::fmu::pack::{self, Spec};
+use hasel_fmu::fmu::pack::{self, FmiVersion, Spec};
 use hasel_fmu::fmu::{MODEL_IDENTIFIER, inverse};
 use hasel_fmu::io::file::write_text_atomic;
 use hasel_fmu::model::Params;
@@ -11,12 +11,12 @@ use crate::common::load_params;
 use crate::error::Error;
 
 /// Which FMU: the platform, or its inverse for feedforward.
-#[derive(Clone, Copy, clap::ValueEnum)]
+#[derive(Clone, Copy, PartialEq, clap::ValueEnum)]
 enum Model {
     /// HaselPlatform: voltages in, heights and tip out
     Platform,
-    /// HaselInverse: tip x, y and mean height in, heights and holding voltages out (its library
-    /// built with `--features inverse-fmu`)
+    /// HaselInverse: tip x, y and mean height in, heights and holding voltages out (FMI 2.0, its
+    /// library built with `--features inverse-fmu`)
     Inverse,
 }
 
@@ -36,6 +36,24 @@ impl Model {
     }
 }
 
+/// `--fmi 2` or `--fmi 3`.
+#[derive(Clone, Copy, PartialEq, clap::ValueEnum)]
+pub enum Fmi {
+    #[value(name = "2")]
+    V2,
+    #[value(name = "3")]
+    V3,
+}
+
+impl From<Fmi> for FmiVersion {
+    fn from(f: Fmi) -> Self {
+        match f {
+            Fmi::V2 => FmiVersion::V2,
+            Fmi::V3 => FmiVersion::V3,
+        }
+    }
+}
+
 #[derive(clap::Args)]
 pub struct Args {
     /// Parameter file whose values become the FMU's start values
@@ -44,13 +62,22 @@ pub struct Args {
     /// The FMU to pack
     #[arg(long, value_enum, default_value = "platform")]
     model: Model,
-    /// Where to write the FMU (default: fmu/HaselPlatform.fmu, fmu/HaselInverse.fmu)
+    /// Pack only the FMU of this FMI version (default: both for the platform; the inverse is
+    /// FMI 2.0 only)
+    #[arg(long, value_name = "2|3")]
+    fmi: Option<Fmi>,
+    /// Where to write the FMU (default: fmu/HaselPlatform.fmu, fmu/HaselInverse.fmu; FMI 3.0:
+    /// with `-fmi3` added to the name when both are packed)
     #[arg(long)]
     out: Option<PathBuf>,
-    /// The FMU's shared library, built for that model (default: libhasel_fmu.so beside this
+    /// The FMI 2.0 shared library, built for that model (default: libhasel_fmu.so beside this
     /// executable)
     #[arg(long, value_name = "FILE.so")]
     lib: Option<PathBuf>,
+    /// The FMI 3.0 shared library, built with `--features fmi3` (default:
+    /// libhasel_fmu_fmi3.so beside this executable)
+    #[arg(long, value_name = "FILE.so")]
+    lib_fmi3: Option<PathBuf>,
 }
 
 #[derive(clap::Args)]
@@ -61,35 +88,87 @@ pub struct DescribeArgs {
     /// The FMU to describe
     #[arg(long, value_enum, default_value = "platform")]
     model: Model,
+    /// The FMI version of the description
+    #[arg(long, value_name = "2|3", default_value = "2")]
+    fmi: Fmi,
     /// Write here instead of standard output
     #[arg(long, value_name = "FILE.xml")]
     out: Option<PathBuf>,
 }
 
+/// `name.so` beside this executable.
+fn beside_exe(name: &str) -> Result<PathBuf, Error> {
+    Ok(std::env::current_exe()
+        .map_err(Error::CurrentExe)?
+        .with_file_name(name))
+}
+
+/// `out` with `-fmi3` added to the file name (`x.fmu` → `x-fmi3.fmu`).
+fn fmi3_name(out: &Path) -> PathBuf {
+    let stem = out.file_stem().unwrap_or_default().to_string_lossy();
+    let ext = out
+        .extension()
+        .map_or(String::new(), |e| format!(".{}", e.to_string_lossy()));
+    out.with_file_name(format!("{stem}-fmi3{ext}"))
+}
+
+/// The inverse FMU exists for FMI 2.0 only.
+fn check_version(model: Model, fmi: Option<Fmi>) -> Result<(), Error> {
+    if model == Model::Inverse && fmi == Some(Fmi::V3) {
+        return Err(Error::flag(
+            "fmi",
+            3,
+            "the inverse FMU is packed for FMI 2.0 only",
+        ));
+    }
+    Ok(())
+}
+
 pub fn run(a: Args) -> Result<(), Error> {
+    check_version(a.model, a.fmi)?;
     let params = load_params(&a.params)?;
-    let lib = match a.lib {
-        Some(p) => p,
-        None => std::env::current_exe()
-            .map_err(Error::CurrentExe)?
-            .with_file_name("libhasel_fmu.so"),
-    };
+    let spec = a.model.spec(&params);
     let out = a
         .out
         .unwrap_or_else(|| PathBuf::from(format!("fmu/{}.fmu", a.model.identifier())));
-    let spec = a.model.spec(&params);
-    pack::pack(&lib, &spec, &params, &out)?;
-    say!(
-        "wrote {} (GUID {}, library {})",
-        out.display(),
-        pack::guid(&spec),
-        lib.display()
-    );
+    let v2 = match a.lib {
+        Some(p) => p,
+        None => beside_exe("libhasel_fmu.so")?,
+    };
+    let v3 = match a.lib_fmi3 {
+        Some(p) => p,
+        None => beside_exe("libhasel_fmu_fmi3.so")?,
+    };
+    let jobs = match (a.fmi, a.model) {
+        (Some(Fmi::V2), _) | (None, Model::Inverse) => vec![(FmiVersion::V2, v2, out)],
+        (Some(Fmi::V3), _) => vec![(FmiVersion::V3, v3, out)],
+        (None, Model::Platform) => {
+            let out3 = fmi3_name(&out);
+            vec![(FmiVersion::V2, v2, out), (FmiVersion::V3, v3, out3)]
+        }
+    };
+    // every library is checked before anything is written
+    let mut libraries = Vec::with_capacity(jobs.len());
+    for (version, lib, _) in &jobs {
+        libraries.push(pack::read_library(lib, *version)?);
+    }
+    for ((version, lib, out), so) in jobs.into_iter().zip(libraries) {
+        pack::pack(so, &spec, &params, &out, version)?;
+        say!(
+            "wrote {} ({}, token {}, library {})",
+            out.display(),
+            version.name(),
+            version.token(&spec),
+            lib.display()
+        );
+    }
     Ok(())
 }
 
 pub fn describe(a: DescribeArgs) -> Result<(), Error> {
-    let xml = pack::model_description(&a.model.spec(&load_params(&a.params)?));
+    check_version(a.model, Some(a.fmi))?;
+    let spec = a.model.spec(&load_params(&a.params)?);
+    let xml = FmiVersion::from(a.fmi).model_description(&spec);
     match a.out {
         Some(path) => Ok(write_text_atomic(&path, &xml)?),
         None => {

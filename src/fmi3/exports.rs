@@ -1,0 +1,575 @@
+//! The `extern "C"` layer: the functions of `fmi3Functions.h` (FMI 3.0 standard, sections 2.3,
+//! 3.2, 4.2 and 5.2), generated for one core by [`export_fmi3!`](crate::export_fmi3).
+//!
+//! Each function checks its pointers, converts them to slices and strings, and calls the safe
+//! [`Instance`] method inside `catch_unwind`; nothing unwinds across the C boundary. A caught
+//! panic is logged and gives `fmi3Error` (the instance goes to the error state; other
+//! instances are unaffected because no state is shared). A NULL instance gives `fmi3Error`
+//! without a log message, there being no logger to send it to.
+//!
+//! Safety of all functions here: the caller is an FMI 3.0 importer and keeps the pointer and
+//! calling-sequence rules of the standard: `c` is NULL or an instance returned by
+//! `fmi3Instantiate…` of this FMU and not yet freed, arrays hold the given number of elements,
+//! strings are NUL-terminated, FMU states come from this FMU, and one instance is not used by
+//! two threads at once.
+#![allow(clippy::missing_safety_doc)]
+
+use std::ffi::c_void;
+use std::panic::{AssertUnwindSafe, catch_unwind};
+use std::ptr::null_mut;
+
+use super::fmu_state::Snapshot;
+use super::instance::{Instance, Request};
+use super::logging::Logger;
+use super::state_machine::Experiment;
+use super::types::*;
+use crate::fmi_common::model_api::FmuCore;
+use crate::fmi_common::shell::{in_slice, opt_str, out_slice, panic_message};
+
+/// Runs `f` on the instance behind `c`, catching panics.
+unsafe fn with_instance<M: FmuCore>(
+    c: fmi3Instance,
+    func: &str,
+    f: impl FnOnce(&mut Instance<M>) -> Fmi3Status,
+) -> Fmi3Status {
+    if c.is_null() {
+        return Fmi3Status::Error;
+    }
+    // SAFETY: `c` came from `instantiate::<M>` (caller contract) and is used by one thread.
+    let inst = unsafe { &mut *(c as *mut Instance<M>) };
+    match catch_unwind(AssertUnwindSafe(|| f(&mut *inst))) {
+        Ok(status) => status,
+        Err(payload) => {
+            let message = panic_message(&*payload);
+            catch_unwind(AssertUnwindSafe(|| inst.on_panic(func, &message)))
+                .unwrap_or(Fmi3Status::Fatal)
+        }
+    }
+}
+
+/// The strings and flags of `fmi3Instantiate…`, as received.
+pub struct CRequest {
+    pub interface: InstanceKind,
+    pub name: fmi3String,
+    pub token: fmi3String,
+    pub resource_path: fmi3String,
+    pub logging_on: fmi3Boolean,
+    pub event_mode_used: fmi3Boolean,
+    pub environment: fmi3InstanceEnvironment,
+    pub log_message: fmi3LogMessageCallback,
+}
+
+pub unsafe fn instantiate<M: FmuCore>(r: CRequest) -> fmi3Instance {
+    let (name, token, resources) =
+        unsafe { (opt_str(r.name), opt_str(r.token), opt_str(r.resource_path)) };
+    let logger = || Logger::new(r.log_message, r.environment, r.logging_on != FMI3_FALSE);
+    let (Some(name), Some(token)) = (name.as_deref(), token.as_deref()) else {
+        logger().log(
+            Fmi3Status::Error,
+            "fmi3Instantiate: instanceName or instantiationToken is NULL",
+        );
+        return null_mut();
+    };
+    let request = Request {
+        interface: r.interface,
+        name,
+        token,
+        resource_path: resources.as_deref(),
+        event_mode_used: r.event_mode_used != FMI3_FALSE,
+    };
+    match catch_unwind(AssertUnwindSafe(|| {
+        Instance::<M>::instantiate(request, logger())
+    })) {
+        Ok(Some(instance)) => Box::into_raw(Box::new(instance)).cast(),
+        Ok(None) => null_mut(),
+        Err(payload) => {
+            let msg = format!(
+                "fmi3Instantiate: internal error (panic: {})",
+                panic_message(&*payload)
+            );
+            logger().log(Fmi3Status::Error, &msg);
+            null_mut()
+        }
+    }
+}
+
+/// `fmi3InstantiateScheduledExecution`, which is not offered: no instance, and the reason
+/// logged.
+pub unsafe fn instantiate_not_offered(
+    func: &str,
+    what: &str,
+    environment: fmi3InstanceEnvironment,
+    log_message: fmi3LogMessageCallback,
+) -> fmi3Instance {
+    let _ = catch_unwind(|| {
+        Logger::new(log_message, environment, false).log(
+            Fmi3Status::Error,
+            &format!("{func}: {what} is not offered by this FMU (see modelDescription.xml)"),
+        )
+    });
+    null_mut()
+}
+
+pub unsafe fn free_instance<M: FmuCore>(c: fmi3Instance) {
+    if !c.is_null() {
+        // SAFETY: `c` came from `instantiate::<M>` and is not used after this call.
+        let instance = unsafe { Box::from_raw(c.cast::<Instance<M>>()) };
+        let _ = catch_unwind(AssertUnwindSafe(move || drop(instance)));
+    }
+}
+
+pub unsafe fn set_debug_logging<M: FmuCore>(
+    c: fmi3Instance,
+    on: fmi3Boolean,
+    n: usize,
+    categories: *const fmi3String,
+) -> Fmi3Status {
+    const F: &str = "fmi3SetDebugLogging";
+    unsafe {
+        with_instance::<M>(c, F, |inst| {
+            let Some(pointers) = in_slice(categories, n) else {
+                return inst.null_argument(F, "categories");
+            };
+            let mut names = Vec::with_capacity(n);
+            for &p in pointers {
+                let Some(name) = opt_str(p) else {
+                    return inst.null_argument(F, "categories[i]");
+                };
+                names.push(name.into_owned());
+            }
+            inst.set_debug_logging(on != FMI3_FALSE, &names)
+        })
+    }
+}
+
+pub unsafe fn enter_initialization_mode<M: FmuCore>(
+    c: fmi3Instance,
+    tolerance_defined: fmi3Boolean,
+    tolerance: f64,
+    start_time: f64,
+    stop_time_defined: fmi3Boolean,
+    stop_time: f64,
+) -> Fmi3Status {
+    let experiment = Experiment {
+        start_time,
+        stop_time: (stop_time_defined != FMI3_FALSE).then_some(stop_time),
+        tolerance: (tolerance_defined != FMI3_FALSE).then_some(tolerance),
+    };
+    unsafe {
+        with_instance::<M>(c, "fmi3EnterInitializationMode", |inst| {
+            inst.enter_initialization_mode(experiment)
+        })
+    }
+}
+
+/// The calls without arguments: `call` is the [`Instance`] method of `func`.
+pub unsafe fn simple<M: FmuCore>(
+    c: fmi3Instance,
+    func: &'static str,
+    call: fn(&mut Instance<M>) -> Fmi3Status,
+) -> Fmi3Status {
+    unsafe { with_instance::<M>(c, func, call) }
+}
+
+/// Writes `value` to each output flag that is not NULL; a NULL one is an error.
+unsafe fn set_flags<M: FmuCore>(
+    inst: &Instance<M>,
+    func: &str,
+    flags: &[(&str, *mut fmi3Boolean)],
+    value: fmi3Boolean,
+) -> Result<(), Fmi3Status> {
+    if let Some((name, _)) = flags.iter().find(|(_, p)| p.is_null()) {
+        return Err(inst.null_argument(func, name));
+    }
+    for (_, p) in flags {
+        unsafe { **p = value };
+    }
+    Ok(())
+}
+
+#[allow(clippy::too_many_arguments)]
+pub unsafe fn update_discrete_states<M: FmuCore>(
+    c: fmi3Instance,
+    discrete_states_need_update: *mut fmi3Boolean,
+    terminate_simulation: *mut fmi3Boolean,
+    nominals_changed: *mut fmi3Boolean,
+    values_changed: *mut fmi3Boolean,
+    next_event_time_defined: *mut fmi3Boolean,
+    next_event_time: *mut f64,
+) -> Fmi3Status {
+    const F: &str = "fmi3UpdateDiscreteStates";
+    unsafe {
+        with_instance::<M>(c, F, |inst| {
+            if next_event_time.is_null() {
+                return inst.null_argument(F, "nextEventTime");
+            }
+            let flags = [
+                ("discreteStatesNeedUpdate", discrete_states_need_update),
+                ("terminateSimulation", terminate_simulation),
+                ("nominalsOfContinuousStatesChanged", nominals_changed),
+                ("valuesOfContinuousStatesChanged", values_changed),
+                ("nextEventTimeDefined", next_event_time_defined),
+            ];
+            let status = inst.update_discrete_states();
+            if status == Fmi3Status::Ok
+                && let Err(s) = set_flags(inst, F, &flags, FMI3_FALSE)
+            {
+                return s;
+            }
+            status
+        })
+    }
+}
+
+pub unsafe fn get_float64<M: FmuCore>(
+    c: fmi3Instance,
+    vr: *const fmi3ValueReference,
+    nvr: usize,
+    values: *mut f64,
+    n_values: usize,
+) -> Fmi3Status {
+    const F: &str = "fmi3GetFloat64";
+    unsafe {
+        with_instance::<M>(c, F, |inst| {
+            match (in_slice(vr, nvr), out_slice(values, n_values)) {
+                (Some(vrs), Some(values)) => inst.get_float64(vrs, values),
+                (None, _) => inst.null_argument(F, "valueReferences"),
+                (_, None) => inst.null_argument(F, "values"),
+            }
+        })
+    }
+}
+
+pub unsafe fn set_float64<M: FmuCore>(
+    c: fmi3Instance,
+    vr: *const fmi3ValueReference,
+    nvr: usize,
+    values: *const f64,
+    n_values: usize,
+) -> Fmi3Status {
+    const F: &str = "fmi3SetFloat64";
+    unsafe {
+        with_instance::<M>(c, F, |inst| {
+            match (in_slice(vr, nvr), in_slice(values, n_values)) {
+                (Some(vrs), Some(values)) => inst.set_float64(vrs, values),
+                (None, _) => inst.null_argument(F, "valueReferences"),
+                (_, None) => inst.null_argument(F, "values"),
+            }
+        })
+    }
+}
+
+/// `fmi3Get/Set{Float32,Int8,…,Binary,Clock}` (`func`, whose name ends in the type); `values`
+/// is the value array, of whichever type.
+pub unsafe fn no_variables<M: FmuCore>(
+    c: fmi3Instance,
+    func: &'static str,
+    vr: *const fmi3ValueReference,
+    nvr: usize,
+    values: *const c_void,
+) -> Fmi3Status {
+    let setter = func.starts_with("fmi3Set");
+    let type_name = func.get("fmi3Get".len()..).unwrap_or(func);
+    unsafe {
+        with_instance::<M>(c, func, |inst| match in_slice(vr, nvr) {
+            None => inst.null_argument(func, "valueReferences"),
+            Some(_) if nvr > 0 && values.is_null() => inst.null_argument(func, "values"),
+            Some(vrs) => inst.no_variables_of_type(func, type_name, setter, vrs),
+        })
+    }
+}
+
+pub unsafe fn get_fmu_state<M: FmuCore>(c: fmi3Instance, state: *mut fmi3FMUState) -> Fmi3Status {
+    const F: &str = "fmi3GetFMUState";
+    unsafe {
+        with_instance::<M>(c, F, |inst| {
+            if state.is_null() {
+                return inst.null_argument(F, "FMUState");
+            }
+            let snapshot = inst.get_fmu_state();
+            if (*state).is_null() {
+                *state = Box::into_raw(Box::new(snapshot)).cast();
+            } else {
+                // Section 2.3.6: a non-NULL *FMUState is a state of this FMU to be overwritten.
+                *(*state).cast::<Snapshot<M>>() = snapshot;
+            }
+            Fmi3Status::Ok
+        })
+    }
+}
+
+pub unsafe fn set_fmu_state<M: FmuCore>(c: fmi3Instance, state: fmi3FMUState) -> Fmi3Status {
+    const F: &str = "fmi3SetFMUState";
+    unsafe {
+        with_instance::<M>(c, F, |inst| match state.cast::<Snapshot<M>>().as_ref() {
+            Some(snapshot) => inst.set_fmu_state(snapshot),
+            None => inst.null_argument(F, "FMUState"),
+        })
+    }
+}
+
+pub unsafe fn free_fmu_state<M: FmuCore>(c: fmi3Instance, state: *mut fmi3FMUState) -> Fmi3Status {
+    unsafe {
+        with_instance::<M>(c, "fmi3FreeFMUState", |_| {
+            // Section 2.3.6: a NULL pointer is ignored.
+            if !state.is_null() && !(*state).is_null() {
+                drop(Box::from_raw((*state).cast::<Snapshot<M>>()));
+                *state = null_mut();
+            }
+            Fmi3Status::Ok
+        })
+    }
+}
+
+pub unsafe fn serialized_fmu_state_size<M: FmuCore>(
+    c: fmi3Instance,
+    state: fmi3FMUState,
+    size: *mut usize,
+) -> Fmi3Status {
+    const F: &str = "fmi3SerializedFMUStateSize";
+    unsafe {
+        with_instance::<M>(c, F, |inst| {
+            match (state.cast::<Snapshot<M>>().as_ref(), size.is_null()) {
+                (Some(snapshot), false) => {
+                    *size = snapshot.to_bytes().len();
+                    Fmi3Status::Ok
+                }
+                (None, _) => inst.null_argument(F, "FMUState"),
+                (_, true) => inst.null_argument(F, "size"),
+            }
+        })
+    }
+}
+
+pub unsafe fn serialize_fmu_state<M: FmuCore>(
+    c: fmi3Instance,
+    state: fmi3FMUState,
+    bytes: *mut fmi3Byte,
+    size: usize,
+) -> Fmi3Status {
+    const F: &str = "fmi3SerializeFMUState";
+    unsafe {
+        with_instance::<M>(c, F, |inst| {
+            let Some(snapshot) = state.cast::<Snapshot<M>>().as_ref() else {
+                return inst.null_argument(F, "FMUState");
+            };
+            let data = snapshot.to_bytes();
+            if size < data.len() {
+                let needs = data.len();
+                return inst.error(
+                    F,
+                    format_args!(
+                        "buffer of {size} bytes is too small, the state needs {needs} \
+                         (fmi3SerializedFMUStateSize)"
+                    ),
+                );
+            }
+            let Some(out) = out_slice(bytes, data.len()) else {
+                return inst.null_argument(F, "serializedState");
+            };
+            out.copy_from_slice(&data);
+            Fmi3Status::Ok
+        })
+    }
+}
+
+pub unsafe fn deserialize_fmu_state<M: FmuCore>(
+    c: fmi3Instance,
+    bytes: *const fmi3Byte,
+    size: usize,
+    state: *mut fmi3FMUState,
+) -> Fmi3Status {
+    const F: &str = "fmi3DeserializeFMUState";
+    unsafe {
+        with_instance::<M>(c, F, |inst| {
+            let Some(data) = in_slice(bytes, size) else {
+                return inst.null_argument(F, "serializedState");
+            };
+            if state.is_null() {
+                return inst.null_argument(F, "FMUState");
+            }
+            match inst.deserialize_fmu_state(data) {
+                Ok(snapshot) => {
+                    *state = Box::into_raw(Box::new(snapshot)).cast();
+                    Fmi3Status::Ok
+                }
+                Err(status) => status,
+            }
+        })
+    }
+}
+
+/// Functions of interfaces or capabilities (`what`) this FMU does not offer.
+pub unsafe fn not_offered<M: FmuCore>(
+    c: fmi3Instance,
+    func: &'static str,
+    what: &str,
+) -> Fmi3Status {
+    unsafe { with_instance::<M>(c, func, |inst| inst.not_offered(func, what)) }
+}
+
+#[allow(clippy::too_many_arguments)]
+pub unsafe fn do_step<M: FmuCore>(
+    c: fmi3Instance,
+    tc: f64,
+    h: f64,
+    event_handling_needed: *mut fmi3Boolean,
+    terminate_simulation: *mut fmi3Boolean,
+    early_return: *mut fmi3Boolean,
+    last_successful_time: *mut f64,
+) -> Fmi3Status {
+    const F: &str = "fmi3DoStep";
+    unsafe {
+        with_instance::<M>(c, F, |inst| {
+            let flags = [
+                ("eventHandlingNeeded", event_handling_needed),
+                ("terminateSimulation", terminate_simulation),
+                ("earlyReturn", early_return),
+            ];
+            if last_successful_time.is_null() {
+                return inst.null_argument(F, "lastSuccessfulTime");
+            }
+            if let Err(s) = set_flags(inst, F, &flags, FMI3_FALSE) {
+                return s;
+            }
+            let (status, t) = inst.do_step(tc, h);
+            *last_successful_time = t;
+            status
+        })
+    }
+}
+
+pub unsafe fn completed_integrator_step<M: FmuCore>(
+    c: fmi3Instance,
+    enter_event_mode: *mut fmi3Boolean,
+    terminate_simulation: *mut fmi3Boolean,
+) -> Fmi3Status {
+    const F: &str = "fmi3CompletedIntegratorStep";
+    unsafe {
+        with_instance::<M>(c, F, |inst| {
+            let flags = [
+                ("enterEventMode", enter_event_mode),
+                ("terminateSimulation", terminate_simulation),
+            ];
+            if let Some((name, _)) = flags.iter().find(|(_, p)| p.is_null()) {
+                return inst.null_argument(F, name);
+            }
+            let status = inst.completed_integrator_step();
+            if status == Fmi3Status::Ok
+                && let Err(s) = set_flags(inst, F, &flags, FMI3_FALSE)
+            {
+                return s;
+            }
+            status
+        })
+    }
+}
+
+pub unsafe fn set_time<M: FmuCore>(c: fmi3Instance, time: f64) -> Fmi3Status {
+    unsafe { with_instance::<M>(c, "fmi3SetTime", |inst| inst.set_time(time)) }
+}
+
+pub unsafe fn set_continuous_states<M: FmuCore>(
+    c: fmi3Instance,
+    x: *const f64,
+    nx: usize,
+) -> Fmi3Status {
+    const F: &str = "fmi3SetContinuousStates";
+    unsafe {
+        with_instance::<M>(c, F, |inst| match in_slice(x, nx) {
+            Some(x) => inst.set_continuous_states(x),
+            None => inst.null_argument(F, "continuousStates"),
+        })
+    }
+}
+
+/// `fmi3GetContinuousStates`, `fmi3GetContinuousStateDerivatives`,
+/// `fmi3GetNominalsOfContinuousStates` (`func`): `call` is the core's method.
+pub unsafe fn state_vector<M: FmuCore>(
+    c: fmi3Instance,
+    func: &'static str,
+    out: *mut f64,
+    n: usize,
+    call: fn(&mut M, &mut [f64]) -> Result<(), String>,
+) -> Fmi3Status {
+    unsafe {
+        with_instance::<M>(c, func, |inst| match out_slice(out, n) {
+            Some(out) => inst.state_vector(func, out, call),
+            None => inst.null_argument(func, "the output array"),
+        })
+    }
+}
+
+pub unsafe fn get_event_indicators<M: FmuCore>(
+    c: fmi3Instance,
+    z: *mut f64,
+    nz: usize,
+) -> Fmi3Status {
+    const F: &str = "fmi3GetEventIndicators";
+    unsafe {
+        with_instance::<M>(c, F, |inst| match out_slice(z, nz) {
+            Some(_) => inst.event_indicators(nz),
+            None => inst.null_argument(F, "eventIndicators"),
+        })
+    }
+}
+
+/// `fmi3GetNumberOfContinuousStates` and `fmi3GetNumberOfEventIndicators` (`func`): `count`
+/// gives the number.
+pub unsafe fn get_number_of<M: FmuCore>(
+    c: fmi3Instance,
+    func: &'static str,
+    n: *mut usize,
+    count: fn(&Instance<M>) -> usize,
+) -> Fmi3Status {
+    unsafe {
+        with_instance::<M>(c, func, |inst| {
+            if n.is_null() {
+                return inst.null_argument(func, "the output argument");
+            }
+            match inst.number_of(func, count(inst)) {
+                Ok(value) => {
+                    *n = value;
+                    Fmi3Status::Ok
+                }
+                Err(s) => s,
+            }
+        })
+    }
+}
+
+#[allow(clippy::too_many_arguments)]
+pub unsafe fn get_directional_derivative<M: FmuCore>(
+    c: fmi3Instance,
+    unknowns: *const fmi3ValueReference,
+    n_unknowns: usize,
+    knowns: *const fmi3ValueReference,
+    n_knowns: usize,
+    seed: *const f64,
+    n_seed: usize,
+    sensitivity: *mut f64,
+    n_sensitivity: usize,
+) -> Fmi3Status {
+    const F: &str = "fmi3GetDirectionalDerivative";
+    unsafe {
+        with_instance::<M>(c, F, |inst| {
+            let (Some(u), Some(k)) = (in_slice(unknowns, n_unknowns), in_slice(knowns, n_knowns))
+            else {
+                return inst.null_argument(F, "unknowns or knowns");
+            };
+            match (
+                in_slice(seed, n_seed),
+                out_slice(sensitivity, n_sensitivity),
+            ) {
+                (Some(s), Some(out)) => inst.directional_derivative(u, k, s, out),
+                (None, _) => inst.null_argument(F, "seed"),
+                (_, None) => inst.null_argument(F, "sensitivity"),
+            }
+        })
+    }
+}
+
+/// The C string returned by `fmi3GetVersion`.
+pub fn version() -> *const std::ffi::c_char {
+    VERSION.as_ptr()
+}

@@ -1,0 +1,18 @@
+//! A generic FMI 3.0 shell (Co-Simulation) around one model that implements
+//! [`FmuCore`](crate::fmi_common::model_api::FmuCore), beside the FMI 2.0 one
+//! ([`crate::fmi2`]) and over the same core: [`export_fmi3!`](crate::export_fmi3) generates
+//! the C functions of the FMU, [`instance`] checks every call against [`state_machine`] and
+//! the arguments, and [`model_description::model_description_xml`] writes the matching FMI
+//! 3.0 `modelDescription.xml` from the same variable table.
+
+pub mod exports;
+pub mod fmu_state;
+pub mod functions;
+pub mod instance;
+pub mod logging;
+pub mod model_description;
+pub mod state_machine;
+pub mod types;
+
+#[cfg(test)]
+mod tests;
