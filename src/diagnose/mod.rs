@@ -27,7 +27,7 @@ pub mod report;
 pub mod screen;
 
 use std::collections::BTreeMap;
-use std::time::Instant;
+use std::time::{Duration, Instant};
 
 use crate::identify::{self, Experiment, FIT_RTOL, Identification, Options as IdOptions};
 use crate::model::{Effect, Params};
@@ -48,6 +48,11 @@ pub const NOISE_FLOOR_EXCESS: f64 = 0.05;
 /// exact form, and what it leaves is not a second mechanism).
 pub const FIT_TOLERANCE: f64 = 1.0;
 
+/// Default wall time of one candidate's refit [s] (`Options::refit_budget`): a guard against a
+/// runaway fit, not a pace; a refit takes a few seconds alone on a core, several times that on
+/// a machine shared with other work.
+pub const REFIT_BUDGET_S: u64 = 120;
+
 /// Settings of a diagnosis.
 #[derive(Clone, Debug)]
 pub struct Options {
@@ -60,6 +65,8 @@ pub struct Options {
     /// from a common scale of Kb, b and γ1², as gravity is.
     pub base_range: f64,
     pub rtol: f64,
+    /// Wall time a candidate's refit may take; a refit that runs out of it fails the candidate.
+    pub refit_budget: Duration,
 }
 
 impl Default for Options {
@@ -69,6 +76,7 @@ impl Default for Options {
             max_effects: 3,
             base_range: 2.0,
             rtol: FIT_RTOL,
+            refit_budget: Duration::from_secs(REFIT_BUDGET_S),
         }
     }
 }
@@ -354,15 +362,37 @@ pub fn diagnose(
             t0.elapsed().as_secs_f64(),
         ));
         let t0 = Instant::now();
-        for c in candidates.iter_mut().take(opts.refits) {
+        // the candidates are refitted in parallel, each on its own: the results do not depend
+        // on the number of threads (a refit that runs out of its budget fails its candidate)
+        let mut starts = Vec::new();
+        for c in candidates.iter().take(opts.refits) {
             let mut p = current.params.clone();
             for &(name, v) in &c.start {
                 p.set(name, v)?;
             }
             let mut with = effects.clone();
             with.push(c.effect);
+            starts.push((p, id_opts(free_list(&with))));
+        }
+        let refits: Vec<Result<Identification, identify::Error>> = std::thread::scope(|s| {
+            let handles: Vec<_> = starts
+                .iter()
+                .map(|(p, o)| {
+                    s.spawn(move || {
+                        let mut o = o.clone();
+                        o.lm.deadline = Some(Instant::now() + opts.refit_budget);
+                        identify::identify(p, estimation, held, &o)
+                    })
+                })
+                .collect();
+            handles
+                .into_iter()
+                .map(|h| h.join().expect("a refit does not panic"))
+                .collect()
+        });
+        for (c, refit) in candidates.iter_mut().zip(refits) {
             // a refit that cannot run (the model leaves its domain) is a failed candidate
-            match identify::identify(&p, estimation, held, &id_opts(free_list(&with))) {
+            match refit {
                 Ok(id) => c.refit = Some(judge(c.effect, id, &current, estimation, held, &effects)),
                 Err(e) => c.refit_error = Some(e),
             }

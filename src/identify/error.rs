@@ -39,6 +39,9 @@ pub enum Error {
     NonFiniteResidual,
     #[error("the Jacobian of the residuals is not finite")]
     NonFiniteJacobian,
+    /// The time given to the fit ran out (`lm::Options::deadline`).
+    #[error("the time budget of the fit was exhausted")]
+    TimeBudget,
     /// The residuals cannot be evaluated where the optimiser starts.
     #[error("at the starting point: {0}")]
     AtStart(Box<Error>),

@@ -8,6 +8,7 @@ use super::experiment::{Channel, Experiment};
 use super::{Error, Options, lm, simulate};
 use crate::model::Params;
 use crate::model::params::{ParamDef, Rule};
+use crate::simulation::sensitivity::{Direction, simulate_sensitive};
 
 /// How a parameter is moved by the optimiser: in log space when it must be positive.
 #[derive(Clone, Copy)]
@@ -44,6 +45,10 @@ struct Problem<'a> {
     counter: std::sync::atomic::AtomicUsize,
 }
 
+/// Step in the coordinates of the differences of f, the rest state and the outputs that the
+/// sensitivities carry (src/identify/identify.md, "How `hasel identify` estimates").
+const SENSITIVITY_STEP: f64 = 1e-6;
+
 impl Problem<'_> {
     fn params_at(&self, x: &[f64]) -> Result<Params, Error> {
         let mut p = self.base.clone();
@@ -51,6 +56,49 @@ impl Problem<'_> {
             p.set(c.def.name, c.to_p(xi))?;
         }
         Ok(p)
+    }
+
+    /// ∂r/∂x from the forward sensitivities of one simulation per experiment, or the reason
+    /// they cannot be had (a direction that switches an effect's states, or moves the delay).
+    fn sensitivity_jacobian(&self, x: &[f64]) -> Result<DMatrix<f64>, Error> {
+        let p = self.params_at(x)?;
+        let directions = (0..x.len())
+            .map(|j| {
+                let mut xj = x.to_vec();
+                xj[j] += SENSITIVITY_STEP;
+                Ok(Direction {
+                    params: self.params_at(&xj)?,
+                    step: SENSITIVITY_STEP,
+                })
+            })
+            .collect::<Result<Vec<_>, Error>>()?;
+        let mut jac = DMatrix::zeros(self.len, x.len());
+        let mut row = 0;
+        for exp in self.experiments {
+            let run = simulate_sensitive(&p, &directions, &exp.input, &exp.t, self.rtol).map_err(
+                |source| Error::Experiment {
+                    experiment: exp.name.clone(),
+                    source,
+                },
+            )?;
+            self.counter
+                .fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+            for &c in &self.channels {
+                if exp.measured(c).is_some() {
+                    let o = match c {
+                        Channel::H(i) => i,
+                        Channel::Tip(i) => 3 + i,
+                    };
+                    for k in 0..exp.t.len() {
+                        for j in 0..x.len() {
+                            jac[(row, j)] = run.output(k, j)[o];
+                        }
+                        row += 1;
+                    }
+                }
+            }
+        }
+        Ok(jac)
     }
 }
 
@@ -150,12 +198,17 @@ struct Reduced<'a, 'b> {
 }
 
 impl Reduced<'_, '_> {
-    fn x_of(&self, z: &[f64]) -> Vec<f64> {
+    /// x0 + B z before the clamping.
+    fn unclamped(&self, z: &[f64]) -> Vec<f64> {
         (0..self.x0.len())
-            .map(|i| {
-                (self.x0[i] + (0..z.len()).map(|k| self.basis[(i, k)] * z[k]).sum::<f64>())
-                    .clamp(self.lo[i], self.hi[i])
-            })
+            .map(|i| self.x0[i] + (0..z.len()).map(|k| self.basis[(i, k)] * z[k]).sum::<f64>())
+            .collect()
+    }
+
+    fn x_of(&self, z: &[f64]) -> Vec<f64> {
+        let x = self.unclamped(z);
+        (0..x.len())
+            .map(|i| x[i].clamp(self.lo[i], self.hi[i]))
             .collect()
     }
 }
@@ -166,6 +219,33 @@ impl lm::Residuals for Reduced<'_, '_> {
     }
     fn eval(&self, z: &[f64], r: &mut [f64]) -> Result<(), Error> {
         self.inner.eval(&self.x_of(z), r)
+    }
+}
+
+impl Reduced<'_, '_> {
+    /// ∂r/∂z = ∂r/∂x D B from the sensitivities, with D zero for a coordinate clamped at a
+    /// bound (where x does not move with z).
+    fn sensitivity_jacobian(&self, z: &[f64]) -> Result<DMatrix<f64>, Error> {
+        let mut jx = self.inner.sensitivity_jacobian(&self.x_of(z))?;
+        for (i, x) in self.unclamped(z).into_iter().enumerate() {
+            if x < self.lo[i] || x > self.hi[i] {
+                jx.column_mut(i).fill(0.0);
+            }
+        }
+        Ok(jx * self.basis)
+    }
+}
+
+/// The Jacobian of the polish and the covariance: the sensitivities of the tighter simulations,
+/// or central differences where they cannot be had.
+fn polish_jacobian(
+    sharp: &Reduced<'_, '_>,
+    z: &[f64],
+    threads: usize,
+) -> Result<DMatrix<f64>, Error> {
+    match sharp.sensitivity_jacobian(z) {
+        Ok(j) => Ok(j),
+        Err(_) => lm::jacobian_central(sharp, z, COVARIANCE_FD_STEP, threads),
     }
 }
 
@@ -332,7 +412,7 @@ pub(super) fn fit_group(
             &opts.lm,
         )?;
         iterations += sol.iterations;
-        // polish with Gauss–Newton on a central-difference Jacobian of tighter simulations, which
+        // polish with Gauss–Newton on the sensitivities of tighter simulations, which
         // also gives the covariance: Kb and gamma1 correlate to 0.999, and forward differences
         // at the optimiser's tolerance misjudge the gradient and the information along that valley
         let sharp = Reduced {
@@ -341,8 +421,9 @@ pub(super) fn fit_group(
         };
         let mut z = sol.x.clone();
         let mut r = lm::evaluate(&sharp, &z)?;
-        let mut j = lm::jacobian_central(&sharp, &z, COVARIANCE_FD_STEP, opts.lm.threads)?;
+        let mut j = polish_jacobian(&sharp, &z, opts.lm.threads)?;
         for _ in 0..GN_POLISH {
+            lm::check_deadline(opts.lm.deadline)?;
             let Some(step) = (j.transpose() * &j)
                 .cholesky()
                 .map(|c| c.solve(&(-(j.transpose() * &r))))
@@ -353,7 +434,7 @@ pub(super) fn fit_group(
             match lm::evaluate(&sharp, &z_new) {
                 Ok(r_new) if r_new.norm_squared() < r.norm_squared() => {
                     (z, r) = (z_new, r_new);
-                    j = lm::jacobian_central(&sharp, &z, COVARIANCE_FD_STEP, opts.lm.threads)?;
+                    j = polish_jacobian(&sharp, &z, opts.lm.threads)?;
                     if step.amax() < 1e-8 {
                         break;
                     }

@@ -2,6 +2,8 @@
 //! computed in parallel. Marquardt's diagonal scaling, Nielsen's damping update, steps
 //! projected onto the bounds.
 
+use std::time::Instant;
+
 use nalgebra::{DMatrix, DVector};
 
 use super::Error;
@@ -24,6 +26,8 @@ pub struct Options {
     /// Forward-difference step in x.
     pub fd_step: f64,
     pub threads: usize,
+    /// Give up with [`Error::TimeBudget`] when an iteration would begin after this instant.
+    pub deadline: Option<Instant>,
 }
 
 impl Default for Options {
@@ -34,6 +38,7 @@ impl Default for Options {
             xtol: 1e-8,
             fd_step: 1e-6,
             threads: std::thread::available_parallelism().map_or(1, |n| n.get()),
+            deadline: None,
         }
     }
 }
@@ -147,6 +152,14 @@ pub fn jacobian_central(
     })
 }
 
+/// [`Error::TimeBudget`] once `deadline` has passed.
+pub fn check_deadline(deadline: Option<Instant>) -> Result<(), Error> {
+    match deadline {
+        Some(d) if Instant::now() > d => Err(Error::TimeBudget),
+        _ => Ok(()),
+    }
+}
+
 /// Minimises ½‖r(x)‖² over lo ≤ x ≤ hi from `x0`.
 pub fn minimize(
     p: &impl Residuals,
@@ -166,6 +179,7 @@ pub fn minimize(
     let mut jac = jacobian(p, &x, &r, lo, hi, opts)?;
     evaluations += n;
     while iterations < opts.max_iterations && !converged {
+        check_deadline(opts.deadline)?;
         iterations += 1;
         let a = jac.transpose() * &jac;
         let g = jac.transpose() * &r;

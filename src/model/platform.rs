@@ -284,6 +284,14 @@ impl Platform {
         }
     }
 
+    /// Whether `other` maps states to outputs as this model does (the same heights
+    /// h_i = ½ Lv sin θ_i and the same kinematics), so that only the states tell their outputs
+    /// apart.
+    pub fn same_output_map(&self, other: &Platform) -> bool {
+        self.kinematics == other.kinematics
+            && (0..3).all(|i| self.actuators[i].height(1.0) == other.actuators[i].height(1.0))
+    }
+
     /// ∂y/∂U of [`Platform::outputs`], row-major 6 × 3: zero, the outputs depend on the states
     /// only (no direct feedthrough).
     pub fn output_input_jacobian(&self) -> [[f64; 3]; 6] {

@@ -2,10 +2,12 @@
 //! FMU, identification and diagnosis all run the model through this one door.
 
 pub mod input;
+pub mod sensitivity;
 
 use serde::{Deserialize, Serialize};
 
 use crate::model::{ModelError, Platform};
+use crate::solver::sensitivity::SensitivityError;
 use crate::solver::{OdeSystem, Radau5, RhsError, SolverError, Stats, Tolerances};
 pub use input::{Input, InputError, Interpolation, Piece, Tone};
 
@@ -48,6 +50,8 @@ pub enum SimError {
     Solver(SolverError),
     /// A setting is out of range (named, with its value).
     Setting(String),
+    /// The sensitivities could not follow the solution (`sensitivity`).
+    Sensitivity(SensitivityError),
 }
 
 impl std::fmt::Display for SimError {
@@ -56,6 +60,7 @@ impl std::fmt::Display for SimError {
             SimError::Model(e) => write!(f, "{e}"),
             SimError::Solver(e) => write!(f, "solver: {e}"),
             SimError::Setting(s) => f.write_str(s),
+            SimError::Sensitivity(e) => write!(f, "{e}"),
         }
     }
 }
@@ -117,6 +122,14 @@ impl OdeSystem for Driven<'_> {
     fn jacobian_blocks(&self) -> Vec<usize> {
         self.model.jacobian_blocks()
     }
+}
+
+/// What a run tells besides its samples (`Simulator::run_observed`).
+trait Observer {
+    /// After every accepted step, with the system that made it.
+    fn stepped(&mut self, solver: &Radau5, sys: &Driven<'_>) -> Result<(), SimError>;
+    /// At every output time, with the state there.
+    fn sampled(&mut self, sample: &Sample, x: &[f64]);
 }
 
 /// The outputs at one instant: heights h_i and the antenna tip [m].
@@ -403,7 +416,28 @@ impl Simulator {
         &mut self,
         input: &Input,
         times: &[f64],
-        mut on_sample: impl FnMut(&Sample),
+        on_sample: impl FnMut(&Sample),
+    ) -> Result<(), SimError> {
+        /// Samples only.
+        struct Samples<F>(F);
+        impl<F: FnMut(&Sample)> Observer for Samples<F> {
+            fn stepped(&mut self, _: &Radau5, _: &Driven<'_>) -> Result<(), SimError> {
+                Ok(())
+            }
+            fn sampled(&mut self, sample: &Sample, _: &[f64]) {
+                (self.0)(sample)
+            }
+        }
+        self.run_observed(input, times, &mut Samples(on_sample))
+    }
+
+    /// [`Simulator::run_at`], telling `observer` of every accepted step and of the state at
+    /// every output time.
+    fn run_observed(
+        &mut self,
+        input: &Input,
+        times: &[f64],
+        observer: &mut impl Observer,
     ) -> Result<(), SimError> {
         let Some(&t_end) = times.last() else {
             return Ok(());
@@ -435,18 +469,20 @@ impl Simulator {
             loop {
                 while k < times.len() && times[k] <= self.t() {
                     self.solver.interpolate(times[k], &mut x);
-                    on_sample(&Sample {
+                    let sample = Sample {
                         t: times[k],
                         u: input.value(times[k]),
                         h: self.model.heights(&x),
                         tip: self.model.tip(&x),
-                    });
+                    };
+                    observer.sampled(&sample, &x);
                     k += 1;
                 }
                 if self.t() >= seg_end {
                     break;
                 }
                 self.solver.step(&sys, seg_end)?;
+                observer.stepped(&self.solver, &sys)?;
             }
             if k == times.len() {
                 return Ok(());

@@ -8,6 +8,7 @@
 
 pub mod lu;
 pub mod radau5;
+pub mod sensitivity;
 
 pub use radau5::Radau5;
 

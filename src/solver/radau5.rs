@@ -14,11 +14,26 @@ use super::{OdeSystem, SolverError, Stats, Tolerances, lu};
 
 const SQRT6: f64 = 2.449_489_742_783_178;
 /// Collocation nodes c1, c2 (c3 = 1).
-const C1: f64 = (4.0 - SQRT6) / 10.0;
-const C2: f64 = (4.0 + SQRT6) / 10.0;
-const C1M1: f64 = C1 - 1.0;
-const C2M1: f64 = C2 - 1.0;
-const C1MC2: f64 = C1 - C2;
+pub(super) const C1: f64 = (4.0 - SQRT6) / 10.0;
+pub(super) const C2: f64 = (4.0 + SQRT6) / 10.0;
+pub(super) const C1M1: f64 = C1 - 1.0;
+pub(super) const C2M1: f64 = C2 - 1.0;
+pub(super) const C1MC2: f64 = C1 - C2;
+/// The coefficients a_kl (Hairer & Wanner IV.5, Table 5.6); the iteration uses their
+/// transformed inverse (T, TI and the eigenvalues below), the sensitivities the matrix itself.
+pub(super) const A: [[f64; 3]; 3] = [
+    [
+        (88.0 - 7.0 * SQRT6) / 360.0,
+        (296.0 - 169.0 * SQRT6) / 1800.0,
+        (-2.0 + 3.0 * SQRT6) / 225.0,
+    ],
+    [
+        (296.0 + 169.0 * SQRT6) / 1800.0,
+        (88.0 + 7.0 * SQRT6) / 360.0,
+        (-2.0 - 3.0 * SQRT6) / 225.0,
+    ],
+    [(16.0 - SQRT6) / 36.0, (16.0 + SQRT6) / 36.0, 1.0 / 9.0],
+];
 /// Error-estimate weights (Hairer & Wanner IV.8.20, scaled by 1/γ0).
 const DD: [f64; 3] = [
     -(13.0 + 7.0 * SQRT6) / 3.0,
@@ -142,6 +157,19 @@ pub struct Radau5 {
     stats: Stats,
     /// The system jumped at the current point: filter the next error estimate twice.
     after_jump: bool,
+}
+
+/// What [`Radau5::last_step`] shows of the last accepted step [t_old, t_old + h].
+pub(super) struct LastStep<'a> {
+    pub(super) t_old: f64,
+    pub(super) h: f64,
+    /// The state at its end, y(t_old) + Z3.
+    pub(super) y: &'a [f64],
+    /// Stage increments Z_k = Y_k − y(t_old), stage k at [k n, (k + 1) n).
+    pub(super) z: &'a [f64],
+    /// Sizes of the diagonal blocks of J.
+    pub(super) blocks: &'a [usize],
+    pub(super) n: usize,
 }
 
 enum Newton {
@@ -605,6 +633,21 @@ impl Radau5 {
         (sum / self.n as f64).sqrt().max(1e-10)
     }
 
+    /// The last accepted step, for quantities integrated alongside the state
+    /// (`super::sensitivity`): read right after [`Radau5::step`] returns, while its stage
+    /// increments are still in place.
+    pub(super) fn last_step(&self) -> LastStep<'_> {
+        let n = self.n;
+        LastStep {
+            t_old: self.t_old,
+            h: self.h_old,
+            y: &self.y,
+            z: &self.z,
+            blocks: &self.blocks,
+            n,
+        }
+    }
+
     /// Commits the step: y ← y + Z3, the dense-output polynomial, f0 (already in err_vec).
     fn accept(&mut self, h: f64, t_new: f64) {
         let n = self.n;
@@ -636,17 +679,7 @@ mod tests {
 
     #[test]
     fn transformation_diagonalises_the_inverse_butcher_matrix() {
-        let a = Matrix3::new(
-            (88.0 - 7.0 * SQRT6) / 360.0,
-            (296.0 - 169.0 * SQRT6) / 1800.0,
-            (-2.0 + 3.0 * SQRT6) / 225.0,
-            (296.0 + 169.0 * SQRT6) / 1800.0,
-            (88.0 + 7.0 * SQRT6) / 360.0,
-            (-2.0 - 3.0 * SQRT6) / 225.0,
-            (16.0 - SQRT6) / 36.0,
-            (16.0 + SQRT6) / 36.0,
-            1.0 / 9.0,
-        );
+        let a = Matrix3::from_fn(|r, c| A[r][c]);
         let t = Matrix3::from_fn(|r, c| T[r][c]);
         let ti = Matrix3::from_fn(|r, c| TI[r][c]);
         let (g, al, be) = eigenvalues();

@@ -29,6 +29,10 @@ pub struct Args {
     /// Candidates refitted in each round (the best screening scores)
     #[arg(long, default_value_t = 3)]
     refits: usize,
+    /// Seconds one candidate's refit may take; a refit that runs out of time fails the
+    /// candidate (reported)
+    #[arg(long, value_name = "SECONDS", default_value_t = diagnose::REFIT_BUDGET_S as f64)]
+    refit_budget: f64,
 }
 
 pub fn run(a: Args) -> Result<(), Error> {
@@ -44,9 +48,13 @@ pub fn run(a: Args) -> Result<(), Error> {
             "at least one candidate must be refitted",
         ));
     }
+    if !(a.refit_budget.is_finite() && a.refit_budget > 0.0) {
+        return Err(Error::flag("refit-budget", a.refit_budget, "must be > 0 s"));
+    }
     let opts = Options {
         refits: a.refits,
         base_range: a.base_range,
+        refit_budget: std::time::Duration::from_secs_f64(a.refit_budget),
         ..Options::default()
     };
     let d = diagnose::diagnose(&start, experiments, &opts)?;
