@@ -17,7 +17,7 @@ use std::ptr::{null, null_mut};
 
 use arbitrary::Arbitrary;
 use common::{Len, Real, Vr, Who, damage};
-use hasel_fmu::fmu::pack::FmiVersion;
+use hasel_fmu::fmu::pack::{FmiVersion, platform};
 use hasel_fmu::fmu::variables::{Slot, rows};
 use hasel_fmu::model::Params;
 use libfuzzer_sys::fuzz_target;
@@ -32,8 +32,12 @@ type LogMessage = unsafe extern "C" fn(*mut c_void, Status, *const c_char, *cons
 // The functions of fmi3Functions.h that this model's FMU serves or refuses.
 unsafe extern "C" {
     fn fmi3GetVersion() -> *const c_char;
-    fn fmi3SetDebugLogging(c: Instance, on: bool, n: usize, categories: *const *const c_char)
-    -> Status;
+    fn fmi3SetDebugLogging(
+        c: Instance,
+        on: bool,
+        n: usize,
+        categories: *const *const c_char,
+    ) -> Status;
     fn fmi3InstantiateModelExchange(
         name: *const c_char,
         token: *const c_char,
@@ -71,13 +75,11 @@ unsafe extern "C" {
     fn fmi3Terminate(c: Instance) -> Status;
     fn fmi3Reset(c: Instance) -> Status;
     fn fmi3GetFloat64(c: Instance, vr: *const u32, nvr: usize, v: *mut f64, nv: usize) -> Status;
-    fn fmi3SetFloat64(c: Instance, vr: *const u32, nvr: usize, v: *const f64, nv: usize)
-    -> Status;
+    fn fmi3SetFloat64(c: Instance, vr: *const u32, nvr: usize, v: *const f64, nv: usize) -> Status;
     fn fmi3GetFloat32(c: Instance, vr: *const u32, nvr: usize, v: *mut f32, nv: usize) -> Status;
     fn fmi3GetInt32(c: Instance, vr: *const u32, nvr: usize, v: *mut i32, nv: usize) -> Status;
     fn fmi3GetUInt64(c: Instance, vr: *const u32, nvr: usize, v: *mut u64, nv: usize) -> Status;
-    fn fmi3GetBoolean(c: Instance, vr: *const u32, nvr: usize, v: *mut bool, nv: usize)
-    -> Status;
+    fn fmi3GetBoolean(c: Instance, vr: *const u32, nvr: usize, v: *mut bool, nv: usize) -> Status;
     fn fmi3GetString(
         c: Instance,
         vr: *const u32,
@@ -100,8 +102,12 @@ unsafe extern "C" {
     fn fmi3FreeFMUState(c: Instance, s: *mut FmuState) -> Status;
     fn fmi3SerializedFMUStateSize(c: Instance, s: FmuState, size: *mut usize) -> Status;
     fn fmi3SerializeFMUState(c: Instance, s: FmuState, bytes: *mut u8, size: usize) -> Status;
-    fn fmi3DeserializeFMUState(c: Instance, bytes: *const u8, size: usize, s: *mut FmuState)
-    -> Status;
+    fn fmi3DeserializeFMUState(
+        c: Instance,
+        bytes: *const u8,
+        size: usize,
+        s: *mut FmuState,
+    ) -> Status;
     fn fmi3GetDirectionalDerivative(
         c: Instance,
         unknowns: *const u32,
@@ -330,7 +336,7 @@ impl World {
             time: [0.0; 2],
             states: [null_mut(); STATE_SLOTS],
             owner: [0; STATE_SLOTS],
-            token: CString::new(FmiVersion::V3.token(&Params::default())).unwrap(),
+            token: CString::new(FmiVersion::V3.token(&platform(&Params::default()))).unwrap(),
             states_expected: rows()
                 .iter()
                 .filter(|r| matches!(r.slot, Slot::State { .. }))
@@ -377,34 +383,23 @@ impl World {
         self.time[i] = 0.0;
     }
 
-    fn new_instance(&self, model_exchange: bool, token: &CStr, resources: *const c_char) -> Instance {
+    /// A Co-Simulation instance of this FMU, quiet: for freeing states whose owner is gone.
+    fn cleanup_instance(&self) -> Instance {
         unsafe {
-            if model_exchange {
-                fmi3InstantiateModelExchange(
-                    c"fuzz".as_ptr(),
-                    token.as_ptr(),
-                    resources,
-                    false,
-                    true,
-                    null_mut(),
-                    Some(log_message),
-                )
-            } else {
-                fmi3InstantiateCoSimulation(
-                    c"fuzz".as_ptr(),
-                    token.as_ptr(),
-                    resources,
-                    false,
-                    true,
-                    false,
-                    false,
-                    null(),
-                    0,
-                    null_mut(),
-                    Some(log_message),
-                    null(),
-                )
-            }
+            fmi3InstantiateCoSimulation(
+                c"cleanup".as_ptr(),
+                self.token.as_ptr(),
+                null(),
+                false,
+                false,
+                false,
+                false,
+                null(),
+                0,
+                null_mut(),
+                None,
+                null(),
+            )
         }
     }
 
@@ -428,10 +423,22 @@ impl World {
                     2 => c"not a path",
                     _ => c"/tmp/",
                 };
-                let resources = if resources.is_empty() { null() } else { resources.as_ptr() };
-                let token = if wrong_token { c"{0}" } else { self.token.as_c_str() };
+                let resources = if resources.is_empty() {
+                    null()
+                } else {
+                    resources.as_ptr()
+                };
+                let token = if wrong_token {
+                    c"{0}"
+                } else {
+                    self.token.as_c_str()
+                };
                 let name = if null_name { null() } else { c"fuzz".as_ptr() };
-                let log = if no_logger { None } else { Some(log_message as LogMessage) };
+                let log = if no_logger {
+                    None
+                } else {
+                    Some(log_message as LogMessage)
+                };
                 self.instances[i] = unsafe {
                     if model_exchange {
                         fmi3InstantiateModelExchange(
@@ -531,7 +538,11 @@ impl World {
                 let vrs: Vec<u32> = vrs.iter().map(|v| v.get()).collect();
                 let n = self.len(values, vrs.len());
                 let mut out = vec![0.0; n];
-                let p = if null_ptr { null_mut() } else { out.as_mut_ptr() };
+                let p = if null_ptr {
+                    null_mut()
+                } else {
+                    out.as_mut_ptr()
+                };
                 unsafe { fmi3GetFloat64(self.instance(who), vrs.as_ptr(), vrs.len(), p, n) };
             }
             Call::SetFloat64 {
@@ -730,7 +741,11 @@ impl World {
                 null_ptr,
             } => {
                 let c = self.instance(who);
-                let right = if kind % 4 == 2 { 0 } else { self.states_expected };
+                let right = if kind % 4 == 2 {
+                    0
+                } else {
+                    self.states_expected
+                };
                 let n = self.len(len, right);
                 let mut v = vec![0.0; n];
                 let p = if null_ptr { null_mut() } else { v.as_mut_ptr() };
@@ -749,7 +764,11 @@ impl World {
                 null_ptr,
             } => {
                 let mut n = 0usize;
-                let p = if null_ptr { null_mut() } else { &mut n as *mut usize };
+                let p = if null_ptr {
+                    null_mut()
+                } else {
+                    &mut n as *mut usize
+                };
                 unsafe {
                     if states {
                         fmi3GetNumberOfContinuousStates(self.instance(who), p)
@@ -855,7 +874,7 @@ impl World {
         }
         for k in 0..STATE_SLOTS {
             if !self.states[k].is_null() {
-                let c = self.new_instance(false, &self.token, null());
+                let c = self.cleanup_instance();
                 unsafe {
                     fmi3FreeFMUState(c, &mut self.states[k]);
                     fmi3FreeInstance(c);
