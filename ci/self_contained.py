@@ -1,14 +1,15 @@
 #!/usr/bin/env python3
 """Fails when a tracked file of the repository refers to a path outside it.
 
-A user has the clone and nothing beside it, so no file may read or name a sibling folder such as
-../shared or a path of the build machine. Checked in every tracked text file:
+A user has the clone and nothing beside it, so no file may read or name a sibling folder or a path
+of the build machine. Checked in every tracked text file:
 
-- the names of the original hand-over folder (`../shared`, `shared/data`, `shared/spec`) and a
-  path built to it (`.parent / "shared"`);
+- a path built on the parent of the repository's root (`ROOT.parent / "x"`,
+  `os.path.dirname(REPO)`, `CARGO_MANIFEST_DIR` then `.parent()`) or a `".."` joined as a
+  component (`join("..")`, `/ ".."`): the checker names no folder, it catches every way out;
 - relative paths that climb out: every `../…` is resolved against the file's own folder and against
-  the repository's root (where scripts and tests run), and must land inside the repository under
-  one of the two;
+  the repository's root (where scripts and tests run), and must land inside the repository, on a
+  folder or file it has, under one of the two;
 - a path glued onto the crate's root that climbs out (`CARGO_MANIFEST_DIR` followed by "/..");
 - absolute paths into home or work folders of a machine (`/work/`, `/home/`, `/root/`, `/tmp/…`
   is allowed: scratch space of the running process).
@@ -21,7 +22,14 @@ import re
 import subprocess
 import sys
 
-NAMED = re.compile(r"\.\./shared|shared/data|shared/spec|parent\s*/\s*[\"']shared[\"']")
+# the repository's root as scripts and tests name it (ROOT, REPO, repo_root, …), then its parent
+ROOT_PARENT = re.compile(
+    r"\b\w*(?:root|repo)\w*\s*\.parent\b"
+    r"|dirname\(\s*\w*(?:root|repo)\w*\s*\)"
+    r"|CARGO_MANIFEST_DIR.*\.parent\(\)",
+    re.IGNORECASE,
+)
+DOTDOT_COMPONENT = re.compile(r"(?:join\(|/)\s*[\"']\.\.[\"']")
 CLIMB = re.compile(r"(?<![\w.])((?:\.\./)+)([\w.\-/]*)")
 MANIFEST_CLIMB = re.compile(r"CARGO_MANIFEST_DIR[\"')\s,]*[\"']/\.\.")
 ABSOLUTE = re.compile(r"(?<![\w.~])/(?:work|home|root)/[\w.\-]")
@@ -55,16 +63,21 @@ def findings(repo):
         folder = os.path.dirname(os.path.join(os.path.realpath(repo), rel))
         for no, line in enumerate(text.splitlines(), 1):
             why = []
-            if NAMED.search(line):
-                why.append("names the hand-over folder outside the repository")
+            if ROOT_PARENT.search(line):
+                why.append("a path built on the parent of the repository's root")
+            if DOTDOT_COMPONENT.search(line):
+                why.append("joins '..' as a path component")
             if MANIFEST_CLIMB.search(line):
                 why.append("climbs out of the crate's root")
             if ABSOLUTE.search(line):
                 why.append("an absolute path of a machine")
             for m in CLIMB.finditer(line):
                 target = m.group(1) + m.group(2)
+                # inside and there: a climb that lands on nothing of the repository is taken
+                # to mean the folder beside it
                 if not any(
                     inside(repo, os.path.join(base, target))
+                    and os.path.exists(os.path.join(base, m.group(1) + m.group(2).split("/")[0]))
                     for base in (folder, os.path.realpath(repo))
                 ):
                     why.append(f"'{target}' leads outside the repository")

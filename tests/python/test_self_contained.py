@@ -34,8 +34,11 @@ def test_every_kind_of_outside_reference_is_found(tmp_path):
     repo = make_repo(
         tmp_path,
         {
-            "tests/a.rs": 'let p = root.join("../shared/data/reference");\n',
-            "tests/b.py": 'REF = ROOT.parent / "shared" / "data"\n',
+            "tests/a.rs": 'let p = root.join("../handover/data/reference");\n',
+            "tests/b.py": 'REF = ROOT.parent / "handover" / "data"\n',
+            "tests/f.py": 'REF = os.path.join(os.path.dirname(repo_root), "handover")\n',
+            "tests/g.rs": 'Path::new(env!("CARGO_MANIFEST_DIR")).parent().unwrap().join("x")\n',
+            "tests/h.py": 'REF = HERE / ".." / ".." / ".." / "handover"\n',
             "src/c.rs": 'default_value = concat!(env!("CARGO_MANIFEST_DIR"), "/../elsewhere")\n',
             "src/d.rs": 'include_str!("../../../outside.csv")\n',
             "ci/e.sh": "cp /work/main/x y\n",
@@ -43,7 +46,8 @@ def test_every_kind_of_outside_reference_is_found(tmp_path):
     )
     result = run_check(repo)
     assert result.returncode == 1
-    for where in ["tests/a.rs:1", "tests/b.py:1", "src/c.rs:1", "src/d.rs:1", "ci/e.sh:1"]:
+    for where in ["tests/a.rs:1", "tests/b.py:1", "src/c.rs:1", "src/d.rs:1", "ci/e.sh:1",
+                  "tests/f.py:1", "tests/g.rs:1", "tests/h.py:1"]:
         assert where in result.stdout, (where, result.stdout)
 
 
@@ -56,6 +60,7 @@ def test_paths_that_stay_inside_are_accepted(tmp_path):
             "tests/data/README.md": "[model](../../src/model.md)\n",
             "src/model.md": "# model\n",
             "ci/run.sh": "python ci/demo.py --out /tmp/x.png\n",
+            "tests/conftest.py": 'DATA = pathlib.Path(__file__).parent / "data"\n',
         },
     )
     result = run_check(repo)
