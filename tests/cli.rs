@@ -1,33 +1,13 @@
 //! The `hasel` command line: outputs on success, and errors that name the file, line and
 //! column with nothing written on failure.
 
-use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+mod common;
 
+use std::path::Path;
+
+use common::{hasel, s, scratch, stderr};
 use hasel_fmu::io::csv::Table;
 use hasel_fmu::model::{Params, Platform};
-
-fn hasel(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_hasel"))
-        .args(args)
-        .output()
-        .expect("hasel runs")
-}
-
-fn scratch(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("hasel-cli-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
-}
-
-fn stderr(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stderr).into_owned()
-}
-
-fn s(p: &Path) -> &str {
-    p.to_str().unwrap()
-}
 
 #[test]
 fn simulate_writes_the_trajectory_and_the_figure() {

@@ -3,8 +3,11 @@
 //! nonlinear simulation, the port-Hamiltonian decomposition and passivity, the reduced model,
 //! and `hasel linearize`.
 
-use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+mod common;
+
+use std::path::Path;
+
+use common::{hasel, s, scratch};
 
 use hasel_fmu::control::frequency::{self, Evaluator, log_grid};
 use hasel_fmu::control::linearize::Point;
@@ -435,23 +438,6 @@ fn bad_voltages_are_refused() {
 
 // ----- the command line -----
 
-fn hasel(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_hasel"))
-        .args(args)
-        .output()
-        .expect("hasel runs")
-}
-
-fn scratch(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("hasel-control-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    dir
-}
-
-fn s(p: &Path) -> &str {
-    p.to_str().unwrap()
-}
-
 /// A CSV matrix as written for numpy's loadtxt(delimiter=",") and MATLAB's readmatrix: plain
 /// numbers, no header, every row the same length.
 fn read_csv(path: &Path) -> Vec<Vec<f64>> {
@@ -572,7 +558,7 @@ fn cli_bad_voltages_are_named_and_nothing_is_written() {
         ("60,nan,0", "U2 = NaN: must be a finite number"),
         ("1e400,0,0", "U1 = inf: must be a finite number"),
     ] {
-        let dir = scratch("bad");
+        let dir = scratch("bad").join("out");
         let o = hasel(&["linearize", "--u", u, "--out", s(&dir)]);
         let err = String::from_utf8_lossy(&o.stderr);
         assert!(!o.status.success(), "{u}");

@@ -2,26 +2,12 @@
 //! bands and draws whatever the number of threads; a bad identification file is named with what
 //! is wrong, and nothing is written.
 
+mod common;
+
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+use std::process::Output;
 
-fn hasel(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_hasel"))
-        .args(args)
-        .output()
-        .expect("hasel runs")
-}
-
-fn scratch(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("hasel-unc-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
-}
-
-fn s(p: &Path) -> &str {
-    p.to_str().unwrap()
-}
+use common::{hasel, s, scratch};
 
 fn ok(o: Output) -> String {
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
