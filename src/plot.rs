@@ -114,12 +114,7 @@ pub fn draw_with_bands(
     columns: usize,
     (width, height): (u32, u32),
 ) -> Result<(), FileError> {
-    register_font();
-    let fail = |e: String| FileError::new(path, format!("cannot draw the figure: {e}"));
-    let tmp = path.with_extension("tmp.png");
-    {
-        let root = BitMapBackend::new(&tmp, (width, height)).into_drawing_area();
-        root.fill(&WHITE).map_err(|e| fail(e.to_string()))?;
+    to_png(path, (width, height), |root| {
         let rows = panels.len().div_ceil(columns);
         let areas = root.split_evenly((rows, columns));
         for (k, (panel, area)) in panels.iter().zip(areas.iter()).enumerate() {
@@ -131,7 +126,7 @@ pub fn draw_with_bands(
                 .x_label_area_size(42)
                 .y_label_area_size(70)
                 .build_cartesian_2d(x0..x1, y0..y1)
-                .map_err(|e| fail(e.to_string()))?;
+                .map_err(|e| e.to_string())?;
             chart
                 .configure_mesh()
                 .x_desc(panel.x_label.as_str())
@@ -140,7 +135,7 @@ pub fn draw_with_bands(
                 .axis_desc_style(("sans-serif", 16))
                 .light_line_style(RGBColor(235, 235, 235))
                 .draw()
-                .map_err(|e| fail(e.to_string()))?;
+                .map_err(|e| e.to_string())?;
             for b in panel_bands {
                 let color = PALETTE[b.color % PALETTE.len()];
                 let finite = |&&(x, lo, hi): &&(f64, f64, f64)| {
@@ -164,7 +159,7 @@ pub fn draw_with_bands(
                         outline,
                         color.mix(0.25).filled(),
                     )))
-                    .map_err(|e| fail(e.to_string()))?
+                    .map_err(|e| e.to_string())?
                     .label(b.label.as_str())
                     .legend(move |(x, y)| {
                         Rectangle::new([(x, y - 5), (x + 18, y + 5)], color.mix(0.25).filled())
@@ -182,23 +177,54 @@ pub fn draw_with_bands(
                 } else {
                     chart.draw_series(LineSeries::new(pts, color.stroke_width(2)))
                 }
-                .map_err(|e| fail(e.to_string()))?;
+                .map_err(|e| e.to_string())?;
                 drawn.label(s.label.as_str()).legend(move |(x, y)| {
                     PathElement::new(vec![(x, y), (x + 18, y)], color.stroke_width(3))
                 });
             }
-            chart
-                .configure_series_labels()
-                .label_font(("sans-serif", 14))
-                .background_style(WHITE.mix(0.85))
-                .border_style(BLACK)
-                .draw()
-                .map_err(|e| fail(e.to_string()))?;
+            legend(&mut chart, 14)?;
         }
-        root.present().map_err(|e| fail(e.to_string()))?;
-    }
-    std::fs::rename(&tmp, path).map_err(|e| {
-        let _ = std::fs::remove_file(&tmp);
-        fail(e.to_string())
+        Ok(())
     })
+}
+
+/// Draws into the PNG `path` of `size` pixels on a white ground through `draw`, by way of a
+/// temporary file beside it: a failed drawing leaves no figure, a finished one replaces the old
+/// one whole.
+pub(crate) fn to_png(
+    path: &Path,
+    size: (u32, u32),
+    draw: impl FnOnce(&DrawingArea<BitMapBackend, plotters::coord::Shift>) -> Result<(), String>,
+) -> Result<(), FileError> {
+    register_font();
+    let fail = |e: String| FileError::new(path, format!("cannot draw the figure: {e}"));
+    let tmp = path.with_extension("tmp.png");
+    let drawn = (|| {
+        let root = BitMapBackend::new(&tmp, size).into_drawing_area();
+        root.fill(&WHITE).map_err(|e| e.to_string())?;
+        draw(&root)?;
+        root.present().map_err(|e| e.to_string())
+    })();
+    if let Err(e) = drawn.and_then(|()| std::fs::rename(&tmp, path).map_err(|e| e.to_string())) {
+        let _ = std::fs::remove_file(&tmp);
+        return Err(fail(e));
+    }
+    Ok(())
+}
+
+/// The series' legend box in the upper right corner, its text of `font_size` pixels.
+pub(crate) fn legend<'a, DB: DrawingBackend + 'a, CT: CoordTranslate>(
+    chart: &mut ChartContext<'a, DB, CT>,
+    font_size: u32,
+) -> Result<(), String>
+where
+    DB::ErrorType: 'static,
+{
+    chart
+        .configure_series_labels()
+        .label_font(("sans-serif", font_size))
+        .background_style(WHITE.mix(0.85))
+        .border_style(BLACK)
+        .draw()
+        .map_err(|e| e.to_string())
 }

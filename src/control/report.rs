@@ -407,9 +407,6 @@ fn unwrap_phase(g: &[Complex<f64>]) -> Vec<f64> {
 /// `bode.png`: magnitude (dB re 1 um/V) and phase from each voltage to the heights and to the
 /// tip, on a logarithmic frequency axis, with the poles marked by class.
 pub fn draw_bode(path: &Path, b: &Bode) -> Result<(), FileError> {
-    plot::register_font();
-    let fail = |e: String| FileError::new(path, format!("cannot draw the figure: {e}"));
-    let tmp = path.with_extension("tmp.png");
     let peak =
         b.g.iter()
             .flat_map(|g| g.iter().map(|z| z.norm()))
@@ -449,9 +446,7 @@ pub fn draw_bode(path: &Path, b: &Bode) -> Result<(), FileError> {
         ),
     ];
     let (f0, f1) = (b.freqs[0], b.freqs[b.freqs.len() - 1]);
-    {
-        let root = BitMapBackend::new(&tmp, (1600, 1500)).into_drawing_area();
-        root.fill(&WHITE).map_err(|e| fail(e.to_string()))?;
+    plot::to_png(path, (1600, 1500), |root| {
         let areas = root.split_evenly((3, 2));
         for (row, (title, channels)) in groups.iter().enumerate() {
             // channels without gain are left out: an actuator at U0 = 0 (its force goes with
@@ -505,7 +500,7 @@ pub fn draw_bode(path: &Path, b: &Bode) -> Result<(), FileError> {
                     .x_label_area_size(42)
                     .y_label_area_size(70)
                     .build_cartesian_2d((f0..f1).log_scale(), lo..hi)
-                    .map_err(|e| fail(e.to_string()))?;
+                    .map_err(|e| e.to_string())?;
                 chart
                     .configure_mesh()
                     .x_desc("frequency [Hz]")
@@ -515,7 +510,7 @@ pub fn draw_bode(path: &Path, b: &Bode) -> Result<(), FileError> {
                     .axis_desc_style(("sans-serif", 16))
                     .light_line_style(RGBColor(235, 235, 235))
                     .draw()
-                    .map_err(|e| fail(e.to_string()))?;
+                    .map_err(|e| e.to_string())?;
                 // the poles, one dashed line each, one legend entry per class
                 for (class, color) in [
                     ("electrical", RGBColor(0, 0, 0)),
@@ -535,7 +530,7 @@ pub fn draw_bode(path: &Path, b: &Bode) -> Result<(), FileError> {
                                 4,
                                 color.stroke_width(1),
                             ))
-                            .map_err(|e| fail(e.to_string()))?;
+                            .map_err(|e| e.to_string())?;
                         if first && col == 0 {
                             s.label(format!("{class} poles")).legend(move |(x, y)| {
                                 PathElement::new(vec![(x, y), (x + 18, y)], color.stroke_width(2))
@@ -554,26 +549,16 @@ pub fn draw_bode(path: &Path, b: &Bode) -> Result<(), FileError> {
                         .map(|(f, y)| (*f, *y));
                     chart
                         .draw_series(LineSeries::new(pts, color.stroke_width(2)))
-                        .map_err(|e| fail(e.to_string()))?
+                        .map_err(|e| e.to_string())?
                         .label(c.label.as_str())
                         .legend(move |(x, y)| {
                             PathElement::new(vec![(x, y), (x + 18, y)], color.stroke_width(3))
                         });
                 }
-                chart
-                    .configure_series_labels()
-                    .label_font(("sans-serif", 13))
-                    .background_style(WHITE.mix(0.85))
-                    .border_style(BLACK)
-                    .draw()
-                    .map_err(|e| fail(e.to_string()))?;
+                plot::legend(&mut chart, 13)?;
             }
         }
-        root.present().map_err(|e| fail(e.to_string()))?;
-    }
-    std::fs::rename(&tmp, path).map_err(|e| {
-        let _ = std::fs::remove_file(&tmp);
-        fail(e.to_string())
+        Ok(())
     })
 }
 
