@@ -31,6 +31,7 @@ higher gains (3x) make the lightly damped actuator 2 oscillate at the step rate.
 import argparse
 import math
 import pathlib
+import tempfile
 
 import matplotlib
 
@@ -91,33 +92,35 @@ def run_circle(fmu_path, make_controller, t_end, name="controlled"):
     md = read_model_description(fmu_path)
     vr = {v.name: v.valueReference for v in md.modelVariables}
     refs = lambda *names: [vr[n] for n in names]  # noqa: E731
-    fmu = FMU2Slave(guid=md.guid, unzipDirectory=extract(fmu_path),
-                    modelIdentifier=md.coSimulation.modelIdentifier, instanceName=name)
-    fmu.instantiate()
-    fmu.setupExperiment(startTime=0.0)
-    fmu.enterInitializationMode()
-    get = lambda *names: np.array(fmu.getReal(refs(*names)))  # noqa: E731
-    r, L = get("anchor_radius", "L")
-    reference = CircleHeights(r, L, get("anchor_angle_1", "anchor_angle_2", "anchor_angle_3"))
-    controller = make_controller(reference, get)
-    fmu.exitInitializationMode()
+    # the unpacked FMU goes when the run ends, whatever the end
+    with tempfile.TemporaryDirectory(prefix="hasel-fmu-") as unzipdir:
+        fmu = FMU2Slave(guid=md.guid, unzipDirectory=extract(fmu_path, unzipdir=unzipdir),
+                        modelIdentifier=md.coSimulation.modelIdentifier, instanceName=name)
+        fmu.instantiate()
+        fmu.setupExperiment(startTime=0.0)
+        fmu.enterInitializationMode()
+        get = lambda *names: np.array(fmu.getReal(refs(*names)))  # noqa: E731
+        r, L = get("anchor_radius", "L")
+        reference = CircleHeights(r, L, get("anchor_angle_1", "anchor_angle_2", "anchor_angle_3"))
+        controller = make_controller(reference, get)
+        fmu.exitInitializationMode()
 
-    centre = None
-    log = []  # t, reference x y, tip x y, U1..U3
-    t = 0.0
-    for _ in range(round(t_end / STEP)):
-        h = get("h1", "h2", "h3")
-        if centre is None and t >= T_SETTLE - STEP / 2:
-            centre = get("tip_x", "tip_y")  # the tip at the operating point
-        u = controller(t, h)
-        fmu.setReal(refs("U1", "U2", "U3"), list(u))
-        fmu.doStep(currentCommunicationPoint=t, communicationStepSize=STEP)
-        t += STEP
-        if centre is not None:  # the tip at the end of the step against the reference then
-            log.append([t, *(centre + circle(t - T_SETTLE)), *get("tip_x", "tip_y"), *u])
-    fmu.terminate()
-    fmu.freeInstance()
-    return np.array(log), centre
+        centre = None
+        log = []  # t, reference x y, tip x y, U1..U3
+        t = 0.0
+        for _ in range(round(t_end / STEP)):
+            h = get("h1", "h2", "h3")
+            if centre is None and t >= T_SETTLE - STEP / 2:
+                centre = get("tip_x", "tip_y")  # the tip at the operating point
+            u = controller(t, h)
+            fmu.setReal(refs("U1", "U2", "U3"), list(u))
+            fmu.doStep(currentCommunicationPoint=t, communicationStepSize=STEP)
+            t += STEP
+            if centre is not None:  # the tip at the end of the step against the reference then
+                log.append([t, *(centre + circle(t - T_SETTLE)), *get("tip_x", "tip_y"), *u])
+        fmu.terminate()
+        fmu.freeInstance()
+        return np.array(log), centre
 
 
 def tracking_error(log):

@@ -170,13 +170,13 @@ def started(unzipdir, md, fmi_type, start_values):
 
 
 @pytest.mark.parametrize("effects", [False, True], ids=["paper", "effects_with_states"])
-def test_directional_derivatives_match_central_differences(fmu_path, effects):
+def test_directional_derivatives_match_central_differences(fmu_path, effects, tmp_path):
     """fmi2GetDirectionalDerivative through the C API, every column (each state and input) of
     d(der(x), y)/d(x, U), against central differences of fmi2GetDerivatives and the outputs, at a
     state in motion reached by simulation; each row relative to its scale (a state's nominal, 1 um
     for an output), per column <= 1e-6. Co-Simulation and Model Exchange give the same numbers."""
     md = read_model_description(fmu_path)
-    unzipdir = extract(fmu_path)
+    unzipdir = extract(fmu_path, unzipdir=str(tmp_path / "unzipped"))
     vr = {v.name: v.valueReference for v in md.modelVariables}
     states = [d.variable.derivative.valueReference for d in md.derivatives]
     unknowns = [d.variable.valueReference for d in md.derivatives] + [vr[o] for o in OUTPUTS]

@@ -105,7 +105,9 @@ def test_libcosimpy_matches_fmpy(fmu_path, md, ref, fmpy_heights):
     compare("libcosimpy", np.array(heights), fmpy_heights, ref)
 
 
-def test_ecospy_matches_fmpy_and_a_plain_fmpy_loop_bit_for_bit(fmu_path, md, ref, fmpy_heights):
+def test_ecospy_matches_fmpy_and_a_plain_fmpy_loop_bit_for_bit(
+    fmu_path, md, ref, fmpy_heights, tmp_path
+):
     """Ecos loads the FMU, steps 2000 x 1 ms with the held inputs set before each step, reproduces
     fmpy's simulate_fmu to 1e-12 m, and an fmpy FMU2Slave loop with the same values bit for bit."""
     EcosLib.set_log_level("warn")
@@ -129,7 +131,8 @@ def test_ecospy_matches_fmpy_and_a_plain_fmpy_loop_bit_for_bit(fmu_path, md, ref
     compare("ecospy", heights, fmpy_heights, ref)
 
     vr = {v.name: v.valueReference for v in md.modelVariables}
-    slave = FMU2Slave(guid=md.guid, unzipDirectory=extract(fmu_path),
+    unzipdir = extract(fmu_path, unzipdir=str(tmp_path / "unzipped"))
+    slave = FMU2Slave(guid=md.guid, unzipDirectory=unzipdir,
                       modelIdentifier=md.coSimulation.modelIdentifier, instanceName="plain")
     slave.instantiate()
     slave.setupExperiment(startTime=0.0)

@@ -27,11 +27,11 @@ def test_interface_is_the_contract(inverse_fmu_path):
 class Inverse:
     """The inverse FMU in co-simulation."""
 
-    def __init__(self, path):
+    def __init__(self, path, unzipdir):
         md = read_model_description(path)
         self.vr = {v.name: v.valueReference for v in md.modelVariables}
-        self.fmu = FMU2Slave(guid=md.guid, unzipDirectory=extract(path), modelIdentifier="HaselInverse",
-                             instanceName="inverse")
+        self.fmu = FMU2Slave(guid=md.guid, unzipDirectory=extract(path, unzipdir=unzipdir),
+                             modelIdentifier="HaselInverse", instanceName="inverse")
         self.fmu.instantiate(loggingOn=True)
         self.fmu.setupExperiment(startTime=0.0)
         self.fmu.enterInitializationMode()
@@ -48,8 +48,8 @@ class Inverse:
 
 
 @pytest.fixture
-def inverse(inverse_fmu_path):
-    fmu = Inverse(inverse_fmu_path)
+def inverse(inverse_fmu_path, tmp_path):
+    fmu = Inverse(inverse_fmu_path, str(tmp_path / "unzipped"))
     yield fmu
     fmu.fmu.terminate()
     fmu.fmu.freeInstance()
