@@ -5,7 +5,7 @@ use std::path::Path;
 use std::sync::Mutex;
 use std::sync::atomic::{AtomicUsize, Ordering};
 
-use super::{Posterior, UncertaintyError};
+use super::{Posterior, SampleFailure, UncertaintyError};
 use crate::io::csv::Table;
 use crate::io::file::write_text_atomic;
 use crate::model::Platform;
@@ -50,7 +50,7 @@ pub struct Bands {
     /// ([`Posterior::names`]).
     pub draws: Vec<Vec<f64>>,
     /// Samples whose draw or simulation failed, with the reason; left out of the bands.
-    pub failed: Vec<(usize, String)>,
+    pub failed: Vec<(usize, SampleFailure)>,
 }
 
 /// The quantile `p` of sorted `v` (linear between order statistics: numpy's default).
@@ -67,17 +67,16 @@ fn one(
     input: &Input,
     s: &Settings,
     index: usize,
-) -> (Vec<f64>, Result<Vec<[f64; 6]>, String>) {
+) -> (Vec<f64>, Result<Vec<[f64; 6]>, SampleFailure>) {
     let values = posterior.values_at(&posterior.draw_coordinates(s.seed, index as u64));
-    let run = || -> Result<Vec<[f64; 6]>, String> {
+    let run = || -> Result<Vec<[f64; 6]>, SampleFailure> {
         let params = posterior.params_at(&values)?;
-        let model = Platform::new(params).map_err(|e| e.to_string())?;
-        let mut sim = Simulator::new(model, 0.0, s.rtol).map_err(|e| e.to_string())?;
+        let model = Platform::new(params)?;
+        let mut sim = Simulator::new(model, 0.0, s.rtol)?;
         let mut out = Vec::new();
         sim.run(input, s.t_end, s.dt, |p| {
             out.push([p.h[0], p.h[1], p.h[2], p.tip[0], p.tip[1], p.tip[2]])
-        })
-        .map_err(|e| e.to_string())?;
+        })?;
         Ok(out)
     };
     let outcome = run();
@@ -130,7 +129,7 @@ pub fn run(
     let t: Vec<f64> = (0..=last).map(|k| (k as f64 * s.dt).min(s.t_end)).collect();
     let u: Vec<[f64; 3]> = t.iter().map(|&ti| input.value(ti)).collect();
 
-    type Outcome = (Vec<f64>, Result<Vec<[f64; 6]>, String>);
+    type Outcome = (Vec<f64>, Result<Vec<[f64; 6]>, SampleFailure>);
     let results: Mutex<Vec<Option<Outcome>>> = Mutex::new(vec![None; s.samples]);
     let next = AtomicUsize::new(0);
     std::thread::scope(|scope| {
@@ -158,16 +157,21 @@ pub fn run(
     let mut failed = Vec::new();
     let mut ok: Vec<Vec<[f64; 6]>> = Vec::new();
     for (k, r) in results.into_iter().enumerate() {
-        let (values, outcome) = r.unwrap_or_else(|| (Vec::new(), Err("not run".into())));
+        let (values, outcome) = r.unwrap_or((Vec::new(), Err(SampleFailure::NotRun)));
         draws.push(values);
         match outcome {
             Ok(out) if out.len() == t.len() => ok.push(out),
-            Ok(out) => failed.push((k, format!("{} output times, not {}", out.len(), t.len()))),
+            Ok(out) => failed.push((
+                k,
+                SampleFailure::ShortRun {
+                    got: out.len(),
+                    expected: t.len(),
+                },
+            )),
             Err(e) => failed.push((k, e)),
         }
     }
-    if ok.is_empty() {
-        let (sample, reason) = failed.first().cloned().unwrap_or_default();
+    if let (true, Some((sample, reason))) = (ok.is_empty(), failed.first().cloned()) {
         return Err(UncertaintyError::AllFailed {
             samples: s.samples,
             sample,

@@ -20,7 +20,8 @@ use serde_json::Value;
 
 use crate::identify::synth::Normal;
 use crate::model::Params;
-use crate::model::params::{Rule, parameter};
+use crate::model::params::{ParamError, Rule, parameter};
+use crate::simulation::SimError;
 
 /// What can go wrong in an uncertainty study.
 #[derive(Clone, Debug, PartialEq)]
@@ -33,7 +34,7 @@ pub enum UncertaintyError {
     AllFailed {
         samples: usize,
         sample: usize,
-        reason: String,
+        reason: SampleFailure,
     },
     /// A result file or figure could not be written.
     Output(String),
@@ -60,6 +61,23 @@ impl fmt::Display for UncertaintyError {
 }
 
 impl std::error::Error for UncertaintyError {}
+
+/// Why one sample of a study has no outputs: it is left out of the bands, with this reason.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum SampleFailure {
+    /// The drawn parameters break a parameter's rule.
+    #[error("{0}")]
+    Parameters(#[from] ParamError),
+    /// The simulation of the drawn model stopped.
+    #[error("{0}")]
+    Simulation(#[from] SimError),
+    /// The run ended before the study's last output time.
+    #[error("{got} output times, not {expected}")]
+    ShortRun { got: usize, expected: usize },
+    /// No thread took the sample (a thread that stopped before its end).
+    #[error("not run")]
+    NotRun,
+}
 
 /// Eigenvalues of the covariance below this fraction of the largest are taken as zero (the
 /// held directions, and rounding).
@@ -302,7 +320,7 @@ impl Posterior {
     }
 
     /// Sample `index` of the study seeded `seed`: every parameter, the estimated ones drawn.
-    pub fn draw(&self, seed: u64, index: u64) -> Result<Params, String> {
+    pub fn draw(&self, seed: u64, index: u64) -> Result<Params, ParamError> {
         self.params_at(&self.values_at(&self.draw_coordinates(seed, index)))
     }
 
@@ -315,12 +333,12 @@ impl Posterior {
     }
 
     /// Every parameter, the estimated ones at `values` (checked).
-    pub fn params_at(&self, values: &[f64]) -> Result<Params, String> {
+    pub fn params_at(&self, values: &[f64]) -> Result<Params, ParamError> {
         let mut p = self.center.clone();
         for (name, &v) in self.names.iter().zip(values) {
-            p.set(name, v).map_err(|e| e.to_string())?;
+            p.set(name, v)?;
         }
-        p.validate().map_err(|e| e.to_string())?;
+        p.validate()?;
         Ok(p)
     }
 }
