@@ -132,7 +132,9 @@ fn write_document(w: &mut Writer<Vec<u8>>, model: &Model, token: &str) -> io::Re
     }
     root.with_attribute(("variableNamingConvention", "flat"))
         .write_inner_content(|w| {
-            write_model_exchange(w, info)?;
+            if info.model_exchange {
+                write_model_exchange(w, info)?;
+            }
             write_co_simulation(w, info)?;
             write_unit_definitions(w, vars)?;
             write_log_categories(w, info)?;
@@ -143,22 +145,32 @@ fn write_document(w: &mut Writer<Vec<u8>>, model: &Model, token: &str) -> io::Re
     Ok(())
 }
 
-/// The capability flags both interfaces share (sections 3.4 and 4.4).
-const COMMON_CAPABILITIES: [(&str, &str); 6] = [
-    ("needsExecutionTool", "false"),
-    ("canBeInstantiatedOnlyOncePerProcess", "false"),
-    ("canGetAndSetFMUState", "true"),
-    ("canSerializeFMUState", "true"),
-    ("providesDirectionalDerivatives", "true"),
-    ("providesAdjointDerivatives", "false"),
-];
+/// The capability flags both interfaces share (sections 3.4 and 4.4); directional derivatives
+/// as the model offers them.
+fn common_capabilities(info: &ModelInfo) -> [(&'static str, &'static str); 6] {
+    [
+        ("needsExecutionTool", "false"),
+        ("canBeInstantiatedOnlyOncePerProcess", "false"),
+        ("canGetAndSetFMUState", "true"),
+        ("canSerializeFMUState", "true"),
+        (
+            "providesDirectionalDerivatives",
+            if info.directional_derivatives {
+                "true"
+            } else {
+                "false"
+            },
+        ),
+        ("providesAdjointDerivatives", "false"),
+    ]
+}
 
-/// `<ModelExchange>` (section 3.4): no need for `fmi3CompletedIntegratorStep`, no
-/// `fmi3EvaluateDiscreteStates` (no discrete states).
+/// `<ModelExchange>` (section 3.4), if the model offers it: no need for
+/// `fmi3CompletedIntegratorStep`, no `fmi3EvaluateDiscreteStates` (no discrete states).
 fn write_model_exchange(w: &mut Writer<Vec<u8>>, info: &ModelInfo) -> io::Result<()> {
     w.create_element("ModelExchange")
         .with_attribute(("modelIdentifier", info.model_identifier.as_str()))
-        .with_attributes(COMMON_CAPABILITIES)
+        .with_attributes(common_capabilities(info))
         .with_attributes([
             ("needsCompletedIntegratorStep", "false"),
             ("providesEvaluateDiscreteStates", "false"),
@@ -172,7 +184,7 @@ fn write_model_exchange(w: &mut Writer<Vec<u8>>, info: &ModelInfo) -> io::Result
 fn write_co_simulation(w: &mut Writer<Vec<u8>>, info: &ModelInfo) -> io::Result<()> {
     w.create_element("CoSimulation")
         .with_attribute(("modelIdentifier", info.model_identifier.as_str()))
-        .with_attributes(COMMON_CAPABILITIES)
+        .with_attributes(common_capabilities(info))
         .with_attributes([
             ("canHandleVariableCommunicationStepSize", "true"),
             ("maxOutputDerivativeOrder", "0"),
