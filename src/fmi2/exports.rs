@@ -14,39 +14,16 @@
 //! threads at once.
 #![allow(clippy::missing_safety_doc)]
 
-use std::borrow::Cow;
 use std::ffi::{CStr, c_char, c_void};
 use std::panic::{AssertUnwindSafe, catch_unwind};
 use std::ptr::null_mut;
 
 use super::fmu_state::Snapshot;
-use super::instance::{Instance, panic_message};
+use super::instance::Instance;
 use super::logging::Logger;
 use super::types::*;
 use crate::fmi_common::model_api::{FmuCore, InstanceKind};
-
-/// A C string argument; `None` for NULL.
-unsafe fn opt_str<'a>(p: fmi2String) -> Option<Cow<'a, str>> {
-    (!p.is_null()).then(|| unsafe { CStr::from_ptr(p) }.to_string_lossy())
-}
-
-/// An input array of `n` elements; `None` if it is NULL although `n > 0`.
-unsafe fn in_slice<'a, T>(p: *const T, n: usize) -> Option<&'a [T]> {
-    match (n, p.is_null()) {
-        (0, _) => Some(&[]),
-        (_, true) => None,
-        _ => Some(unsafe { std::slice::from_raw_parts(p, n) }),
-    }
-}
-
-/// An output array of `n` elements; `None` if it is NULL although `n > 0`.
-unsafe fn out_slice<'a, T>(p: *mut T, n: usize) -> Option<&'a mut [T]> {
-    match (n, p.is_null()) {
-        (0, _) => Some(&mut []),
-        (_, true) => None,
-        _ => Some(unsafe { std::slice::from_raw_parts_mut(p, n) }),
-    }
-}
+use crate::fmi_common::shell::{in_slice, opt_str, out_slice, panic_message};
 
 /// Runs `f` on the instance behind `c`, catching panics.
 unsafe fn with_instance<M: FmuCore>(

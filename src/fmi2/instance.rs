@@ -17,13 +17,14 @@ use std::path::{Path, PathBuf};
 use super::fmu_state::Snapshot;
 use super::logging::Logger;
 use super::model_description::{guid_for, log_categories};
-use super::state_machine::{self, Experiment, Mask, Phase, allowed, settable};
+use super::state_machine::{self, Experiment, Mask, Phase, States, allowed, settable};
 use super::types::{
     FMI2_DO_STEP_STATUS, FMI2_LAST_SUCCESSFUL_TIME, FMI2_PENDING_STATUS, FMI2_TERMINATED,
     Fmi2Status, fmi2CallbackFunctions, fmi2StatusKind,
 };
 use super::uri::path_from_file_uri;
 use crate::fmi_common::model_api::{FmuCore, InstanceKind, ModelStructure};
+use crate::fmi_common::shell::same_time;
 use crate::fmi_common::variables::{Causality, Variable, check_variable_table};
 
 use Phase::*;
@@ -93,29 +94,9 @@ fn find(variables: &[Variable], vr: u32) -> Option<&Variable> {
     Some(&variables[i])
 }
 
-/// The message of a caught panic.
-pub fn panic_message(payload: &(dyn std::any::Any + Send)) -> String {
-    payload
-        .downcast_ref::<&str>()
-        .map(|s| s.to_string())
-        .or_else(|| payload.downcast_ref::<String>().cloned())
-        .unwrap_or_else(|| "(no message)".into())
-}
-
 /// An optional number for messages: the value, or "undefined".
 fn optional(x: Option<f64>) -> String {
     x.map_or("undefined".into(), |x| format!("{x:?}"))
-}
-
-/// Relative tolerance for comparing `currentCommunicationPoint` with the internal time.
-const TIME_RTOL: f64 = 1e-12;
-
-/// Whether the master's time `tc` and the FMU's time `t` agree up to rounding: always within
-/// 1e-12 relative, and within up to 1e-9 relative as long as that is below a thousandth of
-/// the step `h` (accumulated `t += h` in the master); a skipped or repeated step never passes.
-fn same_time(t: f64, tc: f64, h: f64) -> bool {
-    let scale = t.abs().max(tc.abs());
-    (t - tc).abs() <= (TIME_RTOL * scale).max((1e3 * TIME_RTOL * scale).min(1e-3 * h))
 }
 
 impl<M: FmuCore> Instance<M> {
@@ -214,7 +195,7 @@ impl<M: FmuCore> Instance<M> {
             format_args!(
                 "not allowed in state {} (allowed in: {})",
                 self.phase.name(),
-                state_machine::names(mask)
+                state_machine::names::<Phase>(mask)
             ),
         ))
     }

@@ -16,7 +16,7 @@ use std::path::PathBuf;
 use super::fmu_state::Snapshot;
 use super::logging::Logger;
 use super::model_description::{Model, instantiation_token, log_categories, with_time};
-use super::state_machine::{self, Experiment, Mask, Phase, allowed, settable};
+use super::state_machine::{self, Experiment, Mask, Phase, States, allowed, settable};
 use super::types::{Fmi3Status, InstanceKind, kind_name};
 use crate::fmi_common::model_api::{FmuCore, ModelStructure};
 use crate::fmi_common::shell::same_time;
@@ -176,7 +176,7 @@ impl<M: FmuCore> Instance<M> {
             format_args!(
                 "not allowed in state {} (allowed in: {})",
                 self.phase.name(),
-                state_machine::names(mask)
+                state_machine::names::<Phase>(mask)
             ),
         ))
     }

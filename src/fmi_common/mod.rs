@@ -7,6 +7,7 @@
 
 pub mod model_api;
 pub mod shell;
+pub mod state_machine;
 pub mod units;
 pub mod variables;
 pub mod xml;
