@@ -57,14 +57,6 @@ pub struct EventInfo {
     pub next_event_time: Option<f64>,
 }
 
-/// The FMI name of an interface, for messages.
-fn interface(kind: InstanceKind) -> &'static str {
-    match kind {
-        InstanceKind::ModelExchange => "Model Exchange",
-        InstanceKind::CoSimulation => "Co-Simulation",
-    }
-}
-
 /// A fresh core with its sorted variable table and GUID.
 struct Built<M> {
     core: M,
@@ -160,7 +152,7 @@ impl<M: FmuCore> Instance<M> {
                 .map_or("none".into(), |d| d.display().to_string());
             format!(
                 "fmi2Instantiate: {} instance of GUID {guid} created, resources: {resources}",
-                interface(kind)
+                kind.name()
             )
         });
         Some(instance)
@@ -210,8 +202,8 @@ impl<M: FmuCore> Instance<M> {
             func,
             format_args!(
                 "is a {} function; this instance was instantiated for {}",
-                interface(kind),
-                interface(self.kind)
+                kind.name(),
+                self.kind.name()
             ),
         ))
     }
@@ -832,7 +824,7 @@ impl<M: FmuCore> Instance<M> {
             )
         });
         Snapshot {
-            guid: self.guid.clone(),
+            token: self.guid.clone(),
             kind: self.kind,
             phase: self.phase,
             experiment: self.experiment,
@@ -842,12 +834,12 @@ impl<M: FmuCore> Instance<M> {
 
     /// `fmi2SetFMUstate` (section 2.1.8): restores core and state machine.
     pub fn set_fmu_state(&mut self, state: &Snapshot<M>) -> Fmi2Status {
-        if state.guid != self.guid {
+        if state.token != self.guid {
             return self.error(
                 "fmi2SetFMUstate",
                 format_args!(
                     "the state belongs to GUID {}, this instance has GUID {}",
-                    state.guid, self.guid
+                    state.token, self.guid
                 ),
             );
         }
@@ -856,8 +848,8 @@ impl<M: FmuCore> Instance<M> {
                 "fmi2SetFMUstate",
                 format_args!(
                     "the state is of a {} instance, this one is {}",
-                    interface(state.kind),
-                    interface(self.kind)
+                    state.kind.name(),
+                    self.kind.name()
                 ),
             );
         }

@@ -17,7 +17,7 @@ use super::fmu_state::Snapshot;
 use super::logging::Logger;
 use super::model_description::{Model, instantiation_token, log_categories, with_time};
 use super::state_machine::{self, Experiment, Mask, Phase, States, allowed, settable};
-use super::types::{Fmi3Status, InstanceKind, kind_name};
+use super::types::{Fmi3Status, InstanceKind};
 use crate::fmi_common::model_api::{FmuCore, ModelStructure};
 use crate::fmi_common::shell::same_time;
 use crate::fmi_common::variables::{Causality, Variable};
@@ -140,7 +140,7 @@ impl<M: FmuCore> Instance<M> {
         instance.trace(|| {
             format!(
                 "{func}: {} instance {:?} created",
-                kind_name(request.interface),
+                request.interface.name(),
                 request.name
             )
         });
@@ -190,8 +190,8 @@ impl<M: FmuCore> Instance<M> {
             func,
             format_args!(
                 "a function of {}, but this instance was created for {}",
-                kind_name(interface),
-                kind_name(self.interface)
+                interface.name(),
+                self.interface.name()
             ),
         ))
     }
@@ -753,7 +753,7 @@ impl<M: FmuCore> Instance<M> {
         });
         Snapshot {
             token: self.token.clone(),
-            interface: self.interface,
+            kind: self.interface,
             phase: self.phase,
             experiment: self.experiment,
             core: self.core.clone(),
@@ -772,13 +772,13 @@ impl<M: FmuCore> Instance<M> {
                 ),
             );
         }
-        if state.interface != self.interface {
+        if state.kind != self.interface {
             return self.error(
                 F,
                 format_args!(
                     "the state is of a {} instance, this one is {}",
-                    kind_name(state.interface),
-                    kind_name(self.interface)
+                    state.kind.name(),
+                    self.interface.name()
                 ),
             );
         }
