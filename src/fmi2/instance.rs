@@ -23,6 +23,7 @@ use super::types::{
     Fmi2Status, fmi2CallbackFunctions, fmi2StatusKind,
 };
 use super::uri::path_from_file_uri;
+use crate::fmi_common::calls::ShellInstance;
 use crate::fmi_common::model_api::{FmuCore, InstanceKind, ModelStructure};
 use crate::fmi_common::shell::same_time;
 use crate::fmi_common::variables::{Causality, Variable, check_variable_table};
@@ -212,12 +213,6 @@ impl<M: FmuCore> Instance<M> {
     fn require_of(&self, kind: InstanceKind, func: &str, mask: Mask) -> Result<(), Fmi2Status> {
         self.require_interface(kind, func)?;
         self.require(func, mask)
-    }
-
-    /// Logs a caught panic of `func` and puts the instance into the error state.
-    pub fn on_panic(&mut self, func: &str, message: &str) -> Fmi2Status {
-        self.phase = Error;
-        self.error(func, format_args!("internal error (panic: {message}); the instance is now in the error state: call fmi2Reset, fmi2SetFMUstate or fmi2FreeInstance"))
     }
 
     /// Logs that `func` was called with a NULL `argument`.
@@ -813,9 +808,25 @@ impl<M: FmuCore> Instance<M> {
             core.directional_derivative(unknowns, knowns, dv_known, dv_unknown)
         })
     }
+}
 
-    /// `fmi2GetFMUstate` (section 2.1.8): allowed in every state of this FMU.
-    pub fn get_fmu_state(&self) -> Snapshot<M> {
+impl<M: FmuCore> ShellInstance for Instance<M> {
+    type Status = Fmi2Status;
+    type Snapshot = Snapshot<M>;
+    const OK: Fmi2Status = Fmi2Status::Ok;
+    const ERROR: Fmi2Status = Fmi2Status::Error;
+    const FATAL: Fmi2Status = Fmi2Status::Fatal;
+    const FMU_STATE: &'static str = "FMUstate";
+    const SIZE_FUNCTION: &'static str = "fmi2SerializedFMUstateSize";
+
+    fn fail(&self, func: &str, msg: std::fmt::Arguments) -> Fmi2Status {
+        self.error(func, msg)
+    }
+    fn panicked(&mut self, func: &str, message: &str) -> Fmi2Status {
+        self.phase = Error;
+        self.error(func, format_args!("internal error (panic: {message}); the instance is now in the error state: call fmi2Reset, fmi2SetFMUstate or fmi2FreeInstance"))
+    }
+    fn snapshot(&self) -> Snapshot<M> {
         self.trace(|| {
             format!(
                 "fmi2GetFMUstate at t = {:?} in state {}",
@@ -831,9 +842,7 @@ impl<M: FmuCore> Instance<M> {
             core: self.core.clone(),
         }
     }
-
-    /// `fmi2SetFMUstate` (section 2.1.8): restores core and state machine.
-    pub fn set_fmu_state(&mut self, state: &Snapshot<M>) -> Fmi2Status {
+    fn restore(&mut self, state: &Snapshot<M>) -> Fmi2Status {
         if state.token != self.guid {
             return self.error(
                 "fmi2SetFMUstate",
@@ -865,15 +874,11 @@ impl<M: FmuCore> Instance<M> {
         });
         Fmi2Status::Ok
     }
-
-    /// `fmi2DeSerializeFMUstate` (section 2.1.8): a state from bytes, or a logged error.
-    pub fn deserialize_fmu_state(&self, bytes: &[u8]) -> Result<Snapshot<M>, Fmi2Status> {
+    fn serialize(state: &Snapshot<M>) -> Vec<u8> {
+        state.to_bytes()
+    }
+    fn deserialize(&self, bytes: &[u8]) -> Result<Snapshot<M>, Fmi2Status> {
         Snapshot::from_bytes(bytes, &self.guid, self.kind, &self.core)
             .map_err(|e| self.error("fmi2DeSerializeFMUstate", e))
-    }
-
-    /// Logs an error of `func` for the caller (used by the C layer for buffer sizes).
-    pub fn argument_error(&self, func: &str, msg: impl std::fmt::Display) -> Fmi2Status {
-        self.error(func, msg)
     }
 }

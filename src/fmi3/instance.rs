@@ -18,6 +18,7 @@ use super::logging::Logger;
 use super::model_description::{Model, instantiation_token, log_categories, with_time};
 use super::state_machine::{self, Experiment, Mask, Phase, States, allowed, settable};
 use super::types::{Fmi3Status, InstanceKind};
+use crate::fmi_common::calls::ShellInstance;
 use crate::fmi_common::model_api::{FmuCore, ModelStructure};
 use crate::fmi_common::shell::same_time;
 use crate::fmi_common::variables::{Causality, Variable};
@@ -194,12 +195,6 @@ impl<M: FmuCore> Instance<M> {
                 self.interface.name()
             ),
         ))
-    }
-
-    /// Logs a caught panic of `func` and puts the instance into the error state.
-    pub fn on_panic(&mut self, func: &str, message: &str) -> Fmi3Status {
-        self.phase = Error;
-        self.error(func, format_args!("internal error (panic: {message}); the instance is now in the error state: call fmi3Reset, fmi3SetFMUState or fmi3FreeInstance"))
     }
 
     /// Logs that `func` was called with a NULL `argument`.
@@ -741,9 +736,25 @@ impl<M: FmuCore> Instance<M> {
             Err(msg) => self.error(F, msg),
         }
     }
+}
 
-    /// `fmi3GetFMUState` (section 2.3.6): allowed in every state.
-    pub fn get_fmu_state(&self) -> Snapshot<M> {
+impl<M: FmuCore> ShellInstance for Instance<M> {
+    type Status = Fmi3Status;
+    type Snapshot = Snapshot<M>;
+    const OK: Fmi3Status = Fmi3Status::Ok;
+    const ERROR: Fmi3Status = Fmi3Status::Error;
+    const FATAL: Fmi3Status = Fmi3Status::Fatal;
+    const FMU_STATE: &'static str = "FMUState";
+    const SIZE_FUNCTION: &'static str = "fmi3SerializedFMUStateSize";
+
+    fn fail(&self, func: &str, msg: std::fmt::Arguments) -> Fmi3Status {
+        self.error(func, msg)
+    }
+    fn panicked(&mut self, func: &str, message: &str) -> Fmi3Status {
+        self.phase = Error;
+        self.error(func, format_args!("internal error (panic: {message}); the instance is now in the error state: call fmi3Reset, fmi3SetFMUState or fmi3FreeInstance"))
+    }
+    fn snapshot(&self) -> Snapshot<M> {
         self.trace(|| {
             format!(
                 "fmi3GetFMUState at t = {:?} in state {}",
@@ -759,9 +770,7 @@ impl<M: FmuCore> Instance<M> {
             core: self.core.clone(),
         }
     }
-
-    /// `fmi3SetFMUState` (section 2.3.6): restores core and state machine.
-    pub fn set_fmu_state(&mut self, state: &Snapshot<M>) -> Fmi3Status {
+    fn restore(&mut self, state: &Snapshot<M>) -> Fmi3Status {
         const F: &str = "fmi3SetFMUState";
         if state.token != self.token {
             return self.error(
@@ -794,9 +803,10 @@ impl<M: FmuCore> Instance<M> {
         });
         Fmi3Status::Ok
     }
-
-    /// `fmi3DeserializeFMUState` (section 2.3.6): a state from bytes, or a logged error.
-    pub fn deserialize_fmu_state(&self, bytes: &[u8]) -> Result<Snapshot<M>, Fmi3Status> {
+    fn serialize(state: &Snapshot<M>) -> Vec<u8> {
+        state.to_bytes()
+    }
+    fn deserialize(&self, bytes: &[u8]) -> Result<Snapshot<M>, Fmi3Status> {
         Snapshot::from_bytes(bytes, &self.token, self.interface, &self.core)
             .map_err(|e| self.error("fmi3DeserializeFMUState", e))
     }

@@ -5,6 +5,7 @@
 //! shells' version-free helpers ([`shell`]). The FMI 2.0 shell is [`crate::fmi2`], the FMI 3.0 shell
 //! [`crate::fmi3`], over the same pieces.
 
+pub mod calls;
 pub mod fmu_state;
 pub mod model_api;
 pub mod shell;
