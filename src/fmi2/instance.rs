@@ -17,7 +17,7 @@ use std::path::{Path, PathBuf};
 use super::fmu_state::Snapshot;
 use super::logging::Logger;
 use super::model_description::{guid_for, log_categories};
-use super::state_machine::{self, Experiment, Mask, Phase, States, allowed, settable};
+use super::state_machine::{self, Experiment, Mask, Phase, States, allowed};
 use super::types::{
     FMI2_DO_STEP_STATUS, FMI2_LAST_SUCCESSFUL_TIME, FMI2_PENDING_STATUS, FMI2_TERMINATED,
     Fmi2Status, fmi2CallbackFunctions, fmi2StatusKind,
@@ -26,6 +26,7 @@ use super::uri::path_from_file_uri;
 use crate::fmi_common::calls::ShellInstance;
 use crate::fmi_common::model_api::{FmuCore, InstanceKind, ModelStructure};
 use crate::fmi_common::shell::same_time;
+use crate::fmi_common::values::{self, find};
 use crate::fmi_common::variables::{Causality, Variable, check_variable_table};
 
 use Phase::*;
@@ -77,14 +78,6 @@ fn build<M: FmuCore>(kind: InstanceKind, resource_dir: Option<&Path>) -> Result<
         variables,
         guid,
     })
-}
-
-/// The variable with value reference `vr` in a table sorted by value reference.
-fn find(variables: &[Variable], vr: u32) -> Option<&Variable> {
-    let i = variables
-        .binary_search_by_key(&vr, |v| v.value_reference)
-        .ok()?;
-    Some(&variables[i])
 }
 
 /// An optional number for messages: the value, or "undefined".
@@ -384,19 +377,10 @@ impl<M: FmuCore> Instance<M> {
         if let Err(s) = self.require(F, allowed::GET_VALUES) {
             return s;
         }
-        for (&vr, value) in vrs.iter().zip(values.iter_mut()) {
-            let Some(v) = find(&self.variables, vr) else {
-                return self.unknown_reference(F, vr);
-            };
-            match self.core.get_real(vr) {
-                Ok(x) => *value = x,
-                Err(msg) => {
-                    let name = &v.name;
-                    return self.error(F, format_args!("{name} (value reference {vr}): {msg}"));
-                }
-            }
+        match values::get(&mut self.core, &self.variables, vrs, values) {
+            Ok(()) => Fmi2Status::Ok,
+            Err(msg) => self.error(F, msg),
         }
-        Fmi2Status::Ok
     }
 
     /// `fmi2SetReal` (section 2.1.7). All references are checked before any value is set;
@@ -406,41 +390,17 @@ impl<M: FmuCore> Instance<M> {
         if let Err(s) = self.require(F, allowed::SET_VALUES) {
             return s;
         }
-        for &vr in vrs {
-            let Some(v) = find(&self.variables, vr) else {
-                return self.unknown_reference(F, vr);
-            };
-            if !settable(self.phase, v) {
-                let initial = v.effective_initial().map_or("none", |i| i.as_str());
-                return self.error(
-                    F,
-                    format_args!(
-                        "{} (value reference {vr}, causality {}, variability {}, initial {initial}) cannot be set in state {} (FMI 2.0 section 4.2.4)",
-                        v.name,
-                        v.causality.as_str(),
-                        v.variability.as_str(),
-                        self.phase.name()
-                    ),
-                );
+        let logger = &self.logger;
+        let trace = |name: &str, value: f64| {
+            if logger.debug_enabled() {
+                logger.log(Fmi2Status::Ok, &format!("{F}: {name} = {value:?}"));
             }
+        };
+        let rule = (self.phase.set_rule(), self.phase.name());
+        match values::set(&mut self.core, &self.variables, rule, (vrs, values), trace) {
+            Ok(()) => Fmi2Status::Ok,
+            Err(msg) => self.error(F, msg),
         }
-        for (&vr, &value) in vrs.iter().zip(values) {
-            let name = &find(&self.variables, vr).expect("checked above").name;
-            self.trace(|| format!("{F}: {name} = {value:?}"));
-            if value.is_nan() {
-                return self.error(
-                    F,
-                    format_args!("{name} (value reference {vr}): value is NaN"),
-                );
-            }
-            if let Err(msg) = self.core.set_real(vr, value) {
-                return self.error(
-                    F,
-                    format_args!("{name} (value reference {vr}) = {value:?} rejected: {msg}"),
-                );
-            }
-        }
-        Fmi2Status::Ok
     }
 
     /// `fmi2Get/Set{Integer,Boolean,String}`: this FMU has only Real variables, so any value
@@ -452,22 +412,17 @@ impl<M: FmuCore> Instance<M> {
         setter: bool,
         vrs: &[u32],
     ) -> Fmi2Status {
-        if let Err(s) = self.require(
-            func,
-            if setter {
-                allowed::SET_VALUES
-            } else {
-                allowed::GET_VALUES
-            },
-        ) {
+        let mask = if setter {
+            allowed::SET_VALUES
+        } else {
+            allowed::GET_VALUES
+        };
+        if let Err(s) = self.require(func, mask) {
             return s;
         }
-        match vrs.first() {
+        match values::no_variables_of_type(&self.variables, type_name, "", vrs) {
             None => Fmi2Status::Ok,
-            Some(vr) => self.error(
-                func,
-                format_args!("unknown value reference {vr}: this FMU has no {type_name} variables"),
-            ),
+            Some(msg) => self.error(func, msg),
         }
     }
 

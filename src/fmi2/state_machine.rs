@@ -3,12 +3,11 @@
 //! bit per state ([`Phase::bit`]), and for each function the mask of the states it may be
 //! called in ([`allowed`]). The instance checks every call against it (and that a function of
 //! one interface is not called on an instance of the other); which variables `fmi2SetReal` may
-//! set in a state is [`settable`].
+//! set in a state is [`States::set_rule`].
 
 use crate::fmi_common::model_api::InstanceKind;
-use crate::fmi_common::state_machine::{self, SetRule};
+use crate::fmi_common::state_machine::SetRule;
 pub use crate::fmi_common::state_machine::{Experiment, Mask, States, names};
-use crate::fmi_common::variables::Variable;
 
 /// The states of the two state machines this FMU can be in.
 /// `stepInProgress` and `stepCanceled` are unreachable: `fmi2DoStep` is synchronous.
@@ -120,7 +119,7 @@ pub mod allowed {
         | EVENT_MODE
         | CONTINUOUS_TIME_MODE;
     /// `fmi2Set{Real,Integer,Boolean,String}`; which variables depends on the state
-    /// ([`settable`](super::settable)).
+    /// ([`States::set_rule`]).
     pub const SET_VALUES: Mask =
         INSTANTIATED | INITIALIZATION_MODE | STEP_COMPLETE | EVENT_MODE | CONTINUOUS_TIME_MODE;
     /// `fmi2GetDirectionalDerivative`, both interfaces.
@@ -152,11 +151,6 @@ pub mod allowed {
     pub const CANCEL_STEP: Mask = 0;
     /// `fmi2Get{,Real,Integer,Boolean,String}Status`.
     pub const GET_STATUS: Mask = STEP_COMPLETE | STEP_FAILED | TERMINATED;
-}
-
-/// Whether `fmi2SetReal` may set `v` in state `phase` (the shared rule of the state's kind).
-pub fn settable(phase: Phase, v: &Variable) -> bool {
-    state_machine::settable(phase.set_rule(), v)
 }
 
 #[cfg(test)]

@@ -16,11 +16,12 @@ use std::path::PathBuf;
 use super::fmu_state::Snapshot;
 use super::logging::Logger;
 use super::model_description::{Model, instantiation_token, log_categories, with_time};
-use super::state_machine::{self, Experiment, Mask, Phase, States, allowed, settable};
+use super::state_machine::{self, Experiment, Mask, Phase, States, allowed};
 use super::types::{Fmi3Status, InstanceKind};
 use crate::fmi_common::calls::ShellInstance;
 use crate::fmi_common::model_api::{FmuCore, ModelStructure};
 use crate::fmi_common::shell::same_time;
+use crate::fmi_common::values;
 use crate::fmi_common::variables::{Causality, Variable};
 
 use Phase::*;
@@ -374,11 +375,7 @@ impl<M: FmuCore> Instance<M> {
 
     /// The variable with value reference `vr`.
     fn find(&self, vr: u32) -> Option<&Variable> {
-        let i = self
-            .variables
-            .binary_search_by_key(&vr, |v| v.value_reference)
-            .ok()?;
-        Some(&self.variables[i])
+        values::find(&self.variables, vr)
     }
 
     /// Checks that `n_values` values go with `n_refs` scalar references (section 2.3.3:
@@ -404,24 +401,10 @@ impl<M: FmuCore> Instance<M> {
         {
             return s;
         }
-        for (&vr, value) in vrs.iter().zip(values.iter_mut()) {
-            let Some(v) = self.find(vr) else {
-                return self.error(F, format_args!("unknown value reference {vr}"));
-            };
-            let result = if v.causality == Causality::Independent {
-                Ok(self.core.time())
-            } else {
-                self.core.get_real(vr)
-            };
-            match result {
-                Ok(x) => *value = x,
-                Err(msg) => {
-                    let name = &self.find(vr).map_or("", |v| v.name.as_str());
-                    return self.error(F, format_args!("{name} (value reference {vr}): {msg}"));
-                }
-            }
+        match values::get(&mut self.core, &self.variables, vrs, values) {
+            Ok(()) => Fmi3Status::Ok,
+            Err(msg) => self.error(F, msg),
         }
-        Fmi3Status::Ok
     }
 
     /// `fmi3SetFloat64` (section 2.3.3). All references are checked before any value is set;
@@ -434,41 +417,17 @@ impl<M: FmuCore> Instance<M> {
         {
             return s;
         }
-        for &vr in vrs {
-            let Some(v) = self.find(vr) else {
-                return self.error(F, format_args!("unknown value reference {vr}"));
-            };
-            if !settable(self.phase, v) {
-                let initial = v.effective_initial().map_or("none", |i| i.as_str());
-                return self.error(
-                    F,
-                    format_args!(
-                        "{} (value reference {vr}, causality {}, variability {}, initial {initial}) cannot be set in state {}",
-                        v.name,
-                        v.causality.as_str(),
-                        v.variability.as_str(),
-                        self.phase.name()
-                    ),
-                );
+        let logger = &self.logger;
+        let trace = |name: &str, value: f64| {
+            if logger.debug_enabled() {
+                logger.log(Fmi3Status::Ok, &format!("{F}: {name} = {value:?}"));
             }
+        };
+        let rule = (self.phase.set_rule(), self.phase.name());
+        match values::set(&mut self.core, &self.variables, rule, (vrs, values), trace) {
+            Ok(()) => Fmi3Status::Ok,
+            Err(msg) => self.error(F, msg),
         }
-        for (&vr, &value) in vrs.iter().zip(values) {
-            let name = self.find(vr).map_or(String::new(), |v| v.name.clone());
-            self.trace(|| format!("{F}: {name} = {value:?}"));
-            if value.is_nan() {
-                return self.error(
-                    F,
-                    format_args!("{name} (value reference {vr}): value is NaN"),
-                );
-            }
-            if let Err(msg) = self.core.set_real(vr, value) {
-                return self.error(
-                    F,
-                    format_args!("{name} (value reference {vr}) = {value:?} rejected: {msg}"),
-                );
-            }
-        }
-        Fmi3Status::Ok
     }
 
     /// `fmi3Get/Set{Float32,Int8,…,Binary,Clock}` (`func`, of variables of `type_name`): this
@@ -488,18 +447,9 @@ impl<M: FmuCore> Instance<M> {
         if let Err(s) = self.require(func, mask) {
             return s;
         }
-        match vrs.first() {
+        match values::no_variables_of_type(&self.variables, type_name, "Float64", vrs) {
             None => Fmi3Status::Ok,
-            Some(vr) => {
-                let what = match self.find(*vr) {
-                    Some(v) => format!("value reference {vr} is {}, a Float64", v.name),
-                    None => format!("unknown value reference {vr}"),
-                };
-                self.error(
-                    func,
-                    format_args!("{what}: this FMU has no {type_name} variables"),
-                )
-            }
+            Some(msg) => self.error(func, msg),
         }
     }
 

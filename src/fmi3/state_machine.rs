@@ -1,14 +1,13 @@
 //! The state machine of FMI 3.0 for Model Exchange and Co-Simulation (standard sections 3.2
 //! and 4.2) as one table: one bit per state ([`Phase::bit`]), and for each function the mask
 //! of the states it may be called in ([`allowed`]). The instance checks every call against
-//! it; which variables `fmi3SetFloat64` may set in a state is [`settable`].
+//! it; which variables `fmi3SetFloat64` may set in a state is [`States::set_rule`].
 
 use serde::{Deserialize, Serialize};
 
 use super::types::InstanceKind;
-use crate::fmi_common::state_machine::{self, SetRule};
+use crate::fmi_common::state_machine::SetRule;
 pub use crate::fmi_common::state_machine::{Experiment, Mask, States, names};
-use crate::fmi_common::variables::Variable;
 
 /// The states this FMU can be in. Configuration, Reconfiguration, Clock Activation and
 /// Intermediate Update Mode are unreachable: the FMU has no structural parameters, no clocks
@@ -115,7 +114,7 @@ pub mod allowed {
         | STEP_DISCARDED
         | TERMINATED
         | ERROR;
-    /// `fmi3Set{Float64,…}`; which variables depends on the state ([`settable`](super::settable)).
+    /// `fmi3Set{Float64,…}`; which variables depends on the state ([`States::set_rule`]).
     pub const SET_VALUES: Mask =
         INSTANTIATED | INITIALIZATION_MODE | EVENT_MODE | CONTINUOUS_TIME_MODE | STEP_MODE;
     pub const DIRECTIONAL_DERIVATIVE: Mask = INITIALIZATION_MODE
@@ -137,11 +136,6 @@ pub mod allowed {
     pub const GET_NUMBER_OF: Mask = !0;
     pub const ENTER_STEP_MODE: Mask = EVENT_MODE;
     pub const DO_STEP: Mask = STEP_MODE;
-}
-
-/// Whether `fmi3SetFloat64` may set `v` in state `phase` (the shared rule of the state's kind).
-pub fn settable(phase: Phase, v: &Variable) -> bool {
-    state_machine::settable(phase.set_rule(), v)
 }
 
 #[cfg(test)]

@@ -11,5 +11,6 @@ pub mod model_api;
 pub mod shell;
 pub mod state_machine;
 pub mod units;
+pub mod values;
 pub mod variables;
 pub mod xml;
