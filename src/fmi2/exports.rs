@@ -14,60 +14,16 @@
 //! threads at once.
 #![allow(clippy::missing_safety_doc)]
 
-use std::borrow::Cow;
 use std::ffi::{CStr, c_char, c_void};
 use std::panic::{AssertUnwindSafe, catch_unwind};
 use std::ptr::null_mut;
 
-use super::fmu_state::Snapshot;
-use super::instance::{Instance, panic_message};
+use super::instance::Instance;
 use super::logging::Logger;
 use super::types::*;
+use crate::fmi_common::calls::with_instance;
 use crate::fmi_common::model_api::{FmuCore, InstanceKind};
-
-/// A C string argument; `None` for NULL.
-unsafe fn opt_str<'a>(p: fmi2String) -> Option<Cow<'a, str>> {
-    (!p.is_null()).then(|| unsafe { CStr::from_ptr(p) }.to_string_lossy())
-}
-
-/// An input array of `n` elements; `None` if it is NULL although `n > 0`.
-unsafe fn in_slice<'a, T>(p: *const T, n: usize) -> Option<&'a [T]> {
-    match (n, p.is_null()) {
-        (0, _) => Some(&[]),
-        (_, true) => None,
-        _ => Some(unsafe { std::slice::from_raw_parts(p, n) }),
-    }
-}
-
-/// An output array of `n` elements; `None` if it is NULL although `n > 0`.
-unsafe fn out_slice<'a, T>(p: *mut T, n: usize) -> Option<&'a mut [T]> {
-    match (n, p.is_null()) {
-        (0, _) => Some(&mut []),
-        (_, true) => None,
-        _ => Some(unsafe { std::slice::from_raw_parts_mut(p, n) }),
-    }
-}
-
-/// Runs `f` on the instance behind `c`, catching panics.
-unsafe fn with_instance<M: FmuCore>(
-    c: fmi2Component,
-    func: &str,
-    f: impl FnOnce(&mut Instance<M>) -> Fmi2Status,
-) -> Fmi2Status {
-    if c.is_null() {
-        return Fmi2Status::Error;
-    }
-    // SAFETY: `c` came from `instantiate::<M>` (caller contract) and is used by one thread.
-    let inst = unsafe { &mut *(c as *mut Instance<M>) };
-    match catch_unwind(AssertUnwindSafe(|| f(&mut *inst))) {
-        Ok(status) => status,
-        Err(payload) => {
-            let message = panic_message(&*payload);
-            catch_unwind(AssertUnwindSafe(|| inst.on_panic(func, &message)))
-                .unwrap_or(Fmi2Status::Fatal)
-        }
-    }
-}
+use crate::fmi_common::shell::{in_slice, opt_str, out_slice, panic_message};
 
 pub unsafe fn instantiate<M: FmuCore>(
     instance_name: fmi2String,
@@ -140,7 +96,7 @@ pub unsafe fn set_debug_logging<M: FmuCore>(
 ) -> Fmi2Status {
     const F: &str = "fmi2SetDebugLogging";
     unsafe {
-        with_instance::<M>(c, F, |inst| {
+        with_instance::<Instance<M>>(c, F, |inst| {
             let Some(pointers) = in_slice(categories, n) else {
                 return inst.null_argument(F, "categories");
             };
@@ -167,7 +123,7 @@ pub unsafe fn setup_experiment<M: FmuCore>(
     let tolerance = (tolerance_defined != FMI2_FALSE).then_some(tolerance);
     let stop_time = (stop_time_defined != FMI2_FALSE).then_some(stop_time);
     unsafe {
-        with_instance::<M>(c, "fmi2SetupExperiment", |inst| {
+        with_instance::<Instance<M>>(c, "fmi2SetupExperiment", |inst| {
             inst.setup_experiment(tolerance, start_time, stop_time)
         })
     }
@@ -175,7 +131,7 @@ pub unsafe fn setup_experiment<M: FmuCore>(
 
 pub unsafe fn enter_initialization_mode<M: FmuCore>(c: fmi2Component) -> Fmi2Status {
     unsafe {
-        with_instance::<M>(c, "fmi2EnterInitializationMode", |inst| {
+        with_instance::<Instance<M>>(c, "fmi2EnterInitializationMode", |inst| {
             inst.enter_initialization_mode()
         })
     }
@@ -183,18 +139,18 @@ pub unsafe fn enter_initialization_mode<M: FmuCore>(c: fmi2Component) -> Fmi2Sta
 
 pub unsafe fn exit_initialization_mode<M: FmuCore>(c: fmi2Component) -> Fmi2Status {
     unsafe {
-        with_instance::<M>(c, "fmi2ExitInitializationMode", |inst| {
+        with_instance::<Instance<M>>(c, "fmi2ExitInitializationMode", |inst| {
             inst.exit_initialization_mode()
         })
     }
 }
 
 pub unsafe fn terminate<M: FmuCore>(c: fmi2Component) -> Fmi2Status {
-    unsafe { with_instance::<M>(c, "fmi2Terminate", |inst| inst.terminate()) }
+    unsafe { with_instance::<Instance<M>>(c, "fmi2Terminate", |inst| inst.terminate()) }
 }
 
 pub unsafe fn reset<M: FmuCore>(c: fmi2Component) -> Fmi2Status {
-    unsafe { with_instance::<M>(c, "fmi2Reset", |inst| inst.reset()) }
+    unsafe { with_instance::<Instance<M>>(c, "fmi2Reset", |inst| inst.reset()) }
 }
 
 pub unsafe fn get_real<M: FmuCore>(
@@ -205,7 +161,7 @@ pub unsafe fn get_real<M: FmuCore>(
 ) -> Fmi2Status {
     const F: &str = "fmi2GetReal";
     unsafe {
-        with_instance::<M>(c, F, |inst| {
+        with_instance::<Instance<M>>(c, F, |inst| {
             match (in_slice(vr, nvr), out_slice(value, nvr)) {
                 (Some(vrs), Some(values)) => inst.get_real(vrs, values),
                 (None, _) => inst.null_argument(F, "vr"),
@@ -223,7 +179,7 @@ pub unsafe fn set_real<M: FmuCore>(
 ) -> Fmi2Status {
     const F: &str = "fmi2SetReal";
     unsafe {
-        with_instance::<M>(c, F, |inst| {
+        with_instance::<Instance<M>>(c, F, |inst| {
             match (in_slice(vr, nvr), in_slice(value, nvr)) {
                 (Some(vrs), Some(values)) => inst.set_real(vrs, values),
                 (None, _) => inst.null_argument(F, "vr"),
@@ -245,130 +201,10 @@ pub unsafe fn no_variables<M: FmuCore>(
     let setter = func.starts_with("fmi2Set");
     let type_name = func.get("fmi2Get".len()..).unwrap_or(func);
     unsafe {
-        with_instance::<M>(c, func, |inst| match in_slice(vr, nvr) {
+        with_instance::<Instance<M>>(c, func, |inst| match in_slice(vr, nvr) {
             None => inst.null_argument(func, "vr"),
             Some(_) if nvr > 0 && value.is_null() => inst.null_argument(func, "value"),
             Some(vrs) => inst.no_variables_of_type(func, type_name, setter, vrs),
-        })
-    }
-}
-
-pub unsafe fn get_fmu_state<M: FmuCore>(c: fmi2Component, state: *mut fmi2FMUstate) -> Fmi2Status {
-    const F: &str = "fmi2GetFMUstate";
-    unsafe {
-        with_instance::<M>(c, F, |inst| {
-            if state.is_null() {
-                return inst.null_argument(F, "FMUstate");
-            }
-            let snapshot = inst.get_fmu_state();
-            if (*state).is_null() {
-                *state = Box::into_raw(Box::new(snapshot)).cast();
-            } else {
-                // Section 2.1.8: a non-NULL *FMUstate is a state of this FMU to be reused.
-                *(*state).cast::<Snapshot<M>>() = snapshot;
-            }
-            Fmi2Status::Ok
-        })
-    }
-}
-
-pub unsafe fn set_fmu_state<M: FmuCore>(c: fmi2Component, state: fmi2FMUstate) -> Fmi2Status {
-    const F: &str = "fmi2SetFMUstate";
-    unsafe {
-        with_instance::<M>(c, F, |inst| match state.cast::<Snapshot<M>>().as_ref() {
-            Some(snapshot) => inst.set_fmu_state(snapshot),
-            None => inst.null_argument(F, "FMUstate"),
-        })
-    }
-}
-
-pub unsafe fn free_fmu_state<M: FmuCore>(c: fmi2Component, state: *mut fmi2FMUstate) -> Fmi2Status {
-    unsafe {
-        with_instance::<M>(c, "fmi2FreeFMUstate", |_| {
-            // Section 2.1.8: a NULL pointer is ignored.
-            if !state.is_null() && !(*state).is_null() {
-                drop(Box::from_raw((*state).cast::<Snapshot<M>>()));
-                *state = null_mut();
-            }
-            Fmi2Status::Ok
-        })
-    }
-}
-
-pub unsafe fn serialized_fmu_state_size<M: FmuCore>(
-    c: fmi2Component,
-    state: fmi2FMUstate,
-    size: *mut usize,
-) -> Fmi2Status {
-    const F: &str = "fmi2SerializedFMUstateSize";
-    unsafe {
-        with_instance::<M>(c, F, |inst| {
-            match (state.cast::<Snapshot<M>>().as_ref(), size.is_null()) {
-                (Some(snapshot), false) => {
-                    *size = snapshot.to_bytes().len();
-                    Fmi2Status::Ok
-                }
-                (None, _) => inst.null_argument(F, "FMUstate"),
-                (_, true) => inst.null_argument(F, "size"),
-            }
-        })
-    }
-}
-
-pub unsafe fn serialize_fmu_state<M: FmuCore>(
-    c: fmi2Component,
-    state: fmi2FMUstate,
-    bytes: *mut fmi2Byte,
-    size: usize,
-) -> Fmi2Status {
-    const F: &str = "fmi2SerializeFMUstate";
-    unsafe {
-        with_instance::<M>(c, F, |inst| {
-            let Some(snapshot) = state.cast::<Snapshot<M>>().as_ref() else {
-                return inst.null_argument(F, "FMUstate");
-            };
-            let data = snapshot.to_bytes();
-            if size < data.len() {
-                let needs = data.len();
-                return inst.argument_error(
-                    F,
-                    format_args!(
-                        "buffer of {size} bytes is too small, the state needs {needs} \
-                         (fmi2SerializedFMUstateSize)"
-                    ),
-                );
-            }
-            let Some(out) = out_slice(bytes.cast::<u8>(), data.len()) else {
-                return inst.null_argument(F, "serializedState");
-            };
-            out.copy_from_slice(&data);
-            Fmi2Status::Ok
-        })
-    }
-}
-
-pub unsafe fn deserialize_fmu_state<M: FmuCore>(
-    c: fmi2Component,
-    bytes: *const fmi2Byte,
-    size: usize,
-    state: *mut fmi2FMUstate,
-) -> Fmi2Status {
-    const F: &str = "fmi2DeSerializeFMUstate";
-    unsafe {
-        with_instance::<M>(c, F, |inst| {
-            let Some(data) = in_slice(bytes.cast::<u8>(), size) else {
-                return inst.null_argument(F, "serializedState");
-            };
-            if state.is_null() {
-                return inst.null_argument(F, "FMUstate");
-            }
-            match inst.deserialize_fmu_state(data) {
-                Ok(snapshot) => {
-                    *state = Box::into_raw(Box::new(snapshot)).cast();
-                    Fmi2Status::Ok
-                }
-                Err(status) => status,
-            }
         })
     }
 }
@@ -379,7 +215,7 @@ pub unsafe fn not_offered<M: FmuCore>(
     func: &'static str,
     what: &str,
 ) -> Fmi2Status {
-    unsafe { with_instance::<M>(c, func, |inst| inst.not_offered(func, what)) }
+    unsafe { with_instance::<Instance<M>>(c, func, |inst| inst.not_offered(func, what)) }
 }
 
 pub unsafe fn get_directional_derivative<M: FmuCore>(
@@ -393,7 +229,7 @@ pub unsafe fn get_directional_derivative<M: FmuCore>(
 ) -> Fmi2Status {
     const F: &str = "fmi2GetDirectionalDerivative";
     unsafe {
-        with_instance::<M>(c, F, |inst| {
+        with_instance::<Instance<M>>(c, F, |inst| {
             match (
                 in_slice(unknown, n_unknown),
                 in_slice(known, n_known),
@@ -413,7 +249,7 @@ pub unsafe fn get_directional_derivative<M: FmuCore>(
 }
 
 pub unsafe fn enter_event_mode<M: FmuCore>(c: fmi2Component) -> Fmi2Status {
-    unsafe { with_instance::<M>(c, "fmi2EnterEventMode", |inst| inst.enter_event_mode()) }
+    unsafe { with_instance::<Instance<M>>(c, "fmi2EnterEventMode", |inst| inst.enter_event_mode()) }
 }
 
 pub unsafe fn new_discrete_states<M: FmuCore>(
@@ -422,7 +258,7 @@ pub unsafe fn new_discrete_states<M: FmuCore>(
 ) -> Fmi2Status {
     const F: &str = "fmi2NewDiscreteStates";
     unsafe {
-        with_instance::<M>(c, F, |inst| {
+        with_instance::<Instance<M>>(c, F, |inst| {
             let Some(out) = event_info.as_mut() else {
                 return inst.null_argument(F, "fmi2eventInfo");
             };
@@ -450,7 +286,7 @@ pub unsafe fn new_discrete_states<M: FmuCore>(
 
 pub unsafe fn enter_continuous_time_mode<M: FmuCore>(c: fmi2Component) -> Fmi2Status {
     unsafe {
-        with_instance::<M>(c, "fmi2EnterContinuousTimeMode", |inst| {
+        with_instance::<Instance<M>>(c, "fmi2EnterContinuousTimeMode", |inst| {
             inst.enter_continuous_time_mode()
         })
     }
@@ -463,7 +299,7 @@ pub unsafe fn completed_integrator_step<M: FmuCore>(
 ) -> Fmi2Status {
     const F: &str = "fmi2CompletedIntegratorStep";
     unsafe {
-        with_instance::<M>(c, F, |inst| {
+        with_instance::<Instance<M>>(c, F, |inst| {
             match (enter_event_mode.as_mut(), terminate_simulation.as_mut()) {
                 (Some(event), Some(terminate)) => match inst.completed_integrator_step() {
                     Ok((e, t)) => {
@@ -480,7 +316,7 @@ pub unsafe fn completed_integrator_step<M: FmuCore>(
 }
 
 pub unsafe fn set_time<M: FmuCore>(c: fmi2Component, time: f64) -> Fmi2Status {
-    unsafe { with_instance::<M>(c, "fmi2SetTime", |inst| inst.set_time(time)) }
+    unsafe { with_instance::<Instance<M>>(c, "fmi2SetTime", |inst| inst.set_time(time)) }
 }
 
 pub unsafe fn set_continuous_states<M: FmuCore>(
@@ -490,7 +326,7 @@ pub unsafe fn set_continuous_states<M: FmuCore>(
 ) -> Fmi2Status {
     const F: &str = "fmi2SetContinuousStates";
     unsafe {
-        with_instance::<M>(c, F, |inst| match in_slice(x, nx) {
+        with_instance::<Instance<M>>(c, F, |inst| match in_slice(x, nx) {
             Some(x) => inst.set_continuous_states(x),
             None => inst.null_argument(F, "x"),
         })
@@ -508,7 +344,7 @@ pub unsafe fn get_state_vector<M: FmuCore>(
     get: fn(&mut Instance<M>, &mut [f64]) -> Fmi2Status,
 ) -> Fmi2Status {
     unsafe {
-        with_instance::<M>(c, func, |inst| match out_slice(out, nx) {
+        with_instance::<Instance<M>>(c, func, |inst| match out_slice(out, nx) {
             Some(out) => get(inst, out),
             None => inst.null_argument(func, argument),
         })
@@ -522,7 +358,7 @@ pub unsafe fn get_event_indicators<M: FmuCore>(
 ) -> Fmi2Status {
     const F: &str = "fmi2GetEventIndicators";
     unsafe {
-        with_instance::<M>(c, F, |inst| match out_slice(indicators, ni) {
+        with_instance::<Instance<M>>(c, F, |inst| match out_slice(indicators, ni) {
             Some(_) => inst.get_event_indicators(ni),
             None => inst.null_argument(F, "eventIndicators"),
         })
@@ -536,14 +372,14 @@ pub unsafe fn do_step<M: FmuCore>(
     no_set_fmu_state_prior: fmi2Boolean,
 ) -> Fmi2Status {
     unsafe {
-        with_instance::<M>(c, "fmi2DoStep", |inst| {
+        with_instance::<Instance<M>>(c, "fmi2DoStep", |inst| {
             inst.do_step(tc, h, no_set_fmu_state_prior != FMI2_FALSE)
         })
     }
 }
 
 pub unsafe fn cancel_step<M: FmuCore>(c: fmi2Component) -> Fmi2Status {
-    unsafe { with_instance::<M>(c, "fmi2CancelStep", |inst| inst.cancel_step()) }
+    unsafe { with_instance::<Instance<M>>(c, "fmi2CancelStep", |inst| inst.cancel_step()) }
 }
 
 /// `fmi2GetStatus`, `fmi2GetIntegerStatus`, `fmi2GetStringStatus` (`func`): no value is ever
@@ -555,7 +391,7 @@ pub unsafe fn get_valueless_status<M: FmuCore>(
     value: *mut c_void,
 ) -> Fmi2Status {
     unsafe {
-        with_instance::<M>(c, func, |inst| {
+        with_instance::<Instance<M>>(c, func, |inst| {
             if value.is_null() {
                 return inst.null_argument(func, "value");
             }
@@ -571,7 +407,7 @@ pub unsafe fn get_real_status<M: FmuCore>(
 ) -> Fmi2Status {
     const F: &str = "fmi2GetRealStatus";
     unsafe {
-        with_instance::<M>(c, F, |inst| match value.as_mut() {
+        with_instance::<Instance<M>>(c, F, |inst| match value.as_mut() {
             Some(v) => inst.get_real_status(kind, v),
             None => inst.null_argument(F, "value"),
         })
@@ -585,7 +421,7 @@ pub unsafe fn get_boolean_status<M: FmuCore>(
 ) -> Fmi2Status {
     const F: &str = "fmi2GetBooleanStatus";
     unsafe {
-        with_instance::<M>(c, F, |inst| match value.as_mut() {
+        with_instance::<Instance<M>>(c, F, |inst| match value.as_mut() {
             Some(v) => {
                 let mut b = false;
                 let status = inst.get_boolean_status(kind, &mut b);
@@ -795,7 +631,7 @@ macro_rules! __fmi2_functions {
             c: fmi2Component,
             state: *mut fmi2FMUstate,
         ) -> fmi2Status {
-            unsafe { shell::get_fmu_state::<$core>(c, state) }
+            unsafe { $crate::fmi_common::calls::get_fmu_state::<$crate::fmi2::instance::Instance<$core>>(c, "fmi2GetFMUstate", state) }
         }
 
         $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)]
@@ -803,7 +639,7 @@ macro_rules! __fmi2_functions {
             c: fmi2Component,
             state: fmi2FMUstate,
         ) -> fmi2Status {
-            unsafe { shell::set_fmu_state::<$core>(c, state) }
+            unsafe { $crate::fmi_common::calls::set_fmu_state::<$crate::fmi2::instance::Instance<$core>>(c, "fmi2SetFMUstate", state) }
         }
 
         $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)]
@@ -811,7 +647,7 @@ macro_rules! __fmi2_functions {
             c: fmi2Component,
             state: *mut fmi2FMUstate,
         ) -> fmi2Status {
-            unsafe { shell::free_fmu_state::<$core>(c, state) }
+            unsafe { $crate::fmi_common::calls::free_fmu_state::<$crate::fmi2::instance::Instance<$core>>(c, "fmi2FreeFMUstate", state) }
         }
 
         $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)]
@@ -820,7 +656,7 @@ macro_rules! __fmi2_functions {
             state: fmi2FMUstate,
             size: *mut usize,
         ) -> fmi2Status {
-            unsafe { shell::serialized_fmu_state_size::<$core>(c, state, size) }
+            unsafe { $crate::fmi_common::calls::serialized_fmu_state_size::<$crate::fmi2::instance::Instance<$core>>(c, "fmi2SerializedFMUstateSize", state, size) }
         }
 
         $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)]
@@ -830,7 +666,7 @@ macro_rules! __fmi2_functions {
             bytes: *mut fmi2Byte,
             size: usize,
         ) -> fmi2Status {
-            unsafe { shell::serialize_fmu_state::<$core>(c, state, bytes, size) }
+            unsafe { $crate::fmi_common::calls::serialize_fmu_state::<$crate::fmi2::instance::Instance<$core>>(c, "fmi2SerializeFMUstate", state, bytes.cast(), size) }
         }
 
         $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)]
@@ -840,7 +676,7 @@ macro_rules! __fmi2_functions {
             size: usize,
             state: *mut fmi2FMUstate,
         ) -> fmi2Status {
-            unsafe { shell::deserialize_fmu_state::<$core>(c, bytes, size, state) }
+            unsafe { $crate::fmi_common::calls::deserialize_fmu_state::<$crate::fmi2::instance::Instance<$core>>(c, "fmi2DeSerializeFMUstate", bytes.cast(), size, state) }
         }
 
         // Directional derivatives (section 2.1.9)

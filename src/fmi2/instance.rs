@@ -17,13 +17,16 @@ use std::path::{Path, PathBuf};
 use super::fmu_state::Snapshot;
 use super::logging::Logger;
 use super::model_description::{guid_for, log_categories};
-use super::state_machine::{self, Experiment, Mask, Phase, allowed, settable};
+use super::state_machine::{self, Experiment, Mask, Phase, States, allowed};
 use super::types::{
     FMI2_DO_STEP_STATUS, FMI2_LAST_SUCCESSFUL_TIME, FMI2_PENDING_STATUS, FMI2_TERMINATED,
     Fmi2Status, fmi2CallbackFunctions, fmi2StatusKind,
 };
 use super::uri::path_from_file_uri;
+use crate::fmi_common::calls::ShellInstance;
 use crate::fmi_common::model_api::{FmuCore, InstanceKind, ModelStructure};
+use crate::fmi_common::shell::same_time;
+use crate::fmi_common::values::{self, find};
 use crate::fmi_common::variables::{Causality, Variable, check_variable_table};
 
 use Phase::*;
@@ -56,14 +59,6 @@ pub struct EventInfo {
     pub next_event_time: Option<f64>,
 }
 
-/// The FMI name of an interface, for messages.
-fn interface(kind: InstanceKind) -> &'static str {
-    match kind {
-        InstanceKind::ModelExchange => "Model Exchange",
-        InstanceKind::CoSimulation => "Co-Simulation",
-    }
-}
-
 /// A fresh core with its sorted variable table and GUID.
 struct Built<M> {
     core: M,
@@ -85,37 +80,9 @@ fn build<M: FmuCore>(kind: InstanceKind, resource_dir: Option<&Path>) -> Result<
     })
 }
 
-/// The variable with value reference `vr` in a table sorted by value reference.
-fn find(variables: &[Variable], vr: u32) -> Option<&Variable> {
-    let i = variables
-        .binary_search_by_key(&vr, |v| v.value_reference)
-        .ok()?;
-    Some(&variables[i])
-}
-
-/// The message of a caught panic.
-pub fn panic_message(payload: &(dyn std::any::Any + Send)) -> String {
-    payload
-        .downcast_ref::<&str>()
-        .map(|s| s.to_string())
-        .or_else(|| payload.downcast_ref::<String>().cloned())
-        .unwrap_or_else(|| "(no message)".into())
-}
-
 /// An optional number for messages: the value, or "undefined".
 fn optional(x: Option<f64>) -> String {
     x.map_or("undefined".into(), |x| format!("{x:?}"))
-}
-
-/// Relative tolerance for comparing `currentCommunicationPoint` with the internal time.
-const TIME_RTOL: f64 = 1e-12;
-
-/// Whether the master's time `tc` and the FMU's time `t` agree up to rounding: always within
-/// 1e-12 relative, and within up to 1e-9 relative as long as that is below a thousandth of
-/// the step `h` (accumulated `t += h` in the master); a skipped or repeated step never passes.
-fn same_time(t: f64, tc: f64, h: f64) -> bool {
-    let scale = t.abs().max(tc.abs());
-    (t - tc).abs() <= (TIME_RTOL * scale).max((1e3 * TIME_RTOL * scale).min(1e-3 * h))
 }
 
 impl<M: FmuCore> Instance<M> {
@@ -179,7 +146,7 @@ impl<M: FmuCore> Instance<M> {
                 .map_or("none".into(), |d| d.display().to_string());
             format!(
                 "fmi2Instantiate: {} instance of GUID {guid} created, resources: {resources}",
-                interface(kind)
+                kind.name()
             )
         });
         Some(instance)
@@ -214,7 +181,7 @@ impl<M: FmuCore> Instance<M> {
             format_args!(
                 "not allowed in state {} (allowed in: {})",
                 self.phase.name(),
-                state_machine::names(mask)
+                state_machine::names::<Phase>(mask)
             ),
         ))
     }
@@ -229,8 +196,8 @@ impl<M: FmuCore> Instance<M> {
             func,
             format_args!(
                 "is a {} function; this instance was instantiated for {}",
-                interface(kind),
-                interface(self.kind)
+                kind.name(),
+                self.kind.name()
             ),
         ))
     }
@@ -239,12 +206,6 @@ impl<M: FmuCore> Instance<M> {
     fn require_of(&self, kind: InstanceKind, func: &str, mask: Mask) -> Result<(), Fmi2Status> {
         self.require_interface(kind, func)?;
         self.require(func, mask)
-    }
-
-    /// Logs a caught panic of `func` and puts the instance into the error state.
-    pub fn on_panic(&mut self, func: &str, message: &str) -> Fmi2Status {
-        self.phase = Error;
-        self.error(func, format_args!("internal error (panic: {message}); the instance is now in the error state: call fmi2Reset, fmi2SetFMUstate or fmi2FreeInstance"))
     }
 
     /// Logs that `func` was called with a NULL `argument`.
@@ -416,19 +377,10 @@ impl<M: FmuCore> Instance<M> {
         if let Err(s) = self.require(F, allowed::GET_VALUES) {
             return s;
         }
-        for (&vr, value) in vrs.iter().zip(values.iter_mut()) {
-            let Some(v) = find(&self.variables, vr) else {
-                return self.unknown_reference(F, vr);
-            };
-            match self.core.get_real(vr) {
-                Ok(x) => *value = x,
-                Err(msg) => {
-                    let name = &v.name;
-                    return self.error(F, format_args!("{name} (value reference {vr}): {msg}"));
-                }
-            }
+        match values::get(&mut self.core, &self.variables, vrs, values) {
+            Ok(()) => Fmi2Status::Ok,
+            Err(msg) => self.error(F, msg),
         }
-        Fmi2Status::Ok
     }
 
     /// `fmi2SetReal` (section 2.1.7). All references are checked before any value is set;
@@ -438,41 +390,17 @@ impl<M: FmuCore> Instance<M> {
         if let Err(s) = self.require(F, allowed::SET_VALUES) {
             return s;
         }
-        for &vr in vrs {
-            let Some(v) = find(&self.variables, vr) else {
-                return self.unknown_reference(F, vr);
-            };
-            if !settable(self.phase, v) {
-                let initial = v.effective_initial().map_or("none", |i| i.as_str());
-                return self.error(
-                    F,
-                    format_args!(
-                        "{} (value reference {vr}, causality {}, variability {}, initial {initial}) cannot be set in state {} (FMI 2.0 section 4.2.4)",
-                        v.name,
-                        v.causality.as_str(),
-                        v.variability.as_str(),
-                        self.phase.name()
-                    ),
-                );
+        let logger = &self.logger;
+        let trace = |name: &str, value: f64| {
+            if logger.debug_enabled() {
+                logger.log(Fmi2Status::Ok, &format!("{F}: {name} = {value:?}"));
             }
+        };
+        let rule = (self.phase.set_rule(), self.phase.name());
+        match values::set(&mut self.core, &self.variables, rule, (vrs, values), trace) {
+            Ok(()) => Fmi2Status::Ok,
+            Err(msg) => self.error(F, msg),
         }
-        for (&vr, &value) in vrs.iter().zip(values) {
-            let name = &find(&self.variables, vr).expect("checked above").name;
-            self.trace(|| format!("{F}: {name} = {value:?}"));
-            if value.is_nan() {
-                return self.error(
-                    F,
-                    format_args!("{name} (value reference {vr}): value is NaN"),
-                );
-            }
-            if let Err(msg) = self.core.set_real(vr, value) {
-                return self.error(
-                    F,
-                    format_args!("{name} (value reference {vr}) = {value:?} rejected: {msg}"),
-                );
-            }
-        }
-        Fmi2Status::Ok
     }
 
     /// `fmi2Get/Set{Integer,Boolean,String}`: this FMU has only Real variables, so any value
@@ -484,22 +412,17 @@ impl<M: FmuCore> Instance<M> {
         setter: bool,
         vrs: &[u32],
     ) -> Fmi2Status {
-        if let Err(s) = self.require(
-            func,
-            if setter {
-                allowed::SET_VALUES
-            } else {
-                allowed::GET_VALUES
-            },
-        ) {
+        let mask = if setter {
+            allowed::SET_VALUES
+        } else {
+            allowed::GET_VALUES
+        };
+        if let Err(s) = self.require(func, mask) {
             return s;
         }
-        match vrs.first() {
+        match values::no_variables_of_type(&self.variables, type_name, "", vrs) {
             None => Fmi2Status::Ok,
-            Some(vr) => self.error(
-                func,
-                format_args!("unknown value reference {vr}: this FMU has no {type_name} variables"),
-            ),
+            Some(msg) => self.error(func, msg),
         }
     }
 
@@ -840,9 +763,25 @@ impl<M: FmuCore> Instance<M> {
             core.directional_derivative(unknowns, knowns, dv_known, dv_unknown)
         })
     }
+}
 
-    /// `fmi2GetFMUstate` (section 2.1.8): allowed in every state of this FMU.
-    pub fn get_fmu_state(&self) -> Snapshot<M> {
+impl<M: FmuCore> ShellInstance for Instance<M> {
+    type Status = Fmi2Status;
+    type Snapshot = Snapshot<M>;
+    const OK: Fmi2Status = Fmi2Status::Ok;
+    const ERROR: Fmi2Status = Fmi2Status::Error;
+    const FATAL: Fmi2Status = Fmi2Status::Fatal;
+    const FMU_STATE: &'static str = "FMUstate";
+    const SIZE_FUNCTION: &'static str = "fmi2SerializedFMUstateSize";
+
+    fn fail(&self, func: &str, msg: std::fmt::Arguments) -> Fmi2Status {
+        self.error(func, msg)
+    }
+    fn panicked(&mut self, func: &str, message: &str) -> Fmi2Status {
+        self.phase = Error;
+        self.error(func, format_args!("internal error (panic: {message}); the instance is now in the error state: call fmi2Reset, fmi2SetFMUstate or fmi2FreeInstance"))
+    }
+    fn snapshot(&self) -> Snapshot<M> {
         self.trace(|| {
             format!(
                 "fmi2GetFMUstate at t = {:?} in state {}",
@@ -851,22 +790,20 @@ impl<M: FmuCore> Instance<M> {
             )
         });
         Snapshot {
-            guid: self.guid.clone(),
+            token: self.guid.clone(),
             kind: self.kind,
             phase: self.phase,
             experiment: self.experiment,
             core: self.core.clone(),
         }
     }
-
-    /// `fmi2SetFMUstate` (section 2.1.8): restores core and state machine.
-    pub fn set_fmu_state(&mut self, state: &Snapshot<M>) -> Fmi2Status {
-        if state.guid != self.guid {
+    fn restore(&mut self, state: &Snapshot<M>) -> Fmi2Status {
+        if state.token != self.guid {
             return self.error(
                 "fmi2SetFMUstate",
                 format_args!(
                     "the state belongs to GUID {}, this instance has GUID {}",
-                    state.guid, self.guid
+                    state.token, self.guid
                 ),
             );
         }
@@ -875,8 +812,8 @@ impl<M: FmuCore> Instance<M> {
                 "fmi2SetFMUstate",
                 format_args!(
                     "the state is of a {} instance, this one is {}",
-                    interface(state.kind),
-                    interface(self.kind)
+                    state.kind.name(),
+                    self.kind.name()
                 ),
             );
         }
@@ -892,15 +829,11 @@ impl<M: FmuCore> Instance<M> {
         });
         Fmi2Status::Ok
     }
-
-    /// `fmi2DeSerializeFMUstate` (section 2.1.8): a state from bytes, or a logged error.
-    pub fn deserialize_fmu_state(&self, bytes: &[u8]) -> Result<Snapshot<M>, Fmi2Status> {
+    fn serialize(state: &Snapshot<M>) -> Vec<u8> {
+        state.to_bytes()
+    }
+    fn deserialize(&self, bytes: &[u8]) -> Result<Snapshot<M>, Fmi2Status> {
         Snapshot::from_bytes(bytes, &self.guid, self.kind, &self.core)
             .map_err(|e| self.error("fmi2DeSerializeFMUstate", e))
-    }
-
-    /// Logs an error of `func` for the caller (used by the C layer for buffer sizes).
-    pub fn argument_error(&self, func: &str, msg: impl std::fmt::Display) -> Fmi2Status {
-        self.error(func, msg)
     }
 }

@@ -6,10 +6,10 @@
 //! `fmi2OK` are debug logging and go out only when debug logging is on for their category;
 //! all other statuses go out whenever a logger exists.
 
-use std::collections::HashSet;
 use std::ffi::{CStr, CString};
 
 use super::types::{Fmi2Status, fmi2CallbackFunctions};
+use crate::fmi_common::shell::{DebugLogging, c_string};
 
 /// Category of debug (OK-level) messages tracing the calls into the FMU.
 const LOG_CALLS: &CStr = c"logCalls";
@@ -33,14 +33,7 @@ pub const WRAPPER_CATEGORIES: [(&str, &str); 5] = [
 pub struct Logger {
     callbacks: fmi2CallbackFunctions,
     instance_name: CString,
-    debug_on: bool,
-    /// Enabled categories; `None` means all.
-    enabled: Option<HashSet<String>>,
-}
-
-/// Replaces interior NULs so any Rust string can be passed to C.
-fn c_string(text: &str) -> CString {
-    CString::new(text.replace('\0', "\\0")).unwrap_or_default()
+    debug: DebugLogging,
 }
 
 impl Logger {
@@ -48,8 +41,7 @@ impl Logger {
         Logger {
             callbacks,
             instance_name: c_string(instance_name),
-            debug_on,
-            enabled: None,
+            debug: DebugLogging::new(debug_on),
         }
     }
 
@@ -61,22 +53,12 @@ impl Logger {
         categories: &[String],
         known: &[String],
     ) -> Result<(), String> {
-        if let Some(bad) = categories.iter().find(|c| !known.contains(c)) {
-            return Err(bad.clone());
-        }
-        self.debug_on = on;
-        self.enabled = (!categories.is_empty()).then(|| categories.iter().cloned().collect());
-        Ok(())
+        self.debug.set(on, categories, known)
     }
 
     /// Whether debug logging is on; callers may skip building expensive debug messages.
     pub fn debug_enabled(&self) -> bool {
-        self.debug_on
-            && self.callbacks.logger.is_some()
-            && self
-                .enabled
-                .as_ref()
-                .is_none_or(|set| set.contains(LOG_CALLS_NAME))
+        self.callbacks.logger.is_some() && self.debug.enabled(LOG_CALLS_NAME)
     }
 
     /// Logs `message` with `status`, under the category of that status.

@@ -1,7 +1,6 @@
 //! Generation of `modelDescription.xml` (FMI 2.0 standard, section 2.2) and of the GUID
 //! that ties the binary to it.
 
-use std::collections::BTreeSet;
 use std::io;
 
 use quick_xml::Writer;
@@ -10,8 +9,11 @@ use sha2::{Digest, Sha256};
 
 use super::logging::WRAPPER_CATEGORIES;
 use crate::fmi_common::model_api::ModelStructure;
-use crate::fmi_common::units::{self, BASE_UNIT_NAMES};
-use crate::fmi_common::variables::{Causality, Initial, ModelInfo, Variable, check_variable_table};
+use crate::fmi_common::variables::{Causality, ModelInfo, Variable, check_variable_table};
+use crate::fmi_common::xml::{
+    XmlWriter, check_info, check_structure, flag, initial_unknowns, model_attributes,
+    write_default_experiment, write_log_categories, write_unit_definitions, xs_double,
+};
 
 /// What `modelDescription.xml` is made of: the model-level data, the variable table and the
 /// model structure of a core.
@@ -65,142 +67,51 @@ pub fn guid_for(
     ))
 }
 
-/// A double in its shortest exactly round-tripping form (valid `xs:double`).
-/// An xs:double: Rust's shortest round-trip form, infinities as `INF` / `-INF`.
-fn real(x: f64) -> String {
-    match x {
-        f64::INFINITY => "INF".into(),
-        f64::NEG_INFINITY => "-INF".into(),
-        _ => format!("{x:?}"),
-    }
-}
-
-fn check_info(info: &ModelInfo) -> Result<(), String> {
-    let e = &info.default_experiment;
-    let times = [
-        ("startTime", e.start_time),
-        ("stopTime", e.stop_time),
-        ("stepSize", e.step_size),
-        ("tolerance", e.tolerance),
-    ];
-    if let Some((name, x)) = times.iter().find(|(_, x)| !x.is_finite()) {
-        return Err(format!("DefaultExperiment {name} is not finite: {x:?}"));
-    }
-    if !(e.stop_time > e.start_time && e.step_size > 0.0 && e.tolerance > 0.0) {
-        return Err(format!("DefaultExperiment is inconsistent: {e:?}"));
-    }
-    let ident = &info.model_identifier;
-    if ident.is_empty() || !ident.chars().all(|c| c.is_ascii_alphanumeric() || c == '_') {
-        return Err(format!(
-            "modelIdentifier {ident:?} is not a valid C identifier"
-        ));
-    }
-    Ok(())
-}
-
 /// All log categories: the wrapper's, then the model's that are not among them.
 pub fn log_categories(info: &ModelInfo) -> Vec<(String, String)> {
-    let mut all: Vec<(String, String)> = WRAPPER_CATEGORIES
-        .iter()
-        .map(|(n, d)| (n.to_string(), d.to_string()))
-        .collect();
-    for (name, description) in &info.log_categories {
-        if !all.iter().any(|(n, _)| n == name) {
-            all.push((name.clone(), description.clone()));
-        }
-    }
-    all
-}
-
-/// Checks that every value reference of the structure is a variable of the table, and that
-/// each derivative is declared as the derivative of its state.
-fn check_structure(d: Description) -> Result<(), String> {
-    let var = |vr: u32| {
-        d.vars
-            .iter()
-            .find(|v| v.value_reference == vr)
-            .ok_or(format!(
-                "the model structure names value reference {vr}, which is not in the variable table"
-            ))
-    };
-    for s in &d.structure.derivatives {
-        let der = var(s.derivative)?;
-        if der.derivative != Some(s.state) {
-            return Err(format!(
-                "{} is listed as the derivative of value reference {}, but its derivative attribute says {:?}",
-                der.name, s.state, der.derivative
-            ));
-        }
-        for &vr in &s.dependencies {
-            var(vr)?;
-        }
-    }
-    for o in &d.structure.outputs {
-        if var(o.output)?.causality != Causality::Output {
-            return Err(format!(
-                "value reference {} of <Outputs> is not an output",
-                o.output
-            ));
-        }
-        for &vr in &o.dependencies {
-            var(vr)?;
-        }
-    }
-    Ok(())
+    crate::fmi_common::xml::log_categories(&WRAPPER_CATEGORIES, info)
 }
 
 fn write_xml(d: Description, guid: &str) -> Result<String, String> {
     check_info(d.info)?;
     check_variable_table(d.vars)?;
-    check_structure(d)?;
+    check_structure(d.vars, d.structure)?;
     let mut w = Writer::new_with_indent(Vec::new(), b' ', 2);
     write_document(&mut w, d, guid).map_err(|e| format!("writing modelDescription.xml: {e}"))?;
     String::from_utf8(w.into_inner()).map_err(|e| e.to_string())
 }
 
-fn write_document(w: &mut Writer<Vec<u8>>, d: Description, guid: &str) -> io::Result<()> {
+fn write_document(w: &mut XmlWriter, d: Description, guid: &str) -> io::Result<()> {
     let (info, vars) = (d.info, d.vars);
     w.write_event(Event::Decl(BytesDecl::new("1.0", Some("UTF-8"), None)))?;
-    let mut root = w.create_element("fmiModelDescription").with_attributes([
-        ("fmiVersion", "2.0"),
-        ("modelName", info.model_name.as_str()),
-        ("guid", guid),
-    ]);
-    for (key, value) in [
-        ("description", &info.description),
-        ("author", &info.author),
-        ("version", &info.version),
-        ("generationTool", &info.generation_tool),
-    ] {
-        if !value.is_empty() {
-            root = root.with_attribute((key, value.as_str()));
-        }
-    }
-    root.with_attributes([
-        ("variableNamingConvention", "flat"),
-        ("numberOfEventIndicators", "0"),
-    ])
-    .write_inner_content(|w| {
-        if info.model_exchange {
-            write_model_exchange(w, info)?;
-        }
-        write_co_simulation(w, info)?;
-        write_units(w, vars)?;
-        write_log_categories(w, info)?;
-        write_default_experiment(w, info)?;
-        write_variables(w, vars)?;
-        write_model_structure(w, d)
-    })?;
+    w.create_element("fmiModelDescription")
+        .with_attributes([
+            ("fmiVersion", "2.0"),
+            ("modelName", info.model_name.as_str()),
+            ("guid", guid),
+        ])
+        .with_attributes(model_attributes(info))
+        .with_attributes([
+            ("variableNamingConvention", "flat"),
+            ("numberOfEventIndicators", "0"),
+        ])
+        .write_inner_content(|w| {
+            if info.model_exchange {
+                write_model_exchange(w, info)?;
+            }
+            write_co_simulation(w, info)?;
+            write_unit_definitions(w, vars)?;
+            write_log_categories(w, &log_categories(info))?;
+            write_default_experiment(w, info)?;
+            write_variables(w, vars)?;
+            write_model_structure(w, d)
+        })?;
     Ok(())
-}
-
-fn flag(b: bool) -> &'static str {
-    if b { "true" } else { "false" }
 }
 
 /// `<ModelExchange>` with the capability flags (section 3.3.1): the same binary and model
 /// identifier as Co-Simulation.
-fn write_model_exchange(w: &mut Writer<Vec<u8>>, info: &ModelInfo) -> io::Result<()> {
+fn write_model_exchange(w: &mut XmlWriter, info: &ModelInfo) -> io::Result<()> {
     w.create_element("ModelExchange")
         .with_attributes([
             ("modelIdentifier", info.model_identifier.as_str()),
@@ -220,7 +131,7 @@ fn write_model_exchange(w: &mut Writer<Vec<u8>>, info: &ModelInfo) -> io::Result
 }
 
 /// `<CoSimulation>` with the capability flags (section 4.3.1).
-fn write_co_simulation(w: &mut Writer<Vec<u8>>, info: &ModelInfo) -> io::Result<()> {
+fn write_co_simulation(w: &mut XmlWriter, info: &ModelInfo) -> io::Result<()> {
     w.create_element("CoSimulation")
         .with_attributes([
             ("modelIdentifier", info.model_identifier.as_str()),
@@ -242,73 +153,6 @@ fn write_co_simulation(w: &mut Writer<Vec<u8>>, info: &ModelInfo) -> io::Result<
     Ok(())
 }
 
-/// `<UnitDefinitions>`: every unit used, with its SI base units (section 2.2.2).
-fn write_units(w: &mut Writer<Vec<u8>>, vars: &[Variable]) -> io::Result<()> {
-    let used: BTreeSet<&str> = vars.iter().filter_map(|v| v.unit.as_deref()).collect();
-    if used.is_empty() {
-        return Ok(());
-    }
-    w.create_element("UnitDefinitions")
-        .write_inner_content(|w| {
-            for unit in used {
-                // check_variable_table has verified that every unit is in the table
-                let exponents = units::base_unit(unit).unwrap_or_default();
-                let base: Vec<(&str, String)> = BASE_UNIT_NAMES
-                    .iter()
-                    .zip(exponents)
-                    .filter(|(_, e)| *e != 0)
-                    .map(|(name, e)| (*name, e.to_string()))
-                    .collect();
-                w.create_element("Unit")
-                    .with_attribute(("name", unit))
-                    .write_inner_content(|w| {
-                        w.create_element("BaseUnit")
-                            .with_attributes(base.iter().map(|(n, e)| (*n, e.as_str())))
-                            .write_empty()?;
-                        Ok(())
-                    })?;
-            }
-            Ok(())
-        })?;
-    Ok(())
-}
-
-/// `<LogCategories>` (section 2.2.4).
-fn write_log_categories(w: &mut Writer<Vec<u8>>, info: &ModelInfo) -> io::Result<()> {
-    w.create_element("LogCategories").write_inner_content(|w| {
-        for (name, description) in log_categories(info) {
-            w.create_element("Category")
-                .with_attributes([
-                    ("name", name.as_str()),
-                    ("description", description.as_str()),
-                ])
-                .write_empty()?;
-        }
-        Ok(())
-    })?;
-    Ok(())
-}
-
-/// `<DefaultExperiment>` (section 2.2.5).
-fn write_default_experiment(w: &mut Writer<Vec<u8>>, info: &ModelInfo) -> io::Result<()> {
-    let e = &info.default_experiment;
-    let (start, stop, tol, step) = (
-        real(e.start_time),
-        real(e.stop_time),
-        real(e.tolerance),
-        real(e.step_size),
-    );
-    w.create_element("DefaultExperiment")
-        .with_attributes([
-            ("startTime", start.as_str()),
-            ("stopTime", &stop),
-            ("tolerance", &tol),
-            ("stepSize", &step),
-        ])
-        .write_empty()?;
-    Ok(())
-}
-
 /// The 1-based index of the variable with value reference `vr` in `<ModelVariables>`.
 fn index(vars: &[Variable], vr: u32) -> usize {
     // the structure's references are checked against the table before writing
@@ -325,7 +169,7 @@ fn index_of(vars: &[Variable], vr: u32) -> String {
 /// `<ModelVariables>` (section 2.2.7). `initial` is written whenever the table allows it,
 /// as the declared or default value, so readers need not know the defaults; a state
 /// derivative names its state's index in `derivative`.
-fn write_variables(w: &mut Writer<Vec<u8>>, vars: &[Variable]) -> io::Result<()> {
+fn write_variables(w: &mut XmlWriter, vars: &[Variable]) -> io::Result<()> {
     w.create_element("ModelVariables")
         .write_inner_content(|w| {
             for v in vars {
@@ -343,7 +187,7 @@ fn write_variables(w: &mut Writer<Vec<u8>>, vars: &[Variable]) -> io::Result<()>
                 if let Some(initial) = v.effective_initial() {
                     sv = sv.with_attribute(("initial", initial.as_str()));
                 }
-                let start = v.start.map(real);
+                let start = v.start.map(xs_double);
                 let derivative = v.derivative.map(|state| index_of(vars, state));
                 sv.write_inner_content(|w| {
                     let mut real_el = w.create_element("Real");
@@ -378,7 +222,7 @@ fn write_variables(w: &mut Writer<Vec<u8>>, vars: &[Variable]) -> io::Result<()>
 ///   so `dependencies=""` ("depends on no Known") would be false; the attribute is omitted,
 ///   which the standard defines as "depends on all Knowns" — always correct, without the
 ///   generic layer having to know the physics.
-fn write_model_structure(w: &mut Writer<Vec<u8>>, d: Description) -> io::Result<()> {
+fn write_model_structure(w: &mut XmlWriter, d: Description) -> io::Result<()> {
     let vars = d.vars;
     let list = |vrs: &[u32]| -> String {
         let mut indices: Vec<usize> = vrs.iter().map(|&vr| index(vars, vr)).collect();
@@ -407,26 +251,8 @@ fn write_model_structure(w: &mut Writer<Vec<u8>>, d: Description) -> io::Result<
         .iter()
         .map(|s| (index_of(vars, s.derivative), list(&s.dependencies)))
         .collect();
-    let is_state_or_derivative = |vr: u32| {
-        d.structure
-            .derivatives
-            .iter()
-            .any(|s| s.state == vr || s.derivative == vr)
-    };
-    let initial_unknowns: Vec<String> = vars
-        .iter()
-        .enumerate()
-        .filter(|(_, v)| {
-            let calculated = matches!(
-                v.effective_initial(),
-                Some(Initial::Approx | Initial::Calculated)
-            );
-            match v.causality {
-                Causality::Output => calculated,
-                Causality::CalculatedParameter => true,
-                _ => calculated && is_state_or_derivative(v.value_reference),
-            }
-        })
+    let initial_unknowns: Vec<String> = initial_unknowns(vars, d.structure)
+        .into_iter()
         .map(|(i, _)| (i + 1).to_string())
         .collect();
     w.create_element("ModelStructure")

@@ -3,10 +3,11 @@
 //! bit per state ([`Phase::bit`]), and for each function the mask of the states it may be
 //! called in ([`allowed`]). The instance checks every call against it (and that a function of
 //! one interface is not called on an instance of the other); which variables `fmi2SetReal` may
-//! set in a state is [`settable`].
+//! set in a state is [`States::set_rule`].
 
 use crate::fmi_common::model_api::InstanceKind;
-use crate::fmi_common::variables::{Causality, Initial, Variability, Variable};
+use crate::fmi_common::state_machine::SetRule;
+pub use crate::fmi_common::state_machine::{Experiment, Mask, States, names};
 
 /// The states of the two state machines this FMU can be in.
 /// `stepInProgress` and `stepCanceled` are unreachable: `fmi2DoStep` is synchronous.
@@ -28,37 +29,9 @@ pub enum Phase {
     ContinuousTimeMode = 7,
 }
 
-/// A set of states, one bit per [`Phase`].
-pub type Mask = u8;
-
 impl Phase {
-    const ALL: [Phase; 8] = [
-        Phase::Instantiated,
-        Phase::InitializationMode,
-        Phase::StepComplete,
-        Phase::StepFailed,
-        Phase::Terminated,
-        Phase::Error,
-        Phase::EventMode,
-        Phase::ContinuousTimeMode,
-    ];
-
     pub fn from_u8(b: u8) -> Option<Phase> {
         Phase::ALL.get(usize::from(b)).copied()
-    }
-
-    /// The state's name in the standard.
-    pub fn name(self) -> &'static str {
-        match self {
-            Phase::Instantiated => "instantiated",
-            Phase::InitializationMode => "initializationMode",
-            Phase::StepComplete => "stepComplete",
-            Phase::StepFailed => "stepFailed",
-            Phase::Terminated => "terminated",
-            Phase::Error => "error",
-            Phase::EventMode => "eventMode",
-            Phase::ContinuousTimeMode => "continuousTimeMode",
-        }
     }
 
     /// Whether an instance of `kind` can be in this state.
@@ -74,21 +47,46 @@ impl Phase {
     pub const fn bit(self) -> Mask {
         1 << self as u8
     }
-
-    /// Whether the state is in `mask`.
-    pub fn is_in(self, mask: Mask) -> bool {
-        self.bit() & mask != 0
-    }
 }
 
-/// The names of the states in `mask`, in the order of the standard, for messages.
-pub fn names(mask: Mask) -> String {
-    let names: Vec<&str> = Phase::ALL
-        .iter()
-        .filter(|p| p.is_in(mask))
-        .map(|p| p.name())
-        .collect();
-    names.join(", ")
+impl States for Phase {
+    const ALL: &'static [Phase] = &[
+        Phase::Instantiated,
+        Phase::InitializationMode,
+        Phase::StepComplete,
+        Phase::StepFailed,
+        Phase::Terminated,
+        Phase::Error,
+        Phase::EventMode,
+        Phase::ContinuousTimeMode,
+    ];
+
+    fn name(self) -> &'static str {
+        match self {
+            Phase::Instantiated => "instantiated",
+            Phase::InitializationMode => "initializationMode",
+            Phase::StepComplete => "stepComplete",
+            Phase::StepFailed => "stepFailed",
+            Phase::Terminated => "terminated",
+            Phase::Error => "error",
+            Phase::EventMode => "eventMode",
+            Phase::ContinuousTimeMode => "continuousTimeMode",
+        }
+    }
+
+    fn bit(self) -> Mask {
+        Phase::bit(self)
+    }
+
+    fn set_rule(self) -> SetRule {
+        match self {
+            Phase::Instantiated => SetRule::StartValues,
+            Phase::InitializationMode => SetRule::ExactStartValues,
+            Phase::StepComplete | Phase::EventMode => SetRule::InputsAndTunableParameters,
+            Phase::ContinuousTimeMode => SetRule::ContinuousInputs,
+            _ => SetRule::Nothing,
+        }
+    }
 }
 
 /// The states each function may be called in (sections 3.2.3 and 4.2.4). Allowed in every
@@ -121,7 +119,7 @@ pub mod allowed {
         | EVENT_MODE
         | CONTINUOUS_TIME_MODE;
     /// `fmi2Set{Real,Integer,Boolean,String}`; which variables depends on the state
-    /// ([`settable`](super::settable)).
+    /// ([`States::set_rule`]).
     pub const SET_VALUES: Mask =
         INSTANTIATED | INITIALIZATION_MODE | STEP_COMPLETE | EVENT_MODE | CONTINUOUS_TIME_MODE;
     /// `fmi2GetDirectionalDerivative`, both interfaces.
@@ -155,49 +153,19 @@ pub mod allowed {
     pub const GET_STATUS: Mask = STEP_COMPLETE | STEP_FAILED | TERMINATED;
 }
 
-/// Whether `fmi2SetReal` may set `v` in state `phase` (footnotes of the tables in sections 3.2.3
-/// and 4.2.4): in Event Mode inputs and tunable parameters, in Continuous-Time Mode continuous
-/// inputs.
-pub fn settable(phase: Phase, v: &Variable) -> bool {
-    let input = v.causality == Causality::Input;
-    let initial = v.effective_initial();
-    v.variability != Variability::Constant
-        && match phase {
-            Phase::Instantiated => {
-                input || matches!(initial, Some(Initial::Exact | Initial::Approx))
-            }
-            Phase::InitializationMode => input || initial == Some(Initial::Exact),
-            Phase::StepComplete | Phase::EventMode => {
-                input
-                    || (v.causality == Causality::Parameter
-                        && v.variability == Variability::Tunable)
-            }
-            Phase::ContinuousTimeMode => input && v.variability == Variability::Continuous,
-            _ => false,
-        }
-}
-
-/// The experiment of `fmi2SetupExperiment` (section 2.1.6).
-#[derive(Debug, Clone, Copy, Default, PartialEq)]
-pub struct Experiment {
-    pub start_time: f64,
-    pub stop_time: Option<f64>,
-    pub tolerance: Option<f64>,
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
 
     #[test]
     fn phases_round_trip_through_their_byte_and_bit() {
-        for (i, p) in Phase::ALL.into_iter().enumerate() {
+        for (i, p) in Phase::ALL.iter().copied().enumerate() {
             assert_eq!(Phase::from_u8(p as u8), Some(p));
             assert_eq!(p.bit(), 1 << i);
         }
         assert_eq!(Phase::from_u8(8), None);
         assert_eq!(
-            names(allowed::TERMINATE | Phase::Instantiated.bit()),
+            names::<Phase>(allowed::TERMINATE | Phase::Instantiated.bit()),
             "instantiated, stepComplete, stepFailed, eventMode, continuousTimeMode"
         );
     }

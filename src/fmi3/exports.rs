@@ -18,34 +18,13 @@ use std::ffi::c_void;
 use std::panic::{AssertUnwindSafe, catch_unwind};
 use std::ptr::null_mut;
 
-use super::fmu_state::Snapshot;
 use super::instance::{Instance, Request};
 use super::logging::Logger;
 use super::state_machine::Experiment;
 use super::types::*;
+use crate::fmi_common::calls::with_instance;
 use crate::fmi_common::model_api::FmuCore;
 use crate::fmi_common::shell::{in_slice, opt_str, out_slice, panic_message};
-
-/// Runs `f` on the instance behind `c`, catching panics.
-unsafe fn with_instance<M: FmuCore>(
-    c: fmi3Instance,
-    func: &str,
-    f: impl FnOnce(&mut Instance<M>) -> Fmi3Status,
-) -> Fmi3Status {
-    if c.is_null() {
-        return Fmi3Status::Error;
-    }
-    // SAFETY: `c` came from `instantiate::<M>` (caller contract) and is used by one thread.
-    let inst = unsafe { &mut *(c as *mut Instance<M>) };
-    match catch_unwind(AssertUnwindSafe(|| f(&mut *inst))) {
-        Ok(status) => status,
-        Err(payload) => {
-            let message = panic_message(&*payload);
-            catch_unwind(AssertUnwindSafe(|| inst.on_panic(func, &message)))
-                .unwrap_or(Fmi3Status::Fatal)
-        }
-    }
-}
 
 /// The strings and flags of `fmi3Instantiate…`, as received.
 pub struct CRequest {
@@ -126,7 +105,7 @@ pub unsafe fn set_debug_logging<M: FmuCore>(
 ) -> Fmi3Status {
     const F: &str = "fmi3SetDebugLogging";
     unsafe {
-        with_instance::<M>(c, F, |inst| {
+        with_instance::<Instance<M>>(c, F, |inst| {
             let Some(pointers) = in_slice(categories, n) else {
                 return inst.null_argument(F, "categories");
             };
@@ -156,7 +135,7 @@ pub unsafe fn enter_initialization_mode<M: FmuCore>(
         tolerance: (tolerance_defined != FMI3_FALSE).then_some(tolerance),
     };
     unsafe {
-        with_instance::<M>(c, "fmi3EnterInitializationMode", |inst| {
+        with_instance::<Instance<M>>(c, "fmi3EnterInitializationMode", |inst| {
             inst.enter_initialization_mode(experiment)
         })
     }
@@ -168,7 +147,7 @@ pub unsafe fn simple<M: FmuCore>(
     func: &'static str,
     call: fn(&mut Instance<M>) -> Fmi3Status,
 ) -> Fmi3Status {
-    unsafe { with_instance::<M>(c, func, call) }
+    unsafe { with_instance::<Instance<M>>(c, func, call) }
 }
 
 /// Writes `value` to each output flag that is not NULL; a NULL one is an error.
@@ -199,7 +178,7 @@ pub unsafe fn update_discrete_states<M: FmuCore>(
 ) -> Fmi3Status {
     const F: &str = "fmi3UpdateDiscreteStates";
     unsafe {
-        with_instance::<M>(c, F, |inst| {
+        with_instance::<Instance<M>>(c, F, |inst| {
             if next_event_time.is_null() {
                 return inst.null_argument(F, "nextEventTime");
             }
@@ -230,7 +209,7 @@ pub unsafe fn get_float64<M: FmuCore>(
 ) -> Fmi3Status {
     const F: &str = "fmi3GetFloat64";
     unsafe {
-        with_instance::<M>(c, F, |inst| {
+        with_instance::<Instance<M>>(c, F, |inst| {
             match (in_slice(vr, nvr), out_slice(values, n_values)) {
                 (Some(vrs), Some(values)) => inst.get_float64(vrs, values),
                 (None, _) => inst.null_argument(F, "valueReferences"),
@@ -249,7 +228,7 @@ pub unsafe fn set_float64<M: FmuCore>(
 ) -> Fmi3Status {
     const F: &str = "fmi3SetFloat64";
     unsafe {
-        with_instance::<M>(c, F, |inst| {
+        with_instance::<Instance<M>>(c, F, |inst| {
             match (in_slice(vr, nvr), in_slice(values, n_values)) {
                 (Some(vrs), Some(values)) => inst.set_float64(vrs, values),
                 (None, _) => inst.null_argument(F, "valueReferences"),
@@ -271,130 +250,10 @@ pub unsafe fn no_variables<M: FmuCore>(
     let setter = func.starts_with("fmi3Set");
     let type_name = func.get("fmi3Get".len()..).unwrap_or(func);
     unsafe {
-        with_instance::<M>(c, func, |inst| match in_slice(vr, nvr) {
+        with_instance::<Instance<M>>(c, func, |inst| match in_slice(vr, nvr) {
             None => inst.null_argument(func, "valueReferences"),
             Some(_) if nvr > 0 && values.is_null() => inst.null_argument(func, "values"),
             Some(vrs) => inst.no_variables_of_type(func, type_name, setter, vrs),
-        })
-    }
-}
-
-pub unsafe fn get_fmu_state<M: FmuCore>(c: fmi3Instance, state: *mut fmi3FMUState) -> Fmi3Status {
-    const F: &str = "fmi3GetFMUState";
-    unsafe {
-        with_instance::<M>(c, F, |inst| {
-            if state.is_null() {
-                return inst.null_argument(F, "FMUState");
-            }
-            let snapshot = inst.get_fmu_state();
-            if (*state).is_null() {
-                *state = Box::into_raw(Box::new(snapshot)).cast();
-            } else {
-                // Section 2.3.6: a non-NULL *FMUState is a state of this FMU to be overwritten.
-                *(*state).cast::<Snapshot<M>>() = snapshot;
-            }
-            Fmi3Status::Ok
-        })
-    }
-}
-
-pub unsafe fn set_fmu_state<M: FmuCore>(c: fmi3Instance, state: fmi3FMUState) -> Fmi3Status {
-    const F: &str = "fmi3SetFMUState";
-    unsafe {
-        with_instance::<M>(c, F, |inst| match state.cast::<Snapshot<M>>().as_ref() {
-            Some(snapshot) => inst.set_fmu_state(snapshot),
-            None => inst.null_argument(F, "FMUState"),
-        })
-    }
-}
-
-pub unsafe fn free_fmu_state<M: FmuCore>(c: fmi3Instance, state: *mut fmi3FMUState) -> Fmi3Status {
-    unsafe {
-        with_instance::<M>(c, "fmi3FreeFMUState", |_| {
-            // Section 2.3.6: a NULL pointer is ignored.
-            if !state.is_null() && !(*state).is_null() {
-                drop(Box::from_raw((*state).cast::<Snapshot<M>>()));
-                *state = null_mut();
-            }
-            Fmi3Status::Ok
-        })
-    }
-}
-
-pub unsafe fn serialized_fmu_state_size<M: FmuCore>(
-    c: fmi3Instance,
-    state: fmi3FMUState,
-    size: *mut usize,
-) -> Fmi3Status {
-    const F: &str = "fmi3SerializedFMUStateSize";
-    unsafe {
-        with_instance::<M>(c, F, |inst| {
-            match (state.cast::<Snapshot<M>>().as_ref(), size.is_null()) {
-                (Some(snapshot), false) => {
-                    *size = snapshot.to_bytes().len();
-                    Fmi3Status::Ok
-                }
-                (None, _) => inst.null_argument(F, "FMUState"),
-                (_, true) => inst.null_argument(F, "size"),
-            }
-        })
-    }
-}
-
-pub unsafe fn serialize_fmu_state<M: FmuCore>(
-    c: fmi3Instance,
-    state: fmi3FMUState,
-    bytes: *mut fmi3Byte,
-    size: usize,
-) -> Fmi3Status {
-    const F: &str = "fmi3SerializeFMUState";
-    unsafe {
-        with_instance::<M>(c, F, |inst| {
-            let Some(snapshot) = state.cast::<Snapshot<M>>().as_ref() else {
-                return inst.null_argument(F, "FMUState");
-            };
-            let data = snapshot.to_bytes();
-            if size < data.len() {
-                let needs = data.len();
-                return inst.error(
-                    F,
-                    format_args!(
-                        "buffer of {size} bytes is too small, the state needs {needs} \
-                         (fmi3SerializedFMUStateSize)"
-                    ),
-                );
-            }
-            let Some(out) = out_slice(bytes, data.len()) else {
-                return inst.null_argument(F, "serializedState");
-            };
-            out.copy_from_slice(&data);
-            Fmi3Status::Ok
-        })
-    }
-}
-
-pub unsafe fn deserialize_fmu_state<M: FmuCore>(
-    c: fmi3Instance,
-    bytes: *const fmi3Byte,
-    size: usize,
-    state: *mut fmi3FMUState,
-) -> Fmi3Status {
-    const F: &str = "fmi3DeserializeFMUState";
-    unsafe {
-        with_instance::<M>(c, F, |inst| {
-            let Some(data) = in_slice(bytes, size) else {
-                return inst.null_argument(F, "serializedState");
-            };
-            if state.is_null() {
-                return inst.null_argument(F, "FMUState");
-            }
-            match inst.deserialize_fmu_state(data) {
-                Ok(snapshot) => {
-                    *state = Box::into_raw(Box::new(snapshot)).cast();
-                    Fmi3Status::Ok
-                }
-                Err(status) => status,
-            }
         })
     }
 }
@@ -405,7 +264,7 @@ pub unsafe fn not_offered<M: FmuCore>(
     func: &'static str,
     what: &str,
 ) -> Fmi3Status {
-    unsafe { with_instance::<M>(c, func, |inst| inst.not_offered(func, what)) }
+    unsafe { with_instance::<Instance<M>>(c, func, |inst| inst.not_offered(func, what)) }
 }
 
 #[allow(clippy::too_many_arguments)]
@@ -420,7 +279,7 @@ pub unsafe fn do_step<M: FmuCore>(
 ) -> Fmi3Status {
     const F: &str = "fmi3DoStep";
     unsafe {
-        with_instance::<M>(c, F, |inst| {
+        with_instance::<Instance<M>>(c, F, |inst| {
             let flags = [
                 ("eventHandlingNeeded", event_handling_needed),
                 ("terminateSimulation", terminate_simulation),
@@ -446,7 +305,7 @@ pub unsafe fn completed_integrator_step<M: FmuCore>(
 ) -> Fmi3Status {
     const F: &str = "fmi3CompletedIntegratorStep";
     unsafe {
-        with_instance::<M>(c, F, |inst| {
+        with_instance::<Instance<M>>(c, F, |inst| {
             let flags = [
                 ("enterEventMode", enter_event_mode),
                 ("terminateSimulation", terminate_simulation),
@@ -466,7 +325,7 @@ pub unsafe fn completed_integrator_step<M: FmuCore>(
 }
 
 pub unsafe fn set_time<M: FmuCore>(c: fmi3Instance, time: f64) -> Fmi3Status {
-    unsafe { with_instance::<M>(c, "fmi3SetTime", |inst| inst.set_time(time)) }
+    unsafe { with_instance::<Instance<M>>(c, "fmi3SetTime", |inst| inst.set_time(time)) }
 }
 
 pub unsafe fn set_continuous_states<M: FmuCore>(
@@ -476,7 +335,7 @@ pub unsafe fn set_continuous_states<M: FmuCore>(
 ) -> Fmi3Status {
     const F: &str = "fmi3SetContinuousStates";
     unsafe {
-        with_instance::<M>(c, F, |inst| match in_slice(x, nx) {
+        with_instance::<Instance<M>>(c, F, |inst| match in_slice(x, nx) {
             Some(x) => inst.set_continuous_states(x),
             None => inst.null_argument(F, "continuousStates"),
         })
@@ -493,7 +352,7 @@ pub unsafe fn state_vector<M: FmuCore>(
     call: fn(&mut M, &mut [f64]) -> Result<(), String>,
 ) -> Fmi3Status {
     unsafe {
-        with_instance::<M>(c, func, |inst| match out_slice(out, n) {
+        with_instance::<Instance<M>>(c, func, |inst| match out_slice(out, n) {
             Some(out) => inst.state_vector(func, out, call),
             None => inst.null_argument(func, "the output array"),
         })
@@ -507,7 +366,7 @@ pub unsafe fn get_event_indicators<M: FmuCore>(
 ) -> Fmi3Status {
     const F: &str = "fmi3GetEventIndicators";
     unsafe {
-        with_instance::<M>(c, F, |inst| match out_slice(z, nz) {
+        with_instance::<Instance<M>>(c, F, |inst| match out_slice(z, nz) {
             Some(_) => inst.event_indicators(nz),
             None => inst.null_argument(F, "eventIndicators"),
         })
@@ -523,7 +382,7 @@ pub unsafe fn get_number_of<M: FmuCore>(
     count: fn(&Instance<M>) -> usize,
 ) -> Fmi3Status {
     unsafe {
-        with_instance::<M>(c, func, |inst| {
+        with_instance::<Instance<M>>(c, func, |inst| {
             if n.is_null() {
                 return inst.null_argument(func, "the output argument");
             }
@@ -552,7 +411,7 @@ pub unsafe fn get_directional_derivative<M: FmuCore>(
 ) -> Fmi3Status {
     const F: &str = "fmi3GetDirectionalDerivative";
     unsafe {
-        with_instance::<M>(c, F, |inst| {
+        with_instance::<Instance<M>>(c, F, |inst| {
             let (Some(u), Some(k)) = (in_slice(unknowns, n_unknowns), in_slice(knowns, n_knowns))
             else {
                 return inst.null_argument(F, "unknowns or knowns");

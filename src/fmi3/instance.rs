@@ -16,10 +16,12 @@ use std::path::PathBuf;
 use super::fmu_state::Snapshot;
 use super::logging::Logger;
 use super::model_description::{Model, instantiation_token, log_categories, with_time};
-use super::state_machine::{self, Experiment, Mask, Phase, allowed, settable};
-use super::types::{Fmi3Status, InstanceKind, kind_name};
+use super::state_machine::{self, Experiment, Mask, Phase, States, allowed};
+use super::types::{Fmi3Status, InstanceKind};
+use crate::fmi_common::calls::ShellInstance;
 use crate::fmi_common::model_api::{FmuCore, ModelStructure};
 use crate::fmi_common::shell::same_time;
+use crate::fmi_common::values;
 use crate::fmi_common::variables::{Causality, Variable};
 
 use Phase::*;
@@ -140,7 +142,7 @@ impl<M: FmuCore> Instance<M> {
         instance.trace(|| {
             format!(
                 "{func}: {} instance {:?} created",
-                kind_name(request.interface),
+                request.interface.name(),
                 request.name
             )
         });
@@ -176,7 +178,7 @@ impl<M: FmuCore> Instance<M> {
             format_args!(
                 "not allowed in state {} (allowed in: {})",
                 self.phase.name(),
-                state_machine::names(mask)
+                state_machine::names::<Phase>(mask)
             ),
         ))
     }
@@ -190,16 +192,10 @@ impl<M: FmuCore> Instance<M> {
             func,
             format_args!(
                 "a function of {}, but this instance was created for {}",
-                kind_name(interface),
-                kind_name(self.interface)
+                interface.name(),
+                self.interface.name()
             ),
         ))
-    }
-
-    /// Logs a caught panic of `func` and puts the instance into the error state.
-    pub fn on_panic(&mut self, func: &str, message: &str) -> Fmi3Status {
-        self.phase = Error;
-        self.error(func, format_args!("internal error (panic: {message}); the instance is now in the error state: call fmi3Reset, fmi3SetFMUState or fmi3FreeInstance"))
     }
 
     /// Logs that `func` was called with a NULL `argument`.
@@ -379,11 +375,7 @@ impl<M: FmuCore> Instance<M> {
 
     /// The variable with value reference `vr`.
     fn find(&self, vr: u32) -> Option<&Variable> {
-        let i = self
-            .variables
-            .binary_search_by_key(&vr, |v| v.value_reference)
-            .ok()?;
-        Some(&self.variables[i])
+        values::find(&self.variables, vr)
     }
 
     /// Checks that `n_values` values go with `n_refs` scalar references (section 2.3.3:
@@ -409,24 +401,10 @@ impl<M: FmuCore> Instance<M> {
         {
             return s;
         }
-        for (&vr, value) in vrs.iter().zip(values.iter_mut()) {
-            let Some(v) = self.find(vr) else {
-                return self.error(F, format_args!("unknown value reference {vr}"));
-            };
-            let result = if v.causality == Causality::Independent {
-                Ok(self.core.time())
-            } else {
-                self.core.get_real(vr)
-            };
-            match result {
-                Ok(x) => *value = x,
-                Err(msg) => {
-                    let name = &self.find(vr).map_or("", |v| v.name.as_str());
-                    return self.error(F, format_args!("{name} (value reference {vr}): {msg}"));
-                }
-            }
+        match values::get(&mut self.core, &self.variables, vrs, values) {
+            Ok(()) => Fmi3Status::Ok,
+            Err(msg) => self.error(F, msg),
         }
-        Fmi3Status::Ok
     }
 
     /// `fmi3SetFloat64` (section 2.3.3). All references are checked before any value is set;
@@ -439,41 +417,17 @@ impl<M: FmuCore> Instance<M> {
         {
             return s;
         }
-        for &vr in vrs {
-            let Some(v) = self.find(vr) else {
-                return self.error(F, format_args!("unknown value reference {vr}"));
-            };
-            if !settable(self.phase, v) {
-                let initial = v.effective_initial().map_or("none", |i| i.as_str());
-                return self.error(
-                    F,
-                    format_args!(
-                        "{} (value reference {vr}, causality {}, variability {}, initial {initial}) cannot be set in state {}",
-                        v.name,
-                        v.causality.as_str(),
-                        v.variability.as_str(),
-                        self.phase.name()
-                    ),
-                );
+        let logger = &self.logger;
+        let trace = |name: &str, value: f64| {
+            if logger.debug_enabled() {
+                logger.log(Fmi3Status::Ok, &format!("{F}: {name} = {value:?}"));
             }
+        };
+        let rule = (self.phase.set_rule(), self.phase.name());
+        match values::set(&mut self.core, &self.variables, rule, (vrs, values), trace) {
+            Ok(()) => Fmi3Status::Ok,
+            Err(msg) => self.error(F, msg),
         }
-        for (&vr, &value) in vrs.iter().zip(values) {
-            let name = self.find(vr).map_or(String::new(), |v| v.name.clone());
-            self.trace(|| format!("{F}: {name} = {value:?}"));
-            if value.is_nan() {
-                return self.error(
-                    F,
-                    format_args!("{name} (value reference {vr}): value is NaN"),
-                );
-            }
-            if let Err(msg) = self.core.set_real(vr, value) {
-                return self.error(
-                    F,
-                    format_args!("{name} (value reference {vr}) = {value:?} rejected: {msg}"),
-                );
-            }
-        }
-        Fmi3Status::Ok
     }
 
     /// `fmi3Get/Set{Float32,Int8,…,Binary,Clock}` (`func`, of variables of `type_name`): this
@@ -493,18 +447,9 @@ impl<M: FmuCore> Instance<M> {
         if let Err(s) = self.require(func, mask) {
             return s;
         }
-        match vrs.first() {
+        match values::no_variables_of_type(&self.variables, type_name, "Float64", vrs) {
             None => Fmi3Status::Ok,
-            Some(vr) => {
-                let what = match self.find(*vr) {
-                    Some(v) => format!("value reference {vr} is {}, a Float64", v.name),
-                    None => format!("unknown value reference {vr}"),
-                };
-                self.error(
-                    func,
-                    format_args!("{what}: this FMU has no {type_name} variables"),
-                )
-            }
+            Some(msg) => self.error(func, msg),
         }
     }
 
@@ -741,9 +686,25 @@ impl<M: FmuCore> Instance<M> {
             Err(msg) => self.error(F, msg),
         }
     }
+}
 
-    /// `fmi3GetFMUState` (section 2.3.6): allowed in every state.
-    pub fn get_fmu_state(&self) -> Snapshot<M> {
+impl<M: FmuCore> ShellInstance for Instance<M> {
+    type Status = Fmi3Status;
+    type Snapshot = Snapshot<M>;
+    const OK: Fmi3Status = Fmi3Status::Ok;
+    const ERROR: Fmi3Status = Fmi3Status::Error;
+    const FATAL: Fmi3Status = Fmi3Status::Fatal;
+    const FMU_STATE: &'static str = "FMUState";
+    const SIZE_FUNCTION: &'static str = "fmi3SerializedFMUStateSize";
+
+    fn fail(&self, func: &str, msg: std::fmt::Arguments) -> Fmi3Status {
+        self.error(func, msg)
+    }
+    fn panicked(&mut self, func: &str, message: &str) -> Fmi3Status {
+        self.phase = Error;
+        self.error(func, format_args!("internal error (panic: {message}); the instance is now in the error state: call fmi3Reset, fmi3SetFMUState or fmi3FreeInstance"))
+    }
+    fn snapshot(&self) -> Snapshot<M> {
         self.trace(|| {
             format!(
                 "fmi3GetFMUState at t = {:?} in state {}",
@@ -753,15 +714,13 @@ impl<M: FmuCore> Instance<M> {
         });
         Snapshot {
             token: self.token.clone(),
-            interface: self.interface,
+            kind: self.interface,
             phase: self.phase,
             experiment: self.experiment,
             core: self.core.clone(),
         }
     }
-
-    /// `fmi3SetFMUState` (section 2.3.6): restores core and state machine.
-    pub fn set_fmu_state(&mut self, state: &Snapshot<M>) -> Fmi3Status {
+    fn restore(&mut self, state: &Snapshot<M>) -> Fmi3Status {
         const F: &str = "fmi3SetFMUState";
         if state.token != self.token {
             return self.error(
@@ -772,13 +731,13 @@ impl<M: FmuCore> Instance<M> {
                 ),
             );
         }
-        if state.interface != self.interface {
+        if state.kind != self.interface {
             return self.error(
                 F,
                 format_args!(
                     "the state is of a {} instance, this one is {}",
-                    kind_name(state.interface),
-                    kind_name(self.interface)
+                    state.kind.name(),
+                    self.interface.name()
                 ),
             );
         }
@@ -794,9 +753,10 @@ impl<M: FmuCore> Instance<M> {
         });
         Fmi3Status::Ok
     }
-
-    /// `fmi3DeserializeFMUState` (section 2.3.6): a state from bytes, or a logged error.
-    pub fn deserialize_fmu_state(&self, bytes: &[u8]) -> Result<Snapshot<M>, Fmi3Status> {
+    fn serialize(state: &Snapshot<M>) -> Vec<u8> {
+        state.to_bytes()
+    }
+    fn deserialize(&self, bytes: &[u8]) -> Result<Snapshot<M>, Fmi3Status> {
         Snapshot::from_bytes(bytes, &self.token, self.interface, &self.core)
             .map_err(|e| self.error("fmi3DeserializeFMUState", e))
     }

@@ -5,10 +5,10 @@
 //! NULL; messages with status `fmi3OK` are debug logging and go out only when debug logging is
 //! on for their category; all other statuses go out whenever a callback exists.
 
-use std::ffi::{CStr, CString};
+use std::ffi::CStr;
 
 use super::types::{Fmi3Status, fmi3InstanceEnvironment, fmi3LogMessageCallback};
-use crate::fmi_common::shell::DebugLogging;
+use crate::fmi_common::shell::{DebugLogging, c_string};
 
 const LOG_CALLS: &str = "logCalls";
 
@@ -77,8 +77,7 @@ impl Logger {
         if status == Fmi3Status::Ok && !self.debug_enabled() {
             return;
         }
-        // an interior NUL would end the C string early: shown as the escape instead
-        let text = CString::new(message.replace('\0', "\\0")).unwrap_or_default();
+        let text = c_string(message);
         // SAFETY: the importer promised a callback valid for the instance's lifetime
         // (section 2.3.1); both strings are NUL-terminated and outlive the call.
         unsafe {

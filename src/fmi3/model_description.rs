@@ -11,9 +11,12 @@ use sha2::{Digest, Sha256};
 use super::logging::SHELL_CATEGORIES;
 use crate::fmi_common::model_api::ModelStructure;
 use crate::fmi_common::variables::{
-    Causality, Initial, ModelInfo, Variability, Variable, check_variable_table,
+    Causality, ModelInfo, Variability, Variable, check_variable_table,
 };
-use crate::fmi_common::xml::{write_unit_definitions, xs_double};
+use crate::fmi_common::xml::{
+    XmlWriter, check_info, check_structure, flag, initial_unknowns, model_attributes,
+    write_default_experiment, write_log_categories, write_unit_definitions, xs_double,
+};
 
 /// The variables of the FMI 3.0 description: the core's table and, unless the table has one,
 /// the independent variable `time` [s] that FMI 3.0 requires (section 2.4.7.4), with the
@@ -67,16 +70,7 @@ pub fn instantiation_token(model: &Model) -> Result<String, String> {
 
 /// All log categories: the shell's, then the model's that are not among them.
 pub fn log_categories(info: &ModelInfo) -> Vec<(String, String)> {
-    let mut all: Vec<(String, String)> = SHELL_CATEGORIES
-        .iter()
-        .map(|(n, d)| (n.to_string(), d.to_string()))
-        .collect();
-    for (name, description) in &info.log_categories {
-        if all.iter().all(|(n, _)| n != name) {
-            all.push((name.clone(), description.clone()));
-        }
-    }
-    all
+    crate::fmi_common::xml::log_categories(&SHELL_CATEGORIES, info)
 }
 
 fn write_xml(model: &Model, token: &str) -> Result<String, String> {
@@ -90,52 +84,32 @@ fn write_xml(model: &Model, token: &str) -> Result<String, String> {
     {
         return Err("FMI 3.0 needs exactly one independent variable (section 2.4.7.4)".into());
     }
-    let known = |vr: &u32| vars.iter().any(|v| v.value_reference == *vr);
-    let s = model.structure;
-    let all_refs = s
-        .derivatives
-        .iter()
-        .flat_map(|d| {
-            [d.state, d.derivative]
-                .into_iter()
-                .chain(d.dependencies.clone())
-        })
-        .chain(s.outputs.iter().flat_map(|o| o.dependencies.clone()));
-    if let Some(vr) = all_refs.filter(|vr| !known(vr)).min() {
-        return Err(format!(
-            "the model structure names value reference {vr}, which is no variable"
-        ));
-    }
+    check_info(model.info)?;
+    check_structure(vars, model.structure)?;
     let mut w = Writer::new_with_indent(Vec::new(), b' ', 2);
     write_document(&mut w, model, token)
         .map_err(|e| format!("writing modelDescription.xml: {e}"))?;
     String::from_utf8(w.into_inner()).map_err(|e| e.to_string())
 }
 
-fn write_document(w: &mut Writer<Vec<u8>>, model: &Model, token: &str) -> io::Result<()> {
+fn write_document(w: &mut XmlWriter, model: &Model, token: &str) -> io::Result<()> {
     let (info, vars) = (model.info, model.vars);
     w.write_event(Event::Decl(BytesDecl::new("1.0", Some("UTF-8"), None)))?;
-    let mut root = w.create_element("fmiModelDescription").with_attributes([
-        ("fmiVersion", "3.0"),
-        ("modelName", info.model_name.as_str()),
-        ("instantiationToken", token),
-    ]);
-    for (key, value) in [
-        ("description", &info.description),
-        ("author", &info.author),
-        ("version", &info.version),
-        ("generationTool", &info.generation_tool),
-    ] {
-        if !value.is_empty() {
-            root = root.with_attribute((key, value.as_str()));
-        }
-    }
-    root.with_attribute(("variableNamingConvention", "flat"))
+    w.create_element("fmiModelDescription")
+        .with_attributes([
+            ("fmiVersion", "3.0"),
+            ("modelName", info.model_name.as_str()),
+            ("instantiationToken", token),
+        ])
+        .with_attributes(model_attributes(info))
+        .with_attribute(("variableNamingConvention", "flat"))
         .write_inner_content(|w| {
-            write_model_exchange(w, info)?;
+            if info.model_exchange {
+                write_model_exchange(w, info)?;
+            }
             write_co_simulation(w, info)?;
             write_unit_definitions(w, vars)?;
-            write_log_categories(w, info)?;
+            write_log_categories(w, &log_categories(info))?;
             write_default_experiment(w, info)?;
             write_variables(w, vars)?;
             write_model_structure(w, model)
@@ -143,22 +117,28 @@ fn write_document(w: &mut Writer<Vec<u8>>, model: &Model, token: &str) -> io::Re
     Ok(())
 }
 
-/// The capability flags both interfaces share (sections 3.4 and 4.4).
-const COMMON_CAPABILITIES: [(&str, &str); 6] = [
-    ("needsExecutionTool", "false"),
-    ("canBeInstantiatedOnlyOncePerProcess", "false"),
-    ("canGetAndSetFMUState", "true"),
-    ("canSerializeFMUState", "true"),
-    ("providesDirectionalDerivatives", "true"),
-    ("providesAdjointDerivatives", "false"),
-];
+/// The capability flags both interfaces share (sections 3.4 and 4.4); directional derivatives
+/// as the model offers them.
+fn common_capabilities(info: &ModelInfo) -> [(&'static str, &'static str); 6] {
+    [
+        ("needsExecutionTool", "false"),
+        ("canBeInstantiatedOnlyOncePerProcess", "false"),
+        ("canGetAndSetFMUState", "true"),
+        ("canSerializeFMUState", "true"),
+        (
+            "providesDirectionalDerivatives",
+            flag(info.directional_derivatives),
+        ),
+        ("providesAdjointDerivatives", "false"),
+    ]
+}
 
-/// `<ModelExchange>` (section 3.4): no need for `fmi3CompletedIntegratorStep`, no
-/// `fmi3EvaluateDiscreteStates` (no discrete states).
-fn write_model_exchange(w: &mut Writer<Vec<u8>>, info: &ModelInfo) -> io::Result<()> {
+/// `<ModelExchange>` (section 3.4), if the model offers it: no need for
+/// `fmi3CompletedIntegratorStep`, no `fmi3EvaluateDiscreteStates` (no discrete states).
+fn write_model_exchange(w: &mut XmlWriter, info: &ModelInfo) -> io::Result<()> {
     w.create_element("ModelExchange")
         .with_attribute(("modelIdentifier", info.model_identifier.as_str()))
-        .with_attributes(COMMON_CAPABILITIES)
+        .with_attributes(common_capabilities(info))
         .with_attributes([
             ("needsCompletedIntegratorStep", "false"),
             ("providesEvaluateDiscreteStates", "false"),
@@ -169,10 +149,10 @@ fn write_model_exchange(w: &mut Writer<Vec<u8>>, info: &ModelInfo) -> io::Result
 
 /// `<CoSimulation>` (section 4.4): variable steps, no event mode of its own, no early return,
 /// no intermediate update, no output derivatives.
-fn write_co_simulation(w: &mut Writer<Vec<u8>>, info: &ModelInfo) -> io::Result<()> {
+fn write_co_simulation(w: &mut XmlWriter, info: &ModelInfo) -> io::Result<()> {
     w.create_element("CoSimulation")
         .with_attribute(("modelIdentifier", info.model_identifier.as_str()))
-        .with_attributes(COMMON_CAPABILITIES)
+        .with_attributes(common_capabilities(info))
         .with_attributes([
             ("canHandleVariableCommunicationStepSize", "true"),
             ("maxOutputDerivativeOrder", "0"),
@@ -185,41 +165,9 @@ fn write_co_simulation(w: &mut Writer<Vec<u8>>, info: &ModelInfo) -> io::Result<
     Ok(())
 }
 
-/// `<LogCategories>` (section 2.4.5).
-fn write_log_categories(w: &mut Writer<Vec<u8>>, info: &ModelInfo) -> io::Result<()> {
-    w.create_element("LogCategories").write_inner_content(|w| {
-        for (name, description) in log_categories(info) {
-            w.create_element("Category")
-                .with_attributes([
-                    ("name", name.as_str()),
-                    ("description", description.as_str()),
-                ])
-                .write_empty()?;
-        }
-        Ok(())
-    })?;
-    Ok(())
-}
-
-/// `<DefaultExperiment>` (section 2.4.6).
-fn write_default_experiment(w: &mut Writer<Vec<u8>>, info: &ModelInfo) -> io::Result<()> {
-    let e = &info.default_experiment;
-    let values = [
-        ("startTime", e.start_time),
-        ("stopTime", e.stop_time),
-        ("tolerance", e.tolerance),
-        ("stepSize", e.step_size),
-    ]
-    .map(|(name, x)| (name, xs_double(x)));
-    w.create_element("DefaultExperiment")
-        .with_attributes(values.iter().map(|(n, x)| (*n, x.as_str())))
-        .write_empty()?;
-    Ok(())
-}
-
 /// `<ModelVariables>` (section 2.4.7): one `<Float64>` per variable. `initial` is written
 /// whenever the rules allow it, as the declared or default value.
-fn write_variables(w: &mut Writer<Vec<u8>>, vars: &[Variable]) -> io::Result<()> {
+fn write_variables(w: &mut XmlWriter, vars: &[Variable]) -> io::Result<()> {
     w.create_element("ModelVariables")
         .write_inner_content(|w| {
             for v in vars {
@@ -270,29 +218,11 @@ fn refs(vrs: &[u32]) -> String {
 ///   approx or calculated, calculated parameters, and states and derivatives with initial
 ///   approx or calculated, without `dependencies` ("depends on all knowns": always correct
 ///   without the shell knowing the physics).
-fn write_model_structure(w: &mut Writer<Vec<u8>>, model: &Model) -> io::Result<()> {
+fn write_model_structure(w: &mut XmlWriter, model: &Model) -> io::Result<()> {
     let structure = model.structure;
-    let in_structure = |vr: u32| {
-        structure
-            .derivatives
-            .iter()
-            .any(|d| d.state == vr || d.derivative == vr)
-    };
-    let initial_unknowns: Vec<String> = model
-        .vars
-        .iter()
-        .filter(|v| {
-            let calculated = matches!(
-                v.effective_initial(),
-                Some(Initial::Approx | Initial::Calculated)
-            );
-            match v.causality {
-                Causality::Output => calculated,
-                Causality::CalculatedParameter => true,
-                _ => calculated && in_structure(v.value_reference),
-            }
-        })
-        .map(|v| v.value_reference.to_string())
+    let initial_unknowns: Vec<String> = initial_unknowns(model.vars, structure)
+        .into_iter()
+        .map(|(_, v)| v.value_reference.to_string())
         .collect();
     w.create_element("ModelStructure")
         .write_inner_content(|w| {

@@ -1,12 +1,13 @@
 //! The state machine of FMI 3.0 for Model Exchange and Co-Simulation (standard sections 3.2
 //! and 4.2) as one table: one bit per state ([`Phase::bit`]), and for each function the mask
 //! of the states it may be called in ([`allowed`]). The instance checks every call against
-//! it; which variables `fmi3SetFloat64` may set in a state is [`settable`].
+//! it; which variables `fmi3SetFloat64` may set in a state is [`States::set_rule`].
 
 use serde::{Deserialize, Serialize};
 
 use super::types::InstanceKind;
-use crate::fmi_common::variables::{Causality, Initial, Variability, Variable};
+use crate::fmi_common::state_machine::SetRule;
+pub use crate::fmi_common::state_machine::{Experiment, Mask, States, names};
 
 /// The states this FMU can be in. Configuration, Reconfiguration, Clock Activation and
 /// Intermediate Update Mode are unreachable: the FMU has no structural parameters, no clocks
@@ -27,43 +28,10 @@ pub enum Phase {
     Error = 7,
 }
 
-/// A set of states, one bit per [`Phase`].
-pub type Mask = u8;
-
 impl Phase {
-    const ALL: [Phase; 8] = [
-        Phase::Instantiated,
-        Phase::InitializationMode,
-        Phase::EventMode,
-        Phase::ContinuousTimeMode,
-        Phase::StepMode,
-        Phase::StepDiscarded,
-        Phase::Terminated,
-        Phase::Error,
-    ];
-
-    /// The state's name in the standard.
-    pub fn name(self) -> &'static str {
-        match self {
-            Phase::Instantiated => "Instantiated",
-            Phase::InitializationMode => "Initialization Mode",
-            Phase::EventMode => "Event Mode",
-            Phase::ContinuousTimeMode => "Continuous-Time Mode",
-            Phase::StepMode => "Step Mode",
-            Phase::StepDiscarded => "Step Discarded",
-            Phase::Terminated => "Terminated",
-            Phase::Error => "error (after an internal error)",
-        }
-    }
-
     /// The state's bit in a [`Mask`].
     pub const fn bit(self) -> Mask {
         1 << self as u8
-    }
-
-    /// Whether the state is in `mask`.
-    pub fn is_in(self, mask: Mask) -> bool {
-        self.bit() & mask != 0
     }
 
     /// Whether an instance of `interface` can be in this state.
@@ -76,14 +44,44 @@ impl Phase {
     }
 }
 
-/// The names of the states in `mask`, in the order of the standard, for messages.
-pub fn names(mask: Mask) -> String {
-    let names: Vec<&str> = Phase::ALL
-        .iter()
-        .filter(|p| p.is_in(mask))
-        .map(|p| p.name())
-        .collect();
-    names.join(", ")
+impl States for Phase {
+    const ALL: &'static [Phase] = &[
+        Phase::Instantiated,
+        Phase::InitializationMode,
+        Phase::EventMode,
+        Phase::ContinuousTimeMode,
+        Phase::StepMode,
+        Phase::StepDiscarded,
+        Phase::Terminated,
+        Phase::Error,
+    ];
+
+    fn name(self) -> &'static str {
+        match self {
+            Phase::Instantiated => "Instantiated",
+            Phase::InitializationMode => "Initialization Mode",
+            Phase::EventMode => "Event Mode",
+            Phase::ContinuousTimeMode => "Continuous-Time Mode",
+            Phase::StepMode => "Step Mode",
+            Phase::StepDiscarded => "Step Discarded",
+            Phase::Terminated => "Terminated",
+            Phase::Error => "error (after an internal error)",
+        }
+    }
+
+    fn bit(self) -> Mask {
+        Phase::bit(self)
+    }
+
+    fn set_rule(self) -> SetRule {
+        match self {
+            Phase::Instantiated => SetRule::StartValues,
+            Phase::InitializationMode => SetRule::ExactStartValues,
+            Phase::EventMode | Phase::StepMode => SetRule::InputsAndTunableParameters,
+            Phase::ContinuousTimeMode => SetRule::ContinuousInputs,
+            _ => SetRule::Nothing,
+        }
+    }
 }
 
 /// The states each function may be called in. Allowed in every state, and so not checked:
@@ -116,7 +114,7 @@ pub mod allowed {
         | STEP_DISCARDED
         | TERMINATED
         | ERROR;
-    /// `fmi3Set{Float64,…}`; which variables depends on the state ([`settable`](super::settable)).
+    /// `fmi3Set{Float64,…}`; which variables depends on the state ([`States::set_rule`]).
     pub const SET_VALUES: Mask =
         INSTANTIATED | INITIALIZATION_MODE | EVENT_MODE | CONTINUOUS_TIME_MODE | STEP_MODE;
     pub const DIRECTIONAL_DERIVATIVE: Mask = INITIALIZATION_MODE
@@ -140,47 +138,19 @@ pub mod allowed {
     pub const DO_STEP: Mask = STEP_MODE;
 }
 
-/// Whether `fmi3SetFloat64` may set `v` in state `phase` (sections 2.3.3, 3.2 and 4.2: start
-/// values before initialization, exact ones during it; then inputs and tunable parameters,
-/// in Continuous-Time Mode continuous inputs only).
-pub fn settable(phase: Phase, v: &Variable) -> bool {
-    let input = v.causality == Causality::Input;
-    let initial = v.effective_initial();
-    let tunable = v.causality == Causality::Parameter && v.variability == Variability::Tunable;
-    v.variability != Variability::Constant
-        && v.causality != Causality::Independent
-        && match phase {
-            Phase::Instantiated => {
-                input || matches!(initial, Some(Initial::Exact | Initial::Approx))
-            }
-            Phase::InitializationMode => input || initial == Some(Initial::Exact),
-            Phase::EventMode | Phase::StepMode => input || tunable,
-            Phase::ContinuousTimeMode => input && v.variability == Variability::Continuous,
-            _ => false,
-        }
-}
-
-/// The experiment of `fmi3EnterInitializationMode` (section 2.3.2).
-#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
-pub struct Experiment {
-    pub start_time: f64,
-    pub stop_time: Option<f64>,
-    pub tolerance: Option<f64>,
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
 
     #[test]
     fn each_phase_has_its_own_bit_and_belongs_to_its_interfaces() {
-        for (i, p) in Phase::ALL.into_iter().enumerate() {
+        for (i, p) in Phase::ALL.iter().copied().enumerate() {
             assert_eq!(p.bit(), 1 << i);
         }
         assert!(!Phase::StepMode.belongs_to(InstanceKind::ModelExchange));
         assert!(!Phase::ContinuousTimeMode.belongs_to(InstanceKind::CoSimulation));
         assert_eq!(
-            names(allowed::TERMINATE),
+            names::<Phase>(allowed::TERMINATE),
             "Event Mode, Continuous-Time Mode, Step Mode, Step Discarded"
         );
     }

@@ -92,11 +92,3 @@ pub type fmi3ClockUpdateCallback =
     Option<unsafe extern "C" fn(instance_environment: fmi3InstanceEnvironment)>;
 /// `fmi3LockPreemptionCallback` / `fmi3UnlockPreemptionCallback`, likewise.
 pub type fmi3PreemptionCallback = Option<unsafe extern "C" fn()>;
-
-/// The name of an instance kind in messages.
-pub fn kind_name(kind: InstanceKind) -> &'static str {
-    match kind {
-        InstanceKind::ModelExchange => "Model Exchange",
-        InstanceKind::CoSimulation => "Co-Simulation",
-    }
-}

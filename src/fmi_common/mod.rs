@@ -1,12 +1,19 @@
 //! What an FMI shell and the model behind it share, whatever the FMI version: the model's
 //! side of the interface ([`model_api::FmuCore`]), its variable table with the rules on
 //! causality, variability, initial and start ([`variables`]), the unit table
-//! ([`units`]), what both versions write alike in `modelDescription.xml` ([`xml`]) and the
-//! shells' version-free helpers ([`shell`]). The FMI 2.0 shell is [`crate::fmi2`], the FMI 3.0 shell
-//! [`crate::fmi3`], over the same pieces.
+//! ([`units`]); and what the two shells share beyond their C signatures, status types, state
+//! names and XML dialects: what both versions write alike in `modelDescription.xml` ([`xml`]),
+//! the state machines' mask mechanism and set rule ([`state_machine`]), value access by value
+//! reference ([`values`]), FMU states and their serialized frame ([`fmu_state`]), the bodies of
+//! the C functions both define alike ([`calls`]) and the version-free helpers ([`shell`]). The
+//! FMI 2.0 shell is [`crate::fmi2`], the FMI 3.0 shell [`crate::fmi3`], over the same pieces.
 
+pub mod calls;
+pub mod fmu_state;
 pub mod model_api;
 pub mod shell;
+pub mod state_machine;
 pub mod units;
+pub mod values;
 pub mod variables;
 pub mod xml;

@@ -17,6 +17,16 @@ pub enum InstanceKind {
     CoSimulation,
 }
 
+impl InstanceKind {
+    /// The interface's name in the standard, for messages.
+    pub fn name(self) -> &'static str {
+        match self {
+            InstanceKind::ModelExchange => "Model Exchange",
+            InstanceKind::CoSimulation => "Co-Simulation",
+        }
+    }
+}
+
 /// One continuous state of the model's state vector and what its derivative depends on.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct StateDerivative {

@@ -4,7 +4,7 @@
 
 use std::borrow::Cow;
 use std::collections::HashSet;
-use std::ffi::{CStr, c_char};
+use std::ffi::{CStr, CString, c_char};
 
 /// A C string argument; `None` for NULL.
 ///
@@ -36,6 +36,12 @@ pub unsafe fn out_slice<'a, T>(p: *mut T, n: usize) -> Option<&'a mut [T]> {
         (_, true) => None,
         _ => Some(unsafe { std::slice::from_raw_parts_mut(p, n) }),
     }
+}
+
+/// `text` as a C string for the importer's logger; an interior NUL, which would end it early,
+/// is written as the escape `\0`.
+pub fn c_string(text: &str) -> CString {
+    CString::new(text.replace('\0', "\\0")).unwrap_or_default()
 }
 
 /// The debug-logging switch of `fmi2SetDebugLogging` / `fmi3SetDebugLogging`: on or off, for

@@ -1,14 +1,20 @@
-//! Pieces of `modelDescription.xml` that FMI 2.0 and 3.0 write alike: numbers as `xs:double`
-//! and the `<UnitDefinitions>` of the units a variable table uses (FMI 2.0 section 2.2.2,
-//! FMI 3.0 section 2.4.3: the same `<Unit><BaseUnit/></Unit>` elements).
+//! What FMI 2.0 and 3.0 write alike in `modelDescription.xml`, and the checks before: numbers
+//! as `xs:double`, the model's optional attributes, `<UnitDefinitions>` (FMI 2.0 section 2.2.2,
+//! FMI 3.0 section 2.4.3: the same `<Unit><BaseUnit/></Unit>` elements), `<LogCategories>`,
+//! `<DefaultExperiment>` and which variables are initial unknowns. Each version writes its own
+//! dialect around them (element names, references by index or by value reference).
 
 use std::collections::BTreeSet;
 use std::io;
 
 use quick_xml::Writer;
 
+use super::model_api::ModelStructure;
 use super::units::{self, BASE_UNIT_NAMES};
-use super::variables::Variable;
+use super::variables::{Causality, Initial, ModelInfo, Variable};
+
+/// An XML writer of a description.
+pub type XmlWriter = Writer<Vec<u8>>;
 
 /// A double as `xs:double`: the shortest form that reads back to the same bits, infinities
 /// as `INF` / `-INF`.
@@ -19,9 +25,166 @@ pub fn xs_double(x: f64) -> String {
     format!("{x:?}")
 }
 
+/// A boolean attribute value.
+pub fn flag(b: bool) -> &'static str {
+    if b { "true" } else { "false" }
+}
+
+/// Checks the model information: a consistent, finite default experiment and a model
+/// identifier that is a C identifier (it prefixes the library's file name and, in FMI 2.0,
+/// may prefix the function names).
+pub fn check_info(info: &ModelInfo) -> Result<(), String> {
+    let e = &info.default_experiment;
+    let times = [
+        ("startTime", e.start_time),
+        ("stopTime", e.stop_time),
+        ("stepSize", e.step_size),
+        ("tolerance", e.tolerance),
+    ];
+    if let Some((name, x)) = times.iter().find(|(_, x)| !x.is_finite()) {
+        return Err(format!("DefaultExperiment {name} is not finite: {x:?}"));
+    }
+    if !(e.stop_time > e.start_time && e.step_size > 0.0 && e.tolerance > 0.0) {
+        return Err(format!("DefaultExperiment is inconsistent: {e:?}"));
+    }
+    let ident = &info.model_identifier;
+    if ident.is_empty() || !ident.chars().all(|c| c.is_ascii_alphanumeric() || c == '_') {
+        return Err(format!(
+            "modelIdentifier {ident:?} is not a valid C identifier"
+        ));
+    }
+    Ok(())
+}
+
+/// Checks that every value reference of the structure is a variable of the table, that each
+/// derivative is declared as the derivative of its state and each output is an output.
+pub fn check_structure(vars: &[Variable], structure: &ModelStructure) -> Result<(), String> {
+    let var = |vr: u32| {
+        vars.iter().find(|v| v.value_reference == vr).ok_or(format!(
+            "the model structure names value reference {vr}, which is not in the variable table"
+        ))
+    };
+    for s in &structure.derivatives {
+        let der = var(s.derivative)?;
+        if der.derivative != Some(s.state) {
+            return Err(format!(
+                "{} is listed as the derivative of value reference {}, but its derivative attribute says {:?}",
+                der.name, s.state, der.derivative
+            ));
+        }
+        for &vr in &s.dependencies {
+            var(vr)?;
+        }
+    }
+    for o in &structure.outputs {
+        if var(o.output)?.causality != Causality::Output {
+            return Err(format!(
+                "value reference {} of the outputs is not an output",
+                o.output
+            ));
+        }
+        for &vr in &o.dependencies {
+            var(vr)?;
+        }
+    }
+    Ok(())
+}
+
+/// The optional attributes of `<fmiModelDescription>` the model gives (description, author,
+/// version, generationTool), in that order.
+pub fn model_attributes(info: &ModelInfo) -> Vec<(&'static str, &str)> {
+    [
+        ("description", &info.description),
+        ("author", &info.author),
+        ("version", &info.version),
+        ("generationTool", &info.generation_tool),
+    ]
+    .into_iter()
+    .filter(|(_, value)| !value.is_empty())
+    .map(|(key, value)| (key, value.as_str()))
+    .collect()
+}
+
+/// All log categories: the shell's, then the model's that are not among them.
+pub fn log_categories(shell: &[(&str, &str)], info: &ModelInfo) -> Vec<(String, String)> {
+    let mut all: Vec<(String, String)> = shell
+        .iter()
+        .map(|(n, d)| (n.to_string(), d.to_string()))
+        .collect();
+    for (name, description) in &info.log_categories {
+        if all.iter().all(|(n, _)| n != name) {
+            all.push((name.clone(), description.clone()));
+        }
+    }
+    all
+}
+
+/// `<LogCategories>` (FMI 2.0 section 2.2.4, FMI 3.0 section 2.4.5).
+pub fn write_log_categories(w: &mut XmlWriter, categories: &[(String, String)]) -> io::Result<()> {
+    w.create_element("LogCategories").write_inner_content(|w| {
+        for (name, description) in categories {
+            w.create_element("Category")
+                .with_attributes([
+                    ("name", name.as_str()),
+                    ("description", description.as_str()),
+                ])
+                .write_empty()?;
+        }
+        Ok(())
+    })?;
+    Ok(())
+}
+
+/// `<DefaultExperiment>` (FMI 2.0 section 2.2.5, FMI 3.0 section 2.4.6).
+pub fn write_default_experiment(w: &mut XmlWriter, info: &ModelInfo) -> io::Result<()> {
+    let e = &info.default_experiment;
+    let values = [
+        ("startTime", e.start_time),
+        ("stopTime", e.stop_time),
+        ("tolerance", e.tolerance),
+        ("stepSize", e.step_size),
+    ]
+    .map(|(name, x)| (name, xs_double(x)));
+    w.create_element("DefaultExperiment")
+        .with_attributes(values.iter().map(|(n, x)| (*n, x.as_str())))
+        .write_empty()?;
+    Ok(())
+}
+
+/// The initial unknowns, as `(position in vars, variable)` in table order: exactly the list the
+/// standard prescribes (FMI 2.0 section 2.2.8, FMI 3.0 section 2.4.8): outputs with initial
+/// approx or calculated, calculated parameters, and the continuous states and state
+/// derivatives with initial approx or calculated. Written without `dependencies` ("depends on
+/// all knowns"): always correct without the shell knowing the physics.
+pub fn initial_unknowns<'a>(
+    vars: &'a [Variable],
+    structure: &ModelStructure,
+) -> Vec<(usize, &'a Variable)> {
+    let in_structure = |vr: u32| {
+        structure
+            .derivatives
+            .iter()
+            .any(|d| d.state == vr || d.derivative == vr)
+    };
+    vars.iter()
+        .enumerate()
+        .filter(|(_, v)| {
+            let calculated = matches!(
+                v.effective_initial(),
+                Some(Initial::Approx | Initial::Calculated)
+            );
+            match v.causality {
+                Causality::Output => calculated,
+                Causality::CalculatedParameter => true,
+                _ => calculated && in_structure(v.value_reference),
+            }
+        })
+        .collect()
+}
+
 /// `<UnitDefinitions>`: every unit of `vars`, with its SI base-unit exponents; nothing when no
 /// variable has a unit. The table must have passed `check_variable_table` (known units only).
-pub fn write_unit_definitions(w: &mut Writer<Vec<u8>>, vars: &[Variable]) -> io::Result<()> {
+pub fn write_unit_definitions(w: &mut XmlWriter, vars: &[Variable]) -> io::Result<()> {
     let used: BTreeSet<&str> = vars.iter().filter_map(|v| v.unit.as_deref()).collect();
     if used.is_empty() {
         return Ok(());

@@ -355,6 +355,26 @@ mod tests {
     }
 
     #[test]
+    fn both_versions_declare_the_interfaces_and_derivatives_the_model_offers() {
+        let p = Params::default();
+        for version in [FmiVersion::V2, FmiVersion::V3] {
+            let flag = match version {
+                FmiVersion::V2 => "providesDirectionalDerivative=",
+                FmiVersion::V3 => "providesDirectionalDerivatives=",
+            };
+            let count = |xml: &str, value: &str| xml.matches(&format!("{flag}\"{value}\"")).count();
+            // the platform: Model Exchange and Co-Simulation, each with directional derivatives
+            let full = version.model_description(&platform(&p));
+            assert!(full.contains("<ModelExchange") && full.contains("<CoSimulation"));
+            assert_eq!((count(&full, "true"), count(&full, "false")), (2, 0));
+            // the inverse: Co-Simulation only, without them
+            let inverse = version.model_description(&inverse::spec(&p));
+            assert!(!inverse.contains("<ModelExchange") && inverse.contains("<CoSimulation"));
+            assert_eq!((count(&inverse, "true"), count(&inverse, "false")), (0, 1));
+        }
+    }
+
+    #[test]
     fn documentation_lists_every_variable() {
         for spec in specs() {
             let doc = documentation(&spec, FmiVersion::V2);
