@@ -2,7 +2,8 @@
 //! full one with its confusion matrix is `hasel bench --diagnose`): each effect of the library
 //! hidden in another form, with the base parameters off by up to 20 % and 0.5–2 % noise, must be
 //! named exactly with the fit after it at the noise floor; data without an effect must give
-//! `none`; a mechanism outside the library `unexplained`.
+//! `none`; a mechanism outside the library `unexplained`; lab artifacts (sensor lag and
+//! resolution, outliers, dropped rows) must not name an effect nor hide one.
 
 use hasel_fmu::diagnose::hidden::{self, Truth};
 use hasel_fmu::diagnose::{self, FIT_TOLERANCE, Options, Verdict, floor_fit};
@@ -13,7 +14,10 @@ use hasel_fmu::model::{Effect, Params};
 const T_END: f64 = 6.0;
 
 fn diagnose_case(truth: Truth, columns: Columns, seed: u64) -> diagnose::Diagnosis {
-    let case = hidden::hide(truth, seed).unwrap();
+    diagnose_hidden(hidden::hide(truth, seed).unwrap(), columns, seed)
+}
+
+fn diagnose_hidden(case: hidden::Hidden, columns: Columns, seed: u64) -> diagnose::Diagnosis {
     let exps = case.experiments(columns, T_END, seed).unwrap();
     diagnose::diagnose(&Params::default(), exps, &Options::default()).unwrap()
 }
@@ -25,6 +29,10 @@ fn named(effect: Effect, seed: u64) {
 
 fn named_from(effect: Effect, columns: Columns, seed: u64) {
     let d = diagnose_case(Truth::Effect(effect), columns, seed);
+    assert_named(effect, &d);
+}
+
+fn assert_named(effect: Effect, d: &diagnose::Diagnosis) {
     assert_eq!(
         d.verdict,
         Verdict::Effect,
@@ -120,4 +128,42 @@ fn a_mechanism_outside_the_library_is_unexplained() {
     // and the analysis shows why: most of the structured residual is off the drive's harmonics
     let off: f64 = d.before.iter().map(|x| x.off_harmonic).sum::<f64>() / d.before.len() as f64;
     assert!(off > 0.5, "off-harmonic share {off}");
+}
+
+/// The outliers drawn are found and trimmed: at least half as many as the rate promises.
+fn outliers_reported(case: &hidden::Hidden, d: &diagnose::Diagnosis) {
+    let art = case.artifacts.as_ref().unwrap();
+    let samples: usize = d
+        .experiments
+        .iter()
+        .map(|e| e.t.len() * e.channels.len())
+        .sum();
+    let found: usize = d.outliers.iter().map(|o| o.times.len()).sum();
+    let drawn = art.outlier_rate * samples as f64;
+    assert!(
+        found as f64 >= 0.5 * drawn && (found as f64) < 2.0 * drawn + 3.0,
+        "{found} outliers found, about {drawn:.0} drawn"
+    );
+}
+
+#[test]
+fn no_effect_is_named_on_lab_data() {
+    for seed in [1, 2] {
+        let case = hidden::hide(Truth::Nothing, seed)
+            .unwrap()
+            .with_artifacts(seed);
+        let d = diagnose_hidden(case.clone(), Columns::Heights, seed);
+        assert_eq!(d.verdict, Verdict::None, "seed {seed}: {:?}", d.effects);
+        outliers_reported(&case, &d);
+    }
+}
+
+#[test]
+fn an_effect_is_named_on_lab_data() {
+    let case = hidden::hide(Truth::Effect(Effect::Creep), 1)
+        .unwrap()
+        .with_artifacts(1);
+    let d = diagnose_hidden(case.clone(), Columns::Heights, 1);
+    assert_named(Effect::Creep, &d);
+    outliers_reported(&case, &d);
 }

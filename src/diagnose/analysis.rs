@@ -18,7 +18,7 @@ pub struct Disagreement {
     pub channel: Channel,
     /// Residual (measured − simulated) RMS [m].
     pub rms: f64,
-    /// Measurement noise estimated from the data's second differences [m].
+    /// Measurement noise estimated from the samples' departures from their neighbours [m].
     pub noise: f64,
     /// Residual variance beyond the noise, as a fraction of the noise variance (0 at the
     /// noise floor).
@@ -40,17 +40,97 @@ pub struct Disagreement {
     pub off_harmonic: f64,
 }
 
-/// Measurement noise from second differences: a smooth signal's second difference at 1 ms is
-/// negligible, white noise's has variance 6 σ².
-pub fn noise_level(y: &[f64]) -> f64 {
-    let n = y.len();
-    if n < 3 {
+/// Each sample's departure from the straight line through its two neighbours, divided by the
+/// standard deviation that white noise of unit σ gives it: y_k − (w₀ y_{k−1} + w₁ y_{k+1}) with
+/// w₀ = h₁/(h₀+h₁), w₁ = h₀/(h₀+h₁) has variance σ² (1 + w₀² + w₁²). A smooth signal's departure
+/// at 1 ms is negligible, and uneven sampling (dropped rows) changes only the weights.
+fn departures(t: &[f64], y: &[f64]) -> Vec<f64> {
+    (1..y.len().saturating_sub(1))
+        .map(|k| {
+            let (h0, h1) = (t[k] - t[k - 1], t[k + 1] - t[k]);
+            let (w0, w1) = (h1 / (h0 + h1), h0 / (h0 + h1));
+            (y[k] - w0 * y[k - 1] - w1 * y[k + 1]) / (1.0 + w0 * w0 + w1 * w1).sqrt()
+        })
+        .collect()
+}
+
+/// Measurement noise σ from the departures of the samples from their neighbours' line (on an
+/// even grid, the second differences: their variance is 6 σ²).
+pub fn noise_level(t: &[f64], y: &[f64]) -> f64 {
+    let d = departures(t, y);
+    if d.is_empty() {
         return 0.0;
     }
-    let s: f64 = (1..n - 1)
-        .map(|k| (y[k + 1] - 2.0 * y[k] + y[k - 1]).powi(2))
-        .sum();
-    (s / (6.0 * (n - 2) as f64)).sqrt()
+    (d.iter().map(|v| v * v).sum::<f64>() / d.len() as f64).sqrt()
+}
+
+/// A sample is an outlier when its departure from its neighbours' line exceeds this many
+/// robust σ: white noise goes past 6 σ once in 5·10⁸ samples.
+pub const OUTLIER_SIGMAS: f64 = 6.0;
+
+/// The samples of `y` that are outliers: a departure beyond [`OUTLIER_SIGMAS`] times the robust
+/// σ (1.4826 × the median absolute departure), larger than both neighbours' (a spike also
+/// moves its neighbours' departures, by half its own).
+pub fn outliers(t: &[f64], y: &[f64]) -> Vec<usize> {
+    let d = departures(t, y);
+    if d.len() < 3 {
+        return Vec::new();
+    }
+    let mut abs: Vec<f64> = d.iter().map(|v| v.abs()).collect();
+    let mid = abs.len() / 2;
+    let (_, median, _) = abs.select_nth_unstable_by(mid, f64::total_cmp);
+    // quantization can make most departures equal; the RMS keeps the scale honest then
+    let rms = (d.iter().map(|v| v * v).sum::<f64>() / d.len() as f64).sqrt();
+    let sigma = (1.4826 * *median).max(0.5 * rms);
+    let a = |k: usize| d.get(k).map_or(0.0, |v: &f64| v.abs());
+    (0..d.len())
+        .filter(|&k| {
+            let before = if k > 0 { a(k - 1) } else { 0.0 };
+            a(k) > OUTLIER_SIGMAS * sigma && a(k) >= before && a(k) >= a(k + 1)
+        })
+        .map(|k| k + 1)
+        .collect()
+}
+
+/// The outliers found on one output of one experiment.
+#[derive(Clone, Debug)]
+pub struct Outliers {
+    pub experiment: String,
+    pub channel: Channel,
+    /// When they occurred [s].
+    pub times: Vec<f64>,
+}
+
+/// The experiments without the rows where any output has an outlier (a trimmed fit: a spike
+/// would otherwise pull the least squares, and inflate the noise the verdict is judged
+/// against), and the outliers found.
+pub fn trim_outliers(
+    experiments: Vec<Experiment>,
+) -> Result<(Vec<Experiment>, Vec<Outliers>), crate::io::file::FileError> {
+    let mut found = Vec::new();
+    let mut out = Vec::with_capacity(experiments.len());
+    for exp in experiments {
+        let mut keep = vec![true; exp.t.len()];
+        for (channel, y) in &exp.channels {
+            let rows = outliers(&exp.t, y);
+            if !rows.is_empty() {
+                for &k in &rows {
+                    keep[k] = false;
+                }
+                found.push(Outliers {
+                    experiment: exp.name.clone(),
+                    channel: *channel,
+                    times: rows.iter().map(|&k| exp.t[k]).collect(),
+                });
+            }
+        }
+        out.push(if keep.iter().all(|&k| k) {
+            exp
+        } else {
+            exp.rows(&keep)?
+        });
+    }
+    Ok((out, found))
 }
 
 /// Drive frequency from the zero crossings of U1 − mean [rad/s].
@@ -118,7 +198,7 @@ pub fn disagreements(exp: &Experiment, sim: &[Sample]) -> Vec<Disagreement> {
             let yhat: Vec<f64> = sim.iter().map(|s| channel.of(s)).collect();
             let r: Vec<f64> = y.iter().zip(&yhat).map(|(a, b)| a - b).collect();
             let rms = (r.iter().map(|v| v * v).sum::<f64>() / n as f64).sqrt();
-            let noise = noise_level(y);
+            let noise = noise_level(t, y);
             let excess = if noise > 0.0 {
                 (rms / noise).powi(2) - 1.0
             } else {
@@ -221,4 +301,42 @@ fn slow_power(t: &[f64], r: &[f64], w_max: f64) -> f64 {
         }
     }
     p / count as f64
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::identify::synth::Normal;
+
+    /// A 50 µm sine at 11 rad/s with 1 µm white noise, sampled every 1 ms but with every
+    /// seventh row and a 60 ms stretch missing.
+    fn uneven() -> (Vec<f64>, Vec<f64>) {
+        let mut rng = Normal::new(7);
+        let t: Vec<f64> = (0..6000)
+            .filter(|k| k % 7 != 3 && !(2000..2060).contains(k))
+            .map(|k| k as f64 * 1e-3)
+            .collect();
+        let y = t
+            .iter()
+            .map(|t| 50e-6 * (11.0 * t).sin() + 1e-6 * rng.sample())
+            .collect();
+        (t, y)
+    }
+
+    #[test]
+    fn the_noise_is_measured_on_uneven_sampling() {
+        let (t, y) = uneven();
+        let sigma = noise_level(&t, &y);
+        assert!((sigma / 1e-6 - 1.0).abs() < 0.05, "{sigma:e}");
+    }
+
+    #[test]
+    fn spikes_are_found_and_nothing_else() {
+        let (t, mut y) = uneven();
+        assert!(outliers(&t, &y).is_empty());
+        for (k, a) in [(100, 12e-6), (2500, -20e-6), (4000, 40e-6)] {
+            y[k] += a;
+        }
+        assert_eq!(outliers(&t, &y), vec![100, 2500, 4000]);
+    }
 }

@@ -3,13 +3,15 @@
 //! form that differs from the library's term, its magnitude random within a range where it
 //! visibly changes the response, measurement noise of 0.5–2 % of each output's range, and the
 //! paper's two experiments (the 60 V sine at 3π and at 11 rad/s). Also data with no effect and
-//! with a mechanism outside the library (a floor vibration picked up by the sensor).
+//! with a mechanism outside the library (a floor vibration picked up by the sensor). Any case
+//! can be recorded as lab data, with artifacts on top ([`Hidden::with_artifacts`]).
 
 use std::f64::consts::PI;
 
 use super::Error;
+use super::artifacts::Artifacts;
 use crate::identify::Experiment;
-use crate::identify::synth::{self, Columns, DATA_RTOL, Normal, Spec};
+use crate::identify::synth::{self, Columns, DATA_RTOL, Normal, Sensor, Spec};
 use crate::model::Params;
 use crate::model::effects::{Effect, HysteresisLaw, PreloadLaw};
 use crate::simulation::{Input, InputError, Interpolation};
@@ -53,6 +55,7 @@ impl Truth {
 pub const OMEGAS: [f64; 2] = [3.0 * PI, 11.0];
 
 /// A generated case: the true parameters and what else the data hide.
+#[derive(Clone)]
 pub struct Hidden {
     pub truth: Truth,
     pub params: Params,
@@ -63,6 +66,8 @@ pub struct Hidden {
     pub wandering_delay: Option<(f64, f64)>,
     /// Floor vibration: amplitude (fraction of range), frequency [Hz], phase [rad].
     pub vibration: Option<(f64, f64, f64)>,
+    /// What lab data add on top (`src/diagnose/artifacts.rs`), if any.
+    pub artifacts: Option<Artifacts>,
     /// The hidden mechanism and its values, in words.
     pub description: String,
 }
@@ -189,6 +194,7 @@ pub fn hide(truth: Truth, seed: u64) -> Result<Hidden, Error> {
         noise,
         wandering_delay,
         vibration,
+        artifacts: None,
         description: format!("{description}; noise {:.2} % of range", 100.0 * noise),
     })
 }
@@ -222,6 +228,14 @@ fn delayed(input: &Input, tau: f64, phase: f64, t_end: f64) -> Result<Input, Inp
 }
 
 impl Hidden {
+    /// This case recorded as lab data: with artifacts drawn from `seed`.
+    pub fn with_artifacts(mut self, seed: u64) -> Hidden {
+        let a = Artifacts::draw(self.noise, seed);
+        self.description = format!("{}; {}", self.description, a.describe());
+        self.artifacts = Some(a);
+        self
+    }
+
     /// The experiment of `input` recorded in `columns` every `dt` up to `t_end`, with this
     /// case's parameters, hidden mechanism and noise (noise drawn from `seed`).
     pub fn spec(
@@ -244,6 +258,7 @@ impl Hidden {
             t_end,
             dt,
             noise: self.noise,
+            sensor: self.artifacts.as_ref().map_or(Sensor::IDEAL, |a| a.sensor),
             columns,
             seed,
             rtol: DATA_RTOL,
@@ -269,7 +284,11 @@ impl Hidden {
                     columns,
                     seed.wrapping_mul(31).wrapping_add(k as u64),
                 )?;
-                Ok(synth::experiment(&spec, name)?)
+                let exp = synth::experiment(&spec, name)?;
+                match &self.artifacts {
+                    Some(a) => a.apply(&exp, self.noise, k as u64),
+                    None => Ok(exp),
+                }
             })
             .collect()
     }

@@ -21,10 +21,12 @@
 //! `unexplained` when the residual is structured but no candidate passes.
 
 pub mod analysis;
+pub mod artifacts;
 mod error;
 pub mod hidden;
 pub mod report;
 pub mod screen;
+pub mod separate;
 
 use std::collections::BTreeMap;
 use std::time::{Duration, Instant};
@@ -151,8 +153,10 @@ pub struct Diagnosis {
     pub verdict: Verdict,
     pub effects: Vec<Effect>,
     pub ambiguous_between: Vec<Effect>,
-    /// For `ambiguous`: the experiment that would tell the candidates apart.
+    /// For `ambiguous`: the experiment that would tell the candidates apart…
     pub separating_experiment: Option<String>,
+    /// …and what simulating it with both refitted models shows.
+    pub separation: Vec<separate::Separation>,
     /// Names of the estimation and the held-out experiments.
     pub estimation: String,
     pub held_out: Vec<String>,
@@ -163,7 +167,10 @@ pub struct Diagnosis {
     pub rounds: Vec<Round>,
     /// Wall time per stage [s].
     pub timing: Vec<(String, f64)>,
+    /// The experiments as diagnosed: without the rows trimmed as outliers.
     pub experiments: Vec<Experiment>,
+    /// The outliers found and trimmed, per experiment and output.
+    pub outliers: Vec<analysis::Outliers>,
 }
 
 impl Diagnosis {
@@ -279,10 +286,72 @@ fn worst_gap_to_floor(held: &[Experiment], id: &Identification) -> f64 {
     worst
 }
 
+/// What the final model leaves on one held-out output that lies more than [`FIT_TOLERANCE`]
+/// below its noise floor: how far, and where (the disagreement's worst window, largest
+/// harmonic and drift).
+#[derive(Clone, Debug)]
+pub struct Remaining<'d> {
+    /// Noise-floor fit minus the fit [points].
+    pub gap: f64,
+    pub disagreement: &'d Disagreement,
+}
+
+impl Remaining<'_> {
+    /// Where the remaining disagreement lies, in words.
+    pub fn describe(&self) -> String {
+        let d = self.disagreement;
+        let (k, a) = d
+            .harmonics
+            .iter()
+            .enumerate()
+            .fold((0, 0.0), |m, (k, &a)| if a > m.1 { (k, a) } else { m });
+        let at = if k == 0 {
+            "as an offset".to_string()
+        } else {
+            format!("at {k} x the drive ({:.1} rad/s)", k as f64 * d.omega)
+        };
+        format!(
+            "{} on {}: {:.2} points below the noise floor; largest component {:.3} um {at}, drift {:.3} um, worst in {:.2}-{:.2} s, {:.0} % of the structured residual off the drive's harmonics",
+            d.channel.name(),
+            d.experiment,
+            self.gap,
+            a * 1e6,
+            d.drift * 1e6,
+            d.worst_window.0.0,
+            d.worst_window.0.1,
+            100.0 * d.off_harmonic
+        )
+    }
+}
+
+/// The held-out outputs the final model leaves more than [`FIT_TOLERANCE`] below the noise
+/// floor (src/diagnose/diagnose.md, "What remains").
+pub fn remaining(d: &Diagnosis) -> Vec<Remaining<'_>> {
+    let (exps, fits) = if d.last.validation.is_empty() {
+        (&d.experiments[..1], &d.last.estimation)
+    } else {
+        (&d.experiments[1..], &d.last.validation)
+    };
+    let mut out = Vec::new();
+    for (e, f) in exps.iter().zip(fits) {
+        for (name, v) in &f.fits {
+            let gap = floor_fit(e, name).map_or(0.0, |floor| floor - v);
+            let dis = d
+                .after
+                .iter()
+                .find(|x| x.experiment == e.name && x.channel.name() == name);
+            if let (true, Some(disagreement)) = (gap > FIT_TOLERANCE, dis) {
+                out.push(Remaining { gap, disagreement });
+            }
+        }
+    }
+    out
+}
+
 /// The fit that the noise alone allows on channel `name` of `exp`.
 pub fn floor_fit(exp: &Experiment, name: &str) -> Option<f64> {
     let (_, y) = exp.channels.iter().find(|(c, _)| c.name() == name)?;
-    let noise = analysis::noise_level(y);
+    let noise = analysis::noise_level(&exp.t, y);
     let mean = y.iter().sum::<f64>() / y.len() as f64;
     let spread = (y.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / y.len() as f64).sqrt();
     Some(100.0 * (1.0 - noise / spread))
@@ -319,6 +388,8 @@ pub fn diagnose(
     }
     let mut timing = Vec::new();
     let began = Instant::now();
+    let (experiments, outliers) =
+        analysis::trim_outliers(experiments).map_err(identify::Error::from)?;
     let (estimation, held) = experiments.split_at(1);
     // the ordering of the experiments in the identification's `simulated`
     let ordered: Vec<Experiment> = estimation.iter().chain(held).cloned().collect();
@@ -345,6 +416,7 @@ pub fn diagnose(
     let mut rounds = Vec::new();
     let mut verdict = None;
     let mut ambiguous_between = Vec::new();
+    let mut separation = Vec::new();
     while effects.len() < opts.max_effects {
         let now = disagreements(&ordered, &current);
         if pooled_excess(&now) < NOISE_FLOOR_EXCESS {
@@ -425,6 +497,14 @@ pub fn diagnose(
             }
             Decision::Tie(a, b) => {
                 ambiguous_between = vec![candidates[a].effect, candidates[b].effect];
+                // both refitted models driven by the experiments that would separate them
+                let fitted = |k: usize| {
+                    let c = &candidates[k];
+                    let r = c.refit.as_ref().expect("a tied candidate was refitted");
+                    (c.effect, &r.id.params)
+                };
+                separation =
+                    separate::separations(fitted(a), fitted(b), &estimation[0], opts.rtol)?;
                 verdict = Some(Verdict::Ambiguous);
                 None
             }
@@ -462,6 +542,7 @@ pub fn diagnose(
         effects,
         ambiguous_between,
         separating_experiment,
+        separation,
         estimation: estimation[0].name.clone(),
         held_out: held.iter().map(|e| e.name.clone()).collect(),
         base,
@@ -471,6 +552,7 @@ pub fn diagnose(
         rounds,
         timing,
         experiments: ordered,
+        outliers,
     })
 }
 
@@ -590,6 +672,14 @@ fn judge(
     if !excludes {
         failed.push("the 95 % interval of its magnitude includes the neutral value".into());
     }
+    // one cause at a time: a further effect must close what the first left on the held-out
+    // data, not only shave the estimation's BIC (src/diagnose/diagnose.md, "The decision rule")
+    let left = worst_gap_to_floor(held_or_estimation(estimation, held), &id);
+    if !effects.is_empty() && left > FIT_TOLERANCE {
+        failed.push(format!(
+            "leaves a held-out fit {left:.2} points below the noise floor: a further effect must close the gap to within {FIT_TOLERANCE}"
+        ));
+    }
     Refit {
         id,
         delta_bic,
@@ -648,29 +738,7 @@ fn magnitude_interval(
 
 /// Which experiment tells two effects apart: what exposes each.
 pub fn separating_experiment(a: Effect, b: Effect) -> String {
-    let exposes = |e: Effect| match e {
-        Effect::Coupling => "driving one actuator alone: coupling moves the undriven ones",
-        Effect::ChargeDrift => {
-            "a unipolar voltage step held for tens of seconds: trapped charge keeps drifting the stroke"
-        }
-        Effect::Creep => {
-            "a step held for tens of seconds and then released: creep relaxes and recovers mechanically"
-        }
-        Effect::Hysteresis => {
-            "a slow triangle at two amplitudes: rate-independent loops keep their width at any speed"
-        }
-        Effect::AmplifierLag => "a multisine up to 100 rad/s: a lag attenuates the fast tones",
-        Effect::Delay => {
-            "a multisine up to 100 rad/s: a delay shifts the fast tones' phase without attenuating them"
-        }
-        Effect::Saturation => "the same sine at 30 V and 60 V: clipping acts only above U_max",
-        Effect::Stiffening => {
-            "the same sine at 30 V and 60 V: stiffening grows with the stroke, not the voltage peak"
-        }
-        Effect::Preload => {
-            "a record of the rest position before the drive starts: a preload shifts it"
-        }
-    };
+    let exposes = separate::exposes;
     format!("{}: {}; {}: {}", a, exposes(a), b, exposes(b))
 }
 

@@ -7,7 +7,7 @@ use std::path::Path;
 use serde_json::{Map, Value, json};
 
 use super::analysis::Disagreement;
-use super::{Candidate, Diagnosis, Verdict, floor_fit, held_out_fits};
+use super::{Candidate, Diagnosis, Verdict, floor_fit, held_out_fits, remaining};
 use crate::identify::report::{fits_json, residual_series, round};
 use crate::io::file::{FileError, write_text_atomic};
 use crate::io::params_file;
@@ -92,6 +92,13 @@ pub fn to_json(d: &Diagnosis) -> Value {
         "effects": d.effects.iter().map(|e| e.name()).collect::<Vec<_>>(),
         "ambiguous_between": d.ambiguous_between.iter().map(|e| e.name()).collect::<Vec<_>>(),
         "separating_experiment": d.separating_experiment,
+        "separation": d.separation.iter().map(|s| json!({
+            "experiment_exposing": s.effect.name(),
+            "output": s.channel.name(),
+            "difference_um": round(s.difference * 1e6, 4),
+            "noise_um": round(s.noise * 1e6, 4),
+            "separates": s.separates(),
+        })).collect::<Vec<_>>(),
         "fit_before": as_map(held_out_fits(&d.base)),
         "fit_after": as_map(held_out_fits(&d.last)),
         "noise_floor_fit": floor_map(d),
@@ -111,6 +118,18 @@ pub fn to_json(d: &Diagnosis) -> Value {
         },
         "disagreement_before": d.before.iter().map(disagreement_json).collect::<Vec<_>>(),
         "disagreement_after": d.after.iter().map(disagreement_json).collect::<Vec<_>>(),
+        "remaining": remaining(d).iter().map(|r| json!({
+            "experiment": r.disagreement.experiment,
+            "output": r.disagreement.channel.name(),
+            "below_noise_floor": round(r.gap, 2),
+            "where": r.describe(),
+        })).collect::<Vec<_>>(),
+        "outliers": d.outliers.iter().map(|o| json!({
+            "experiment": o.experiment,
+            "output": o.channel.name(),
+            "count": o.times.len(),
+            "times_s": o.times.iter().map(|t| round(*t, 4)).collect::<Vec<_>>(),
+        })).collect::<Vec<_>>(),
         "timing_s": d.timing.iter().map(|(s, t)| (s.clone(), json!(round(*t, 2)))).collect::<Map<_, _>>(),
     })
 }
@@ -320,11 +339,26 @@ pub fn write(dir: &Path, d: &Diagnosis) -> Result<(), FileError> {
             )
         }
     );
+    for s in &d.separation {
+        let _ = writeln!(
+            md,
+            "Simulated with both refitted models, the experiment exposing `{}` makes their {} differ by {:.3} µm RMS against a measurement noise of {:.3} µm: it {} them.\n",
+            s.effect.name(),
+            s.channel.name(),
+            s.difference * 1e6,
+            s.noise * 1e6,
+            if s.separates() {
+                "would separate"
+            } else {
+                "would not separate"
+            }
+        );
+    }
     let _ = writeln!(md, "## Where and how the paper's model disagreed\n");
     disagreement_table(&mut md, &d.before);
     let _ = writeln!(
         md,
-        "\nExcess over noise: residual variance beyond the measurement noise (estimated from the data's second differences), relative to it; 0 % is the noise floor. Harmonics are of the drive frequency found in U1; the off-harmonic share is residual power neither at a harmonic nor slow.\n"
+        "\nExcess over noise: residual variance beyond the measurement noise (estimated from the samples' departures from their neighbours), relative to it; 0 % is the noise floor. Harmonics are of the drive frequency found in U1; the off-harmonic share is residual power neither at a harmonic nor slow.\n"
     );
     for (k, r) in d.rounds.iter().enumerate() {
         let _ = writeln!(
@@ -389,6 +423,34 @@ pub fn write(dir: &Path, d: &Diagnosis) -> Result<(), FileError> {
     fits_table(&mut md, d);
     let _ = writeln!(md, "\n## Where the disagreement went\n");
     disagreement_table(&mut md, &d.after);
+    let left = remaining(d);
+    if !left.is_empty() {
+        let _ = writeln!(md, "\n## What remains\n");
+        for r in &left {
+            let _ = writeln!(md, "- {}", r.describe());
+        }
+    }
+    if !d.outliers.is_empty() {
+        let _ = writeln!(
+            md,
+            "\n## Outliers\n\nSamples departing from their neighbours by more than {} robust noise σ were trimmed (their rows left out of every fit):\n",
+            super::analysis::OUTLIER_SIGMAS
+        );
+        for o in &d.outliers {
+            let _ = writeln!(
+                md,
+                "- {} on {}: {} at {}",
+                o.channel.name(),
+                o.experiment,
+                o.times.len(),
+                o.times
+                    .iter()
+                    .map(|t| format!("{t:.3} s"))
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            );
+        }
+    }
     let _ = writeln!(md, "\n## Figures\n");
     for k in 0..d.experiments.len() {
         let file = format!("diagnosis_{k}.png");

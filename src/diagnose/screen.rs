@@ -140,7 +140,7 @@ impl<'a> Point<'a> {
         let weights: Vec<(Channel, f64)> = exp
             .channels
             .iter()
-            .map(|(c, y)| (*c, noise_level(y).max(1e-15)))
+            .map(|(c, y)| (*c, noise_level(&exp.t, y).max(1e-15)))
             .collect();
         let y0 = outputs(params, exp, &weights, rtol)?;
         let mut measured = Vec::new();

@@ -154,6 +154,39 @@ impl Experiment {
         })
     }
 
+    /// This experiment with only the rows where `keep` holds (rows a recorder dropped, samples
+    /// trimmed as outliers): the sampling becomes uneven, and the input is replayed through the
+    /// commands at the rows kept.
+    pub fn rows(&self, keep: &[bool]) -> Result<Experiment, FileError> {
+        let kept = |v: &[f64]| -> Vec<f64> {
+            v.iter()
+                .zip(keep)
+                .filter(|(_, k)| **k)
+                .map(|(x, _)| *x)
+                .collect()
+        };
+        let t = kept(&self.t);
+        if t.len() < MIN_SAMPLES {
+            return Err(FileError::new(
+                &self.path,
+                format!(
+                    "{} samples left: an experiment needs at least {MIN_SAMPLES}",
+                    t.len()
+                ),
+            ));
+        }
+        let samples = t.iter().map(|&tk| self.input.value(tk)).collect();
+        let input = Input::sampled(t.clone(), samples, Interpolation::Spline)
+            .map_err(|e| FileError::new(&self.path, e.to_string()))?;
+        Ok(Experiment {
+            name: self.name.clone(),
+            path: self.path.clone(),
+            t,
+            input,
+            channels: self.channels.iter().map(|(c, v)| (*c, kept(v))).collect(),
+        })
+    }
+
     /// The measured values of `channel`, if the experiment has it.
     pub fn measured(&self, channel: Channel) -> Option<&[f64]> {
         self.channels
@@ -200,6 +233,24 @@ mod tests {
             ["h1", "tip_x", "tip_y"]
         );
         assert!(e.has_tip_xy() && e.measured(Channel::Tip(2)).is_none());
+    }
+
+    #[test]
+    fn uneven_sampling_is_read_and_rows_can_be_dropped() {
+        let text: String = (0..200)
+            .filter(|k| k % 5 != 2)
+            .map(|k| format!("{},{k},0,0,{}\n", k as f64 * 0.01, k * k))
+            .collect();
+        let e = parse(&format!("t,U1,U2,U3,h1\n{text}")).unwrap();
+        assert_eq!(e.t.len(), 160);
+        assert!((e.input.value(0.31)[0] - 31.0).abs() < 1e-9);
+        let keep: Vec<bool> = (0..160).map(|k| k % 2 == 0).collect();
+        let half = e.rows(&keep).unwrap();
+        assert_eq!(half.t.len(), 80);
+        assert_eq!(half.measured(Channel::H(0)).unwrap()[1], 9.0);
+        assert!((half.input.value(0.31)[0] - 31.0).abs() < 1e-6);
+        let e = half.rows(&keep[..80]).unwrap_err();
+        assert!(e.to_string().contains("40 samples left"), "{e}");
     }
 
     #[test]

@@ -347,7 +347,8 @@ pub(super) fn fit_group(
         counter: Default::default(),
     };
     let x0: Vec<f64> = coords.iter().map(|c| c.to_x((c.def.get)(base))).collect();
-    let (lo, hi): (Vec<f64>, Vec<f64>) = coords
+    // the bounds of each parameter, then in the fit's coordinates
+    let bounds: Vec<(f64, f64)> = coords
         .iter()
         .map(|c| {
             let prior = (c.def.get)(base);
@@ -363,13 +364,21 @@ pub(super) fn fit_group(
                 ),
                 Rule::Finite => (f64::NEG_INFINITY, f64::INFINITY),
             };
-            let (l, h) = opts.bounds.get(c.def.name).copied().unwrap_or(default);
+            opts.bounds.get(c.def.name).copied().unwrap_or(default)
+        })
+        .collect();
+    let (lo, hi): (Vec<f64>, Vec<f64>) = coords
+        .iter()
+        .zip(&bounds)
+        .map(|(c, &(l, h))| {
             (
                 if l.is_finite() { c.to_x(l) } else { l },
                 if h.is_finite() { c.to_x(h) } else { h },
             )
         })
         .unzip();
+    // a value at its bound is the bound itself, not exp(ln(bound)) a rounding outside
+    let value_at = |c: usize, x: f64| coords[c].to_p(x).clamp(bounds[c].0, bounds[c].1);
     let mut held: Vec<DVector<f64>> = Vec::new();
     let mut reasons: Vec<String> = Vec::new();
     let mut iterations = 0;
@@ -530,13 +539,13 @@ pub(super) fn fit_group(
         // held parameters keep their start value exactly (not exp(ln(value)))
         let mut fitted = base.clone();
         for &c in &active {
-            fitted.set(coords[c].def.name, coords[c].to_p(x[c]))?;
+            fitted.set(coords[c].def.name, value_at(c, x[c]))?;
         }
         let estimates = active
             .iter()
             .map(|&c| {
                 let coord = coords[c];
-                let value = coord.to_p(x[c]);
+                let value = value_at(c, x[c]);
                 let se_x = cov_x[(c, c)].max(0.0).sqrt();
                 let (se, ci) = if coord.log {
                     (

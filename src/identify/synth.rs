@@ -46,9 +46,41 @@ pub struct Spec {
     pub dt: f64,
     /// Noise standard deviation as a fraction of each output's range (max − min).
     pub noise: f64,
+    /// The sensor's own response: its lag and resolution.
+    pub sensor: Sensor,
     pub columns: Columns,
     pub seed: u64,
     pub rtol: f64,
+}
+
+/// What a real displacement sensor adds to the outputs: a first-order lag before the noise and a
+/// resolution (quantization) after it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Sensor {
+    /// Time constant of the sensor's lag [s] (0: none).
+    pub lag: f64,
+    /// Resolution as a fraction of each output's range (0: none).
+    pub quantum: f64,
+}
+
+impl Sensor {
+    /// No lag, no quantization.
+    pub const IDEAL: Sensor = Sensor {
+        lag: 0.0,
+        quantum: 0.0,
+    };
+
+    /// Column `col` of `rows` (time in column 0) seen through the lag, discretized exactly for
+    /// a signal held over each step: y ← y + (1 − e^(−Δt/τ)) (u − y).
+    fn lag(&self, rows: &mut [Vec<f64>], col: usize) {
+        if self.lag <= 0.0 {
+            return;
+        }
+        for k in 1..rows.len() {
+            let a = 1.0 - (-(rows[k][0] - rows[k - 1][0]) / self.lag).exp();
+            rows[k][col] = rows[k - 1][col] + a * (rows[k][col] - rows[k - 1][col]);
+        }
+    }
 }
 
 impl Spec {
@@ -63,6 +95,7 @@ impl Spec {
             t_end: 10.0,
             dt: 1e-3,
             noise,
+            sensor: Sensor::IDEAL,
             columns,
             seed,
             rtol: DATA_RTOL,
@@ -154,10 +187,15 @@ pub fn synthesize(spec: &Spec) -> Result<(Vec<&'static str>, Vec<Vec<f64>>), Err
                 (l.min(r[col]), h.max(r[col]))
             });
         let sigma = spec.noise * (hi - lo);
+        let quantum = spec.sensor.quantum * (hi - lo);
         let (a, f, phase) = spec.vibration.unwrap_or((0.0, 0.0, 0.0));
+        spec.sensor.lag(&mut rows, col);
         for r in rows.iter_mut() {
             let disturbance = a * (hi - lo) * (2.0 * std::f64::consts::PI * f * r[0] + phase).sin();
             r[col] += disturbance + sigma * rng.sample();
+            if quantum > 0.0 {
+                r[col] = (r[col] / quantum).round() * quantum;
+            }
         }
     }
     let mut header = vec!["t", "U1", "U2", "U3"];

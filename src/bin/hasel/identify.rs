@@ -2,7 +2,7 @@
 
 use std::path::PathBuf;
 
-use hasel_fmu::identify::synth::{self, DATA_RTOL, Spec};
+use hasel_fmu::identify::synth::{self, DATA_RTOL, Sensor, Spec};
 use hasel_fmu::identify::{self, Options, report};
 use hasel_fmu::io::csv::write_atomic;
 
@@ -187,6 +187,7 @@ pub fn synth(a: SynthArgs) -> Result<(), Error> {
             t_end: a.t_end,
             dt: a.dt,
             noise: a.noise.unwrap_or(0.0),
+            sensor: Sensor::IDEAL,
             columns,
             seed: a.seed,
             rtol: DATA_RTOL,

@@ -41,11 +41,19 @@ pub struct Args {
     /// With --diagnose: only this hidden mechanism (an effect, `none` or `vibration`)
     #[arg(long)]
     only: Option<String>,
+    /// With --diagnose: record every case as lab data (sensor lag, resolution, outliers, dropouts)
+    #[arg(long)]
+    artifacts: bool,
 }
 
 pub fn run(a: Args) -> Result<(), Error> {
     if a.diagnose {
-        return diagnose::run(a.seeds, crate::common::columns(&a.columns), a.only);
+        return diagnose::run(
+            a.seeds,
+            crate::common::columns(&a.columns),
+            a.only,
+            a.artifacts,
+        );
     }
     if a.identify {
         return identify::run();
