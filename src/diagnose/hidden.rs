@@ -119,12 +119,14 @@ pub fn hide(truth: Truth, seed: u64) -> Result<Hidden, Error> {
             )
         }
         Truth::Effect(Effect::Creep) => {
-            fx.creep.two_branches = true;
-            fx.creep.k_v = between(0.15, 0.4) * mean_kb;
-            fx.creep.tau_v = log_between(&mut between, 0.2, 2.0);
+            let k_v = between(0.15, 0.4) * mean_kb;
+            let tau_v = log_between(&mut between, 0.2, 2.0);
+            fx.creep.k_v = 0.5 * k_v;
+            fx.creep.tau_v = tau_v / 3.0;
+            fx.creep.k_v2 = 0.5 * k_v;
+            fx.creep.tau_v2 = 3.0 * tau_v;
             format!(
-                "creep in two branches (tau_v/3 and 3 tau_v), k_v = {:.3} N.m/rad, tau_v = {:.2} s",
-                fx.creep.k_v, fx.creep.tau_v
+                "creep in two branches (tau_v/3 and 3 tau_v), k_v = {k_v:.3} N.m/rad, tau_v = {tau_v:.2} s"
             )
         }
         Truth::Effect(Effect::Hysteresis) => {
@@ -137,12 +139,13 @@ pub fn hide(truth: Truth, seed: u64) -> Result<Hidden, Error> {
             )
         }
         Truth::Effect(Effect::AmplifierLag) => {
-            fx.amplifier_lag.order = 2;
-            fx.amplifier_lag.tau_a = log_between(&mut between, 0.02, 0.06);
+            let tau = log_between(&mut between, 0.02, 0.06);
+            fx.amplifier_lag.tau_a = 0.8 * tau;
+            fx.amplifier_lag.tau_a2 = 0.2 * tau;
             format!(
                 "two-stage amplifier, {:.1} ms and {:.1} ms",
-                800.0 * fx.amplifier_lag.tau_a,
-                200.0 * fx.amplifier_lag.tau_a
+                800.0 * tau,
+                200.0 * tau
             )
         }
         Truth::Effect(Effect::Delay) => {
