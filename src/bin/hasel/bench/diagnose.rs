@@ -15,8 +15,8 @@ use crate::error::Error;
 fn expected(t: Truth) -> &'static str {
     match t {
         Truth::Nothing => "none",
-        Truth::Outside => "unexplained",
-        Truth::Effect(e) => e.name(),
+        Truth::Outside | Truth::Ripple => "unexplained",
+        Truth::Effect(e) | Truth::Variant(e) => e.name(),
     }
 }
 
@@ -30,7 +30,11 @@ pub fn run(seeds: u64, columns: Columns, only: Option<String>) -> Result<(), Err
     let mut slowest: f64 = 0.0;
     let mut stages: BTreeMap<String, f64> = BTreeMap::new();
     for truth in Truth::all() {
-        if only.as_deref().is_some_and(|o| o != truth.name()) {
+        // `--only coupling` runs every case of the family, `--only coupling_tilt` one
+        if only
+            .as_deref()
+            .is_some_and(|o| o != truth.name() && truth.effect().is_none_or(|e| e.name() != o))
+        {
             continue;
         }
         for seed in 1..=seeds {
@@ -47,7 +51,7 @@ pub fn run(seeds: u64, columns: Columns, only: Option<String>) -> Result<(), Err
             }
             total += 1;
             right += ok as usize;
-            if let Truth::Effect(_) = truth {
+            if truth.effect().is_some() {
                 effect_cases += 1;
                 effect_right += ok as usize;
             }
@@ -59,10 +63,11 @@ pub fn run(seeds: u64, columns: Columns, only: Option<String>) -> Result<(), Err
                 .filter(|x| x.experiment != d.estimation)
                 .map(|x| format!("{:.1}", 100.0 * x.excess))
                 .collect();
+            let forms: Vec<&str> = d.forms.iter().map(|f| f.name).collect();
             say!(
-                "  {:<13} seed {seed}: {:<28} {} {:5.1} s | held-out fit {} -> {} | excess after {} % | {}",
+                "  {:<26} seed {seed}: {:<28} {} {:5.1} s | held-out fit {} -> {} | excess after {} % | {}",
                 truth.name(),
-                got,
+                format!("{got} [{}]", forms.join("+")),
                 if ok { "ok  " } else { "MISS" },
                 seconds,
                 fmt_fits(&before),
@@ -74,8 +79,9 @@ pub fn run(seeds: u64, columns: Columns, only: Option<String>) -> Result<(), Err
                 for c in &r.candidates {
                     if let Some(f) = &c.refit {
                         say!(
-                            "      {:<13} score {:.3} dBIC {:9.1} gain {:6.2} gap {:5.2} {}",
+                            "      {:<13} {:<17} score {:.3} dBIC {:9.1} gain {:6.2} gap {:5.2} {}",
                             c.effect.name(),
+                            c.form.name,
                             c.score,
                             f.delta_bic,
                             f.fit_gain,
@@ -88,8 +94,9 @@ pub fn run(seeds: u64, columns: Columns, only: Option<String>) -> Result<(), Err
                         );
                     } else {
                         say!(
-                            "      {:<13} score {:.3}{}",
+                            "      {:<13} {:<17} score {:.3}{}",
                             c.effect.name(),
+                            c.form.name,
                             c.score,
                             c.refit_error
                                 .as_ref()
@@ -104,7 +111,7 @@ pub fn run(seeds: u64, columns: Columns, only: Option<String>) -> Result<(), Err
     }
     say!("confusion (hidden -> answer: count)");
     for ((t, a), n) in &matrix {
-        say!("  {t:<13} -> {a:<28} {n}");
+        say!("  {t:<26} -> {a:<28} {n}");
     }
     say!(
         "right: {right}/{total}; effect named exactly: {effect_right}/{effect_cases} (target >= 90 %); slowest diagnosis {slowest:.1} s ({})",
