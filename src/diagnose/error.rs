@@ -17,6 +17,9 @@ pub enum Error {
     Input(#[from] InputError),
     #[error("no experiment")]
     NoExperiment,
+    /// Hidden data asked for a second form of an effect that has none.
+    #[error("{0} has no second hidden form")]
+    NoVariant(crate::model::Effect),
     /// The screening's least-squares projection could not be solved.
     #[error("{0}")]
     Projection(&'static str),

@@ -2,9 +2,12 @@
 //! the base parameters Kb, b, γ1, γ2 off by up to ±20 %, one mechanism of the library in a
 //! form that differs from the library's term, its magnitude random within a range where it
 //! visibly changes the response, measurement noise of 0.5–2 % of each output's range, and the
-//! paper's two experiments (the 60 V sine at 3π and at 11 rad/s). Also data with no effect and
-//! with a mechanism outside the library (a floor vibration picked up by the sensor). Any case
-//! can be recorded as lab data, with artifacts on top ([`Hidden::with_artifacts`]).
+//! paper's two experiments (the 60 V sine at 3π and at 11 rad/s). Each family has a second
+//! hidden form beside the first where the library has several (a tilt spring, retention across
+//! the film, unequal creep times, rate-dependent Dahl hysteresis, a second-order amplifier of
+//! equal stages). Also data with no effect and with two mechanisms outside the library (a floor
+//! vibration picked up by the sensor, a ripple of the amplifier's supply). Any case can be
+//! recorded as lab data, with artifacts on top ([`Hidden::with_artifacts`]).
 
 use std::f64::consts::PI;
 
@@ -13,7 +16,7 @@ use super::artifacts::Artifacts;
 use crate::identify::Experiment;
 use crate::identify::synth::{self, Columns, DATA_RTOL, Normal, Sensor, Spec};
 use crate::model::Params;
-use crate::model::effects::{Effect, HysteresisLaw, PreloadLaw};
+use crate::model::effects::{ChargeDrift, Creep, DriftSite, Effect, HysteresisLaw, PreloadLaw};
 use crate::simulation::{Input, InputError, Interpolation};
 
 /// What the data hide.
@@ -21,32 +24,57 @@ use crate::simulation::{Input, InputError, Interpolation};
 pub enum Truth {
     Nothing,
     Effect(Effect),
+    /// The effect in its second hidden form (the families with several forms).
+    Variant(Effect),
     /// A floor vibration at a frequency unrelated to the drive, added to the measurements.
     Outside,
+    /// The amplifier's supply rippling: its gain modulated at a frequency unrelated to the
+    /// drive.
+    Ripple,
 }
+
+/// The families with a second hidden form, and its name.
+const VARIANTS: [(Effect, &str); 5] = [
+    (Effect::Coupling, "coupling_tilt"),
+    (Effect::ChargeDrift, "charge_drift_film"),
+    (Effect::Creep, "creep_two_times"),
+    (Effect::Hysteresis, "hysteresis_rate"),
+    (Effect::AmplifierLag, "amplifier_lag_second_order"),
+];
 
 impl Truth {
     pub fn name(self) -> &'static str {
         match self {
             Truth::Nothing => "none",
             Truth::Effect(e) => e.name(),
+            Truth::Variant(e) => VARIANTS
+                .iter()
+                .find(|(v, _)| *v == e)
+                .map_or(e.name(), |(_, n)| n),
             Truth::Outside => "vibration",
+            Truth::Ripple => "supply_ripple",
         }
     }
 
     pub fn from_name(name: &str) -> Option<Truth> {
-        match name {
-            "none" => Some(Truth::Nothing),
-            "vibration" => Some(Truth::Outside),
-            _ => Effect::from_name(name).map(Truth::Effect),
+        Truth::all().into_iter().find(|t| t.name() == name)
+    }
+
+    /// The effect the data hide, if it is one of the library's.
+    pub fn effect(self) -> Option<Effect> {
+        match self {
+            Truth::Effect(e) | Truth::Variant(e) => Some(e),
+            _ => None,
         }
     }
 
-    /// Every truth: no effect, the nine effects, the mechanism outside the library.
+    /// Every truth: no effect, the nine effects, the five second forms, the two mechanisms
+    /// outside the library.
     pub fn all() -> Vec<Truth> {
         std::iter::once(Truth::Nothing)
             .chain(Effect::ALL.into_iter().map(Truth::Effect))
-            .chain(std::iter::once(Truth::Outside))
+            .chain(VARIANTS.iter().map(|(e, _)| Truth::Variant(*e)))
+            .chain([Truth::Outside, Truth::Ripple])
             .collect()
     }
 }
@@ -66,6 +94,8 @@ pub struct Hidden {
     pub wandering_delay: Option<(f64, f64)>,
     /// Floor vibration: amplitude (fraction of range), frequency [Hz], phase [rad].
     pub vibration: Option<(f64, f64, f64)>,
+    /// Supply ripple: relative depth of the gain's modulation, frequency [Hz], phase [rad].
+    pub ripple: Option<(f64, f64, f64)>,
     /// What lab data add on top (`src/diagnose/artifacts.rs`), if any.
     pub artifacts: Option<Artifacts>,
     /// The hidden mechanism and its values, in words.
@@ -90,6 +120,7 @@ pub fn hide(truth: Truth, seed: u64) -> Result<Hidden, Error> {
     let mean_kb = kb.iter().sum::<f64>() / 3.0;
     let mut wandering_delay = None;
     let mut vibration = None;
+    let mut ripple = None;
     let fx = &mut params.effects;
     let description = match truth {
         Truth::Nothing => "no effect".to_string(),
@@ -101,6 +132,82 @@ pub fn hide(truth: Truth, seed: u64) -> Result<Hidden, Error> {
                 100.0 * a
             )
         }
+        Truth::Ripple => {
+            let (depth, f) = (between(0.08, 0.15), between(1.1, 1.7));
+            ripple = Some((depth, f, between(0.0, 2.0 * PI)));
+            format!(
+                "the amplifier's supply rippling: gain modulated by {:.0} % at {f:.2} Hz",
+                100.0 * depth
+            )
+        }
+        Truth::Variant(Effect::Coupling) => {
+            // a tilt spring H = 1/2 (K_x phi_x^2 + K_y phi_y^2), stiffer about one axis; with
+            // the anchors at 90, 210 and 330 degrees, phi_x = (h3 - h2) / (sqrt 3 r) and
+            // phi_y = (h1 - (h2 + h3)/2) / (1.5 r), so (in units of K_y / r^2)
+            // w_12 = w_13 = 2/9 and w_23 = K_x/(3 K_y) - 1/9 (positive for K_x > K_y / 3)
+            let ratio = if between(0.0, 1.0) < 0.5 {
+                between(1.6, 2.5)
+            } else {
+                1.0 / between(1.6, 2.5)
+            };
+            let w = [2.0 / 9.0, 2.0 / 9.0, ratio / 3.0 - 1.0 / 9.0];
+            let mean = w.iter().sum::<f64>() / 3.0;
+            fx.coupling.weights = w.map(|x| x / mean);
+            fx.coupling.k_c = log_between(&mut between, 800.0, 3000.0);
+            format!(
+                "a platform tilt spring, K_x / K_y = {ratio:.2}: pair weights {:.2?}, k_c = {:.0} N/m",
+                fx.coupling.weights, fx.coupling.k_c
+            )
+        }
+        Truth::Variant(Effect::ChargeDrift) => {
+            // the source holds the film's voltage through R0 + R1: the branch takes a visible
+            // share of the current when its R3 = tau3 / C3 is 1 to 4 times R0 + R1
+            let r01 = params.act[0].r0 + params.act[0].r1;
+            let (tau3, f) = (
+                log_between(&mut between, 0.3, 3.0),
+                log_between(&mut between, 1.0, 4.0),
+            );
+            fx.charge_drift = ChargeDrift {
+                site: DriftSite::Film,
+                tau3,
+                c3: tau3 / (f * r01),
+                ..fx.charge_drift
+            };
+            format!(
+                "an absorption branch across the whole film, R3 = {:.0} Ohm ({f:.2} (R0 + R1)), tau3 = {tau3:.2} s",
+                f * r01
+            )
+        }
+        Truth::Variant(Effect::Creep) => {
+            let k_v = between(0.15, 0.4) * mean_kb;
+            let tau_v = log_between(&mut between, 0.1, 0.5);
+            let share = between(0.25, 0.4);
+            two_branches(&mut fx.creep, k_v, share, tau_v, 8.0 * tau_v);
+            format!(
+                "creep in two branches, {:.0} % at tau = {tau_v:.2} s and the rest at 8 tau, k_v = {k_v:.3} N.m/rad",
+                100.0 * share
+            )
+        }
+        Truth::Variant(Effect::Hysteresis) => {
+            fx.hysteresis.law = HysteresisLaw::Dahl;
+            fx.hysteresis.k_h = between(0.25, 0.5) * mean_kb;
+            fx.hysteresis.theta_h = log_between(&mut between, 2e-3, 6e-3);
+            fx.hysteresis.r_h = log_between(&mut between, 2.0, 8.0);
+            format!(
+                "rate-dependent Dahl hysteresis, k_h = {:.3} N.m/rad, theta_h = {:.2e} rad, relaxing at {:.1} 1/s",
+                fx.hysteresis.k_h, fx.hysteresis.theta_h, fx.hysteresis.r_h
+            )
+        }
+        Truth::Variant(Effect::AmplifierLag) => {
+            let tau = log_between(&mut between, 0.01, 0.03);
+            fx.amplifier_lag.tau_a = tau;
+            fx.amplifier_lag.tau_a2 = tau;
+            format!(
+                "a second-order amplifier, two equal stages of {:.1} ms",
+                1000.0 * tau
+            )
+        }
+        Truth::Variant(e) => return Err(Error::NoVariant(e)),
         Truth::Effect(Effect::Coupling) => {
             fx.coupling.k_c = log_between(&mut between, 800.0, 3000.0);
             let k = (between(0.0, 3.0) as usize).min(2);
@@ -124,12 +231,11 @@ pub fn hide(truth: Truth, seed: u64) -> Result<Hidden, Error> {
             )
         }
         Truth::Effect(Effect::Creep) => {
-            fx.creep.two_branches = true;
-            fx.creep.k_v = between(0.15, 0.4) * mean_kb;
-            fx.creep.tau_v = log_between(&mut between, 0.2, 2.0);
+            let k_v = between(0.15, 0.4) * mean_kb;
+            let tau_v = log_between(&mut between, 0.2, 2.0);
+            two_branches(&mut fx.creep, k_v, 0.5, tau_v / 3.0, 3.0 * tau_v);
             format!(
-                "creep in two branches (tau_v/3 and 3 tau_v), k_v = {:.3} N.m/rad, tau_v = {:.2} s",
-                fx.creep.k_v, fx.creep.tau_v
+                "creep in two branches (tau_v/3 and 3 tau_v), k_v = {k_v:.3} N.m/rad, tau_v = {tau_v:.2} s"
             )
         }
         Truth::Effect(Effect::Hysteresis) => {
@@ -142,12 +248,13 @@ pub fn hide(truth: Truth, seed: u64) -> Result<Hidden, Error> {
             )
         }
         Truth::Effect(Effect::AmplifierLag) => {
-            fx.amplifier_lag.order = 2;
-            fx.amplifier_lag.tau_a = log_between(&mut between, 0.02, 0.06);
+            let tau = log_between(&mut between, 0.02, 0.06);
+            fx.amplifier_lag.tau_a = 0.8 * tau;
+            fx.amplifier_lag.tau_a2 = 0.2 * tau;
             format!(
                 "two-stage amplifier, {:.1} ms and {:.1} ms",
-                800.0 * fx.amplifier_lag.tau_a,
-                200.0 * fx.amplifier_lag.tau_a
+                800.0 * tau,
+                200.0 * tau
             )
         }
         Truth::Effect(Effect::Delay) => {
@@ -194,9 +301,18 @@ pub fn hide(truth: Truth, seed: u64) -> Result<Hidden, Error> {
         noise,
         wandering_delay,
         vibration,
+        ripple,
         artifacts: None,
         description: format!("{description}; noise {:.2} % of range", 100.0 * noise),
     })
+}
+
+/// Creep of stiffness `k_v` in two branches: a `share` of it at `tau`, the rest at `tau2`.
+fn two_branches(creep: &mut Creep, k_v: f64, share: f64, tau: f64, tau2: f64) {
+    creep.k_v = share * k_v;
+    creep.tau_v = tau;
+    creep.k_v2 = (1.0 - share) * k_v;
+    creep.tau_v2 = tau2;
 }
 
 fn log_between(between: &mut impl FnMut(f64, f64) -> f64, lo: f64, hi: f64) -> f64 {
@@ -208,23 +324,37 @@ const WANDER: f64 = 0.05;
 const WANDER_HZ: f64 = 0.37;
 
 /// The command late by τ(t) = τ (1 + WANDER sin(2π WANDER_HZ t + phase)), 0 before it
-/// arrives, tabulated every 0.5 ms and replayed linearly.
+/// arrives.
 fn delayed(input: &Input, tau: f64, phase: f64, t_end: f64) -> Result<Input, InputError> {
+    resampled(t_end, |tk| {
+        let late = tk - tau * (1.0 + WANDER * (2.0 * PI * WANDER_HZ * tk + phase).sin());
+        if late < 0.0 {
+            [0.0; 3]
+        } else {
+            input.value(late)
+        }
+    })
+}
+
+/// The command times 1 + depth sin(2π f t + phase): a gain rippling with the supply.
+fn rippled(
+    input: &Input,
+    (depth, f, phase): (f64, f64, f64),
+    t_end: f64,
+) -> Result<Input, InputError> {
+    resampled(t_end, |tk| {
+        let gain = 1.0 + depth * (2.0 * PI * f * tk + phase).sin();
+        input.value(tk).map(|u| gain * u)
+    })
+}
+
+/// A drive `u(t)` tabulated every 0.5 ms up to `t_end` and replayed linearly.
+fn resampled(t_end: f64, u: impl Fn(f64) -> [f64; 3]) -> Result<Input, InputError> {
     const STEP: f64 = 5e-4;
     let n = (t_end / STEP).ceil() as usize + 1;
     let t: Vec<f64> = (0..=n).map(|k| k as f64 * STEP).collect();
-    let u = t
-        .iter()
-        .map(|&tk| {
-            let late = tk - tau * (1.0 + WANDER * (2.0 * PI * WANDER_HZ * tk + phase).sin());
-            if late < 0.0 {
-                [0.0; 3]
-            } else {
-                input.value(late)
-            }
-        })
-        .collect();
-    Input::sampled(t, u, Interpolation::Linear)
+    let values = t.iter().map(|&tk| u(tk)).collect();
+    Input::sampled(t, values, Interpolation::Linear)
 }
 
 impl Hidden {
@@ -246,9 +376,10 @@ impl Hidden {
         columns: Columns,
         seed: u64,
     ) -> Result<Spec, Error> {
-        let drive = match self.wandering_delay {
-            Some((tau, phase)) => Some(delayed(&input, tau, phase, t_end)?),
-            None => None,
+        let drive = match (self.wandering_delay, self.ripple) {
+            (Some((tau, phase)), _) => Some(delayed(&input, tau, phase, t_end)?),
+            (None, Some(r)) => Some(rippled(&input, r, t_end)?),
+            (None, None) => None,
         };
         Ok(Spec {
             input,

@@ -32,6 +32,7 @@ use std::collections::BTreeMap;
 use std::time::{Duration, Instant};
 
 use crate::identify::{self, Experiment, FIT_RTOL, Identification, Options as IdOptions};
+use crate::model::effects::Form;
 use crate::model::{Effect, Params};
 use analysis::Disagreement;
 pub use error::Error;
@@ -49,6 +50,10 @@ pub const NOISE_FLOOR_EXCESS: f64 = 0.05;
 /// a further effect is looked for only beyond it (the library's term is rarely the data's
 /// exact form, and what it leaves is not a second mechanism).
 pub const FIT_TOLERANCE: f64 = 1.0;
+
+/// A family's runner-up form is refitted beside its best when the screening gives it at least
+/// this share of the best form's worth (src/diagnose/diagnose.md, "Families of forms").
+pub const FORM_RUNNER_UP: f64 = 0.8;
 
 /// Default wall time of one candidate's refit [s] (`Options::refit_budget`): a guard against a
 /// runaway fit, not a pace; a refit takes a few seconds alone on a core, several times that on
@@ -103,14 +108,22 @@ impl Verdict {
     }
 }
 
-/// One candidate of one round.
+/// One candidate of one round: an effect's family, in the form that fitted best.
 #[derive(Clone, Debug)]
 pub struct Candidate {
     pub effect: Effect,
-    /// Share of the residual its probe explains beyond the base parameters.
+    /// The form: the screening's best, or after the refits the refitted form with the lowest
+    /// BIC.
+    pub form: &'static Form,
+    /// Share of the residual its form's probe explains beyond the base parameters.
     pub score: f64,
     /// Start values of its parameters from the screening.
     pub start: Vec<(&'static str, f64)>,
+    /// The runner-up form and its start values, refitted too when the screening cannot tell
+    /// it from the best ([`FORM_RUNNER_UP`]).
+    pub alternative: Option<(&'static Form, Vec<(&'static str, f64)>)>,
+    /// Every form refitted, with its ΔBIC or why its refit failed.
+    pub forms_tried: Vec<(&'static str, Result<f64, String>)>,
     pub refit: Option<Refit>,
     /// Why the refit could not run, if it could not.
     pub refit_error: Option<identify::Error>,
@@ -145,6 +158,8 @@ pub struct Round {
     pub effects_before: Vec<Effect>,
     pub candidates: Vec<Candidate>,
     pub added: Option<Effect>,
+    /// The form of the effect added.
+    pub added_form: Option<&'static Form>,
 }
 
 /// Everything a diagnosis found.
@@ -152,6 +167,8 @@ pub struct Round {
 pub struct Diagnosis {
     pub verdict: Verdict,
     pub effects: Vec<Effect>,
+    /// The form of each named effect, in the same order.
+    pub forms: Vec<&'static Form>,
     pub ambiguous_between: Vec<Effect>,
     /// For `ambiguous`: the experiment that would tell the candidates apart…
     pub separating_experiment: Option<String>,
@@ -368,13 +385,65 @@ fn disagreements(exps: &[Experiment], id: &Identification) -> Vec<Disagreement> 
         .collect()
 }
 
-/// The free parameters: the base ones and those of `effects`.
-fn free_list(effects: &[Effect]) -> Vec<String> {
+/// The free parameters: the base ones and those of the effects' `forms`.
+fn free_list(forms: &[&Form]) -> Vec<String> {
     let mut free = identify::default_free();
-    for e in effects {
-        free.extend(e.parameters().iter().map(|s| s.to_string()));
+    for f in forms {
+        free.extend(f.free.iter().map(|s| s.to_string()));
     }
     free
+}
+
+/// One refit of a round: the candidate's index, the form refitted and its start values.
+type PlannedRefit = (usize, &'static Form, Vec<(&'static str, f64)>);
+
+/// What a round refits (candidate index, form, start values): the best form of each of the
+/// `refits` best candidates and, for the best candidate, its runner-up form when the screening
+/// could not tell the two apart (the family that most likely wins is the one whose form is
+/// reported; the others' forms only compete for second place).
+fn refit_plan(candidates: &[Candidate], refits: usize) -> Vec<PlannedRefit> {
+    let mut plan: Vec<_> = candidates
+        .iter()
+        .enumerate()
+        .take(refits)
+        .map(|(k, c)| (k, c.form, c.start.clone()))
+        .collect();
+    if let Some((form, start)) = candidates.first().and_then(|c| c.alternative.clone()) {
+        plan.push((0, form, start));
+    }
+    plan
+}
+
+/// Each refitted candidate in the form of its family with the lowest BIC (src/diagnose/
+/// diagnose.md, "Families of forms"), judged against `before`; a failed refit fails only its
+/// form, and the candidate when all its forms failed.
+fn settle_forms(
+    candidates: &mut [Candidate],
+    plan: &[PlannedRefit],
+    refits: Vec<Result<Identification, identify::Error>>,
+    judge: impl Fn(&Form, Identification) -> Refit,
+) {
+    for ((k, form, start), refit) in plan.iter().zip(refits) {
+        let c = &mut candidates[*k];
+        match refit {
+            Ok(id) => {
+                let r = judge(form, id);
+                c.forms_tried.push((form.name, Ok(r.delta_bic)));
+                if c.refit.as_ref().is_none_or(|b| r.delta_bic < b.delta_bic) {
+                    c.form = form;
+                    c.start = start.clone();
+                    c.refit = Some(r);
+                    c.refit_error = None;
+                }
+            }
+            Err(e) => {
+                c.forms_tried.push((form.name, Err(e.to_string())));
+                if c.refit.is_none() && c.refit_error.is_none() {
+                    c.refit_error = Some(e);
+                }
+            }
+        }
+    }
 }
 
 /// Diagnoses `experiments` (the first estimates, the others are held out) from `start`.
@@ -412,6 +481,7 @@ pub fn diagnose(
     let before = disagreements(&ordered, &base);
 
     let mut effects: Vec<Effect> = Vec::new();
+    let mut forms: Vec<&'static Form> = Vec::new();
     let mut current = base.clone();
     let mut rounds = Vec::new();
     let mut verdict = None;
@@ -428,7 +498,7 @@ pub fn diagnose(
             break;
         }
         let t0 = Instant::now();
-        let mut candidates = screen(&current, &estimation[0], &effects, opts)?;
+        let mut candidates = screen(&current, &estimation[0], &forms, opts)?;
         timing.push((
             format!("screen candidates (round {})", rounds.len() + 1),
             t0.elapsed().as_secs_f64(),
@@ -436,14 +506,15 @@ pub fn diagnose(
         let t0 = Instant::now();
         // the candidates are refitted in parallel, each on its own: the results do not depend
         // on the number of threads (a refit that runs out of its budget fails its candidate)
+        let plan = refit_plan(&candidates, opts.refits);
         let mut starts = Vec::new();
-        for c in candidates.iter().take(opts.refits) {
+        for (_, form, start) in &plan {
             let mut p = current.params.clone();
-            for &(name, v) in &c.start {
+            for &(name, v) in start {
                 p.set(name, v)?;
             }
-            let mut with = effects.clone();
-            with.push(c.effect);
+            let mut with = forms.clone();
+            with.push(form);
             starts.push((p, id_opts(free_list(&with))));
         }
         let refits: Vec<Result<Identification, identify::Error>> = std::thread::scope(|s| {
@@ -462,17 +533,14 @@ pub fn diagnose(
                 .map(|h| h.join().expect("a refit does not panic"))
                 .collect()
         });
-        for (c, refit) in candidates.iter_mut().zip(refits) {
-            // a refit that cannot run (the model leaves its domain) is a failed candidate
-            match refit {
-                Ok(id) => c.refit = Some(judge(c.effect, id, &current, estimation, held, &effects)),
-                Err(e) => c.refit_error = Some(e),
-            }
-        }
+        // a refit that cannot run (the model leaves its domain) fails its form
+        settle_forms(&mut candidates, &plan, refits, |form, id| {
+            judge(form, id, &current, estimation, held, &forms)
+        });
         timing.push((
             format!(
-                "refit {} candidates (round {})",
-                opts.refits.min(candidates.len()),
+                "refit {} candidate forms (round {})",
+                plan.len(),
                 rounds.len() + 1
             ),
             t0.elapsed().as_secs_f64(),
@@ -516,11 +584,13 @@ pub fn diagnose(
                     .expect("a decided candidate was refitted");
                 current = rb.id.clone();
                 effects.push(best.effect);
+                forms.push(best.form);
                 Some(best.effect)
             }
         };
         rounds.push(Round {
             effects_before: round_effects,
+            added_form: added.and(forms.last().copied()),
             candidates,
             added,
         });
@@ -540,6 +610,7 @@ pub fn diagnose(
     Ok(Diagnosis {
         verdict,
         effects,
+        forms,
         ambiguous_between,
         separating_experiment,
         separation,
@@ -597,16 +668,18 @@ fn decide(evidence: &[Option<Evidence>]) -> Decision {
     }
 }
 
-/// The screening of one round: every effect not yet added, scored, best first.
+/// The screening of one round: every effect not yet added, scored, best first; each in the form
+/// of its family worth most, with the runner-up form when it is worth nearly as much
+/// ([`FORM_RUNNER_UP`]).
 fn screen(
     current: &Identification,
     exp: &Experiment,
-    effects: &[Effect],
+    forms: &[&Form],
     opts: &Options,
 ) -> Result<Vec<Candidate>, Error> {
     let params = &current.params;
     // base sensitivities: the base parameters and those of the effects already added
-    let point = screen::Point::new(params, exp, &free_list(effects), opts.rtol)?;
+    let point = screen::Point::new(params, exp, &free_list(forms), opts.rtol)?;
     let probes = screen::probes(params, analysis::peak_command(exp));
     let scores: Vec<screen::Score> = std::thread::scope(|s| {
         let handles: Vec<_> = probes.iter().map(|p| s.spawn(|| point.score(p))).collect();
@@ -615,41 +688,60 @@ fn screen(
             .map(|h| h.join().expect("a probe does not panic"))
             .collect::<Result<Vec<_>, _>>()
     })?;
-    let mut best: BTreeMap<Effect, screen::Score> = BTreeMap::new();
+    // each form's best probe, then each family's forms by worth
+    let mut best: BTreeMap<(Effect, &'static str), screen::Score> = BTreeMap::new();
     for s in scores {
-        if best.get(&s.effect).is_none_or(|b| s.score > b.score) {
-            best.insert(s.effect, s);
+        let key = (s.form.effect, s.form.name);
+        if best.get(&key).is_none_or(|b| s.worth > b.worth) {
+            best.insert(key, s);
         }
     }
-    let mut out: Vec<Candidate> = best
-        .into_values()
-        .map(|s| Candidate {
-            effect: s.effect,
-            score: s.score,
-            start: s.start,
-            refit: None,
-            refit_error: None,
+    let mut families: BTreeMap<Effect, Vec<screen::Score>> = BTreeMap::new();
+    for s in best.into_values() {
+        families.entry(s.form.effect).or_default().push(s);
+    }
+    let mut out: Vec<Candidate> = families
+        .into_iter()
+        .map(|(effect, mut ranked)| {
+            ranked.sort_by(|a, b| b.worth.total_cmp(&a.worth));
+            let mut ranked = ranked.into_iter();
+            let first = ranked.next().expect("a family has a form");
+            let alternative = ranked
+                .next()
+                .filter(|s| first.worth > 0.0 && s.worth >= FORM_RUNNER_UP * first.worth)
+                .map(|s| (s.form, s.start));
+            Candidate {
+                effect,
+                form: first.form,
+                score: first.score,
+                start: first.start,
+                alternative,
+                forms_tried: Vec::new(),
+                refit: None,
+                refit_error: None,
+            }
         })
         .collect();
     out.sort_by(|a, b| b.score.total_cmp(&a.score));
     Ok(out)
 }
 
-/// The evidence for adding `effect`, re-identified as `id`, to the model `before`.
+/// The evidence for adding `form`, re-identified as `id`, to the model `before` (whose effects
+/// are in `forms`).
 fn judge(
-    effect: Effect,
+    form: &Form,
     id: Identification,
     before: &Identification,
     estimation: &[Experiment],
     held: &[Experiment],
-    effects: &[Effect],
+    forms: &[&Form],
 ) -> Refit {
-    let k_before = free_list(effects).len();
-    let k_after = k_before + effect.parameters().len();
+    let k_before = free_list(forms).len();
+    let k_after = k_before + form.free.len();
     let delta_bic = bic(&estimation[0], &id.simulated[0], k_after)
         - bic(&estimation[0], &before.simulated[0], k_before);
     let (fit_gain, gap_closed) = held_out_gain(held_or_estimation(estimation, held), before, &id);
-    let (interval, excludes) = magnitude_interval(effect, &id, estimation);
+    let (interval, excludes) = magnitude_interval(form, &id, estimation);
     let mut failed = Vec::new();
     if delta_bic > -BIC_MARGIN {
         failed.push(format!(
@@ -675,7 +767,7 @@ fn judge(
     // one cause at a time: a further effect must close what the first left on the held-out
     // data, not only shave the estimation's BIC (src/diagnose/diagnose.md, "The decision rule")
     let left = worst_gap_to_floor(held_or_estimation(estimation, held), &id);
-    if !effects.is_empty() && left > FIT_TOLERANCE {
+    if !forms.is_empty() && left > FIT_TOLERANCE {
         failed.push(format!(
             "leaves a held-out fit {left:.2} points below the noise floor: a further effect must close the gap to within {FIT_TOLERANCE}"
         ));
@@ -694,7 +786,7 @@ fn judge(
 /// The 95 % interval of the effect's magnitude and whether it excludes the neutral value
 /// (0, or for U_max the largest command: a limit above it clips nothing).
 fn magnitude_interval(
-    effect: Effect,
+    form: &Form,
     id: &Identification,
     estimation: &[Experiment],
 ) -> (Option<(String, f64, f64)>, bool) {
@@ -704,7 +796,8 @@ fn magnitude_interval(
             .find(|e| e.name == name)
             .and_then(|e| e.ci95.map(|(lo, hi)| (name.to_string(), lo, hi)))
     };
-    match effect {
+    let magnitude = form.free[0];
+    match form.effect {
         Effect::Saturation => {
             let u_peak = analysis::peak_command(&estimation[0]);
             let c = ci("U_max");
@@ -712,7 +805,7 @@ fn magnitude_interval(
             (c, ok)
         }
         Effect::Preload => {
-            let cs: Vec<_> = effect.parameters().iter().filter_map(|n| ci(n)).collect();
+            let cs: Vec<_> = form.free.iter().filter_map(|n| ci(n)).collect();
             let best = cs
                 .iter()
                 .find(|(_, lo, hi)| lo * hi > 0.0)
@@ -722,13 +815,13 @@ fn magnitude_interval(
             (best, ok)
         }
         _ => {
-            let c = ci(effect.parameters()[0]);
+            let c = ci(magnitude);
             // in log coordinates the interval is positive; its relative width must exclude 0
             // in linear terms: value / (1.96 se) > 1
             let ok = id
                 .estimates
                 .iter()
-                .find(|e| e.name == effect.parameters()[0])
+                .find(|e| e.name == magnitude)
                 .and_then(|e| e.std_error.map(|se| e.value > 1.96 * se.abs()))
                 .unwrap_or(false);
             (c, ok)

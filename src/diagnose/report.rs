@@ -14,7 +14,18 @@ use crate::io::params_file;
 use crate::plot::{self, Panel, Series};
 
 fn candidate_json(c: &Candidate) -> Value {
-    let mut v = json!({ "effect": c.effect.name(), "score": round(c.score, 4) });
+    let mut v =
+        json!({ "effect": c.effect.name(), "form": c.form.name, "score": round(c.score, 4) });
+    if !c.forms_tried.is_empty() {
+        v["forms_tried"] = c
+            .forms_tried
+            .iter()
+            .map(|(name, r)| match r {
+                Ok(d) => json!({"form": name, "delta_bic": round(*d, 1)}),
+                Err(e) => json!({"form": name, "refit_error": e}),
+            })
+            .collect();
+    }
     if let Some(r) = &c.refit {
         v["delta_bic"] = json!(round(r.delta_bic, 1));
         v["fit_gain"] = json!(round(r.fit_gain, 2));
@@ -74,9 +85,9 @@ fn floor_map(d: &Diagnosis) -> Map<String, Value> {
 /// The JSON of src/diagnose/diagnose.md ("diagnosis.json"), and the evidence behind it.
 pub fn to_json(d: &Diagnosis) -> Value {
     let effect_params: Map<String, Value> = d
-        .effects
+        .forms
         .iter()
-        .flat_map(|e| e.parameters().iter())
+        .flat_map(|f| f.free.iter())
         .filter_map(|name| {
             let e = d.last.estimates.iter().find(|e| e.name == *name)?;
             Some((name.to_string(), json!({"value": e.value, "ci95": e.ci95.map(|(a, b)| vec![a, b]), "estimated": e.estimated})))
@@ -90,6 +101,7 @@ pub fn to_json(d: &Diagnosis) -> Value {
     json!({
         "verdict": d.verdict.name(),
         "effects": d.effects.iter().map(|e| e.name()).collect::<Vec<_>>(),
+        "forms": d.forms.iter().map(|f| f.name).collect::<Vec<_>>(),
         "ambiguous_between": d.ambiguous_between.iter().map(|e| e.name()).collect::<Vec<_>>(),
         "separating_experiment": d.separating_experiment,
         "separation": d.separation.iter().map(|s| json!({
@@ -107,6 +119,7 @@ pub fn to_json(d: &Diagnosis) -> Value {
         "rounds": d.rounds.iter().map(|r| json!({
             "effects_before": r.effects_before.iter().map(|e| e.name()).collect::<Vec<_>>(),
             "added": r.added.map(|e| e.name()),
+            "added_form": r.added_form.map(|f| f.name),
             "candidates": r.candidates.iter().map(candidate_json).collect::<Vec<_>>(),
         })).collect::<Vec<_>>(),
         "parameters": effect_params,
@@ -143,7 +156,19 @@ fn headline(d: &Diagnosis) -> String {
             .join(", then ")
     };
     match d.verdict {
-        Verdict::Effect => format!("The missing effect: {}.", names(&d.effects)),
+        Verdict::Effect => format!(
+            "The missing effect: {}.",
+            d.forms
+                .iter()
+                .map(|f| format!(
+                    "`{}` in the form `{}` ({})",
+                    f.effect.name(),
+                    f.name,
+                    f.effect.mechanism()
+                ))
+                .collect::<Vec<_>>()
+                .join(", then ")
+        ),
         Verdict::None => "No missing effect: the paper's model, re-identified, explains the data to the noise floor.".into(),
         Verdict::Ambiguous => format!(
             "Ambiguous: {} explain the data equally well. The experiment that tells them apart: {}.",
@@ -188,10 +213,26 @@ fn disagreement_table(md: &mut String, ds: &[Disagreement]) {
     }
 }
 
+/// The candidate's form, and the ΔBIC of every form refitted when there were several.
+fn forms_cell(c: &Candidate) -> String {
+    if c.forms_tried.len() < 2 {
+        return format!("`{}`", c.form.name);
+    }
+    let tried: Vec<String> = c
+        .forms_tried
+        .iter()
+        .map(|(name, r)| match r {
+            Ok(d) => format!("{name} ΔBIC {d:.1}"),
+            Err(_) => format!("{name} failed"),
+        })
+        .collect();
+    format!("`{}` (of {})", c.form.name, tried.join(", "))
+}
+
 fn candidates_table(md: &mut String, cs: &[Candidate]) {
     let _ = writeln!(
         md,
-        "| effect | screening score | ΔBIC (estimation) | held-out fit gain [points] | held-out gap closed | magnitude, 95 % interval | evidence |\n|---|---|---|---|---|---|---|"
+        "| effect | form | screening score | ΔBIC (estimation) | held-out fit gain [points] | held-out gap closed | magnitude, 95 % interval | evidence |\n|---|---|---|---|---|---|---|---|"
     );
     for c in cs {
         match (&c.refit, &c.refit_error) {
@@ -204,8 +245,9 @@ fn candidates_table(md: &mut String, cs: &[Candidate]) {
                     });
                 let _ = writeln!(
                     md,
-                    "| {} | {:.3} | {:.1} | {:+.2} | {:.0} % | {} | {} |",
+                    "| {} | {} | {:.3} | {:.1} | {:+.2} | {:.0} % | {} | {} |",
                     c.effect.name(),
+                    forms_cell(c),
                     c.score,
                     r.delta_bic,
                     r.fit_gain,
@@ -221,16 +263,18 @@ fn candidates_table(md: &mut String, cs: &[Candidate]) {
             (None, Some(e)) => {
                 let _ = writeln!(
                     md,
-                    "| {} | {:.3} | | | | | refit failed: {e} |",
+                    "| {} | {} | {:.3} | | | | | refit failed: {e} |",
                     c.effect.name(),
+                    forms_cell(c),
                     c.score
                 );
             }
             (None, None) => {
                 let _ = writeln!(
                     md,
-                    "| {} | {:.3} | | | | | not refitted (lower score) |",
+                    "| {} | {} | {:.3} | | | | | not refitted (lower score) |",
                     c.effect.name(),
+                    c.form.name,
                     c.score
                 );
             }
@@ -379,9 +423,15 @@ pub fn write(dir: &Path, d: &Diagnosis) -> Result<(), FileError> {
         let _ = writeln!(
             md,
             "\n{}\n",
-            match r.added {
-                Some(e) => format!("Added: `{}`, {}.", e.name(), e.form()),
-                None => "Nothing added in this round.".into(),
+            match (r.added, r.added_form) {
+                (Some(e), Some(f)) if !f.is_library() => format!(
+                    "Added: `{}` in the form `{}` (frees {}).",
+                    e.name(),
+                    f.name,
+                    f.free.join(", ")
+                ),
+                (Some(e), _) => format!("Added: `{}`, {}.", e.name(), e.form()),
+                (None, _) => "Nothing added in this round.".into(),
             }
         );
     }
@@ -395,10 +445,16 @@ pub fn write(dir: &Path, d: &Diagnosis) -> Result<(), FileError> {
     if !d.effects.is_empty() {
         let _ = writeln!(
             md,
-            "## The named effects and their parameters\n\n| effect | term | parameter | estimate | 95 % interval |\n|---|---|---|---|---|"
+            "## The named effects and their parameters\n\n| effect | form | parameter | estimate | 95 % interval |\n|---|---|---|---|---|"
         );
-        for e in &d.effects {
-            for name in e.parameters() {
+        for f in &d.forms {
+            let e = f.effect;
+            let form = if f.is_library() {
+                format!("`{}`: {}", f.name, e.form())
+            } else {
+                format!("`{}`", f.name)
+            };
+            for name in f.free {
                 if let Some(est) = d.last.estimates.iter().find(|x| x.name == *name) {
                     let ci = est
                         .ci95
@@ -409,7 +465,7 @@ pub fn write(dir: &Path, d: &Diagnosis) -> Result<(), FileError> {
                         md,
                         "| {} | {} | {} | {:.4e} | {} |",
                         e.name(),
-                        e.form(),
+                        form,
                         name,
                         est.value,
                         ci

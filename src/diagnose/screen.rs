@@ -2,19 +2,23 @@
 //! each effect is switched on at a probe value and its change of the outputs is projected out
 //! of what the base parameters can already do (their sensitivities); the share of the
 //! residual that the rest explains is the effect's score, and the projection's coefficient
-//! scales the probe into a starting value for the refit.
+//! scales the probe into a starting value for the refit. Every form of an effect's family has
+//! its own probes (src/diagnose/diagnose.md, "Families of forms"); a form is worth its explained
+//! share less the price of its dimensions, in the units of the BIC.
 
 use nalgebra::{DMatrix, DVector};
 
 use super::Error;
 use super::analysis::noise_level;
 use crate::identify::{Channel, Experiment, simulate};
+use crate::model::effects::Form;
 use crate::model::{Effect, Params};
 
-/// Effect parameter settings that switch an effect on, each giving one direction in output
-/// space; several settings of one probe span a subspace (the preload's three torques).
+/// Effect parameter settings that switch a form of an effect on, each giving one direction in
+/// output space; several settings of one probe span a subspace (the preload's three torques,
+/// the coupling's three pairs, the creep's two branches).
 pub struct Probe {
-    pub effect: Effect,
+    pub form: &'static Form,
     pub columns: Vec<Vec<(&'static str, f64)>>,
     pub scaling: Scaling,
 }
@@ -28,67 +32,119 @@ pub enum Scaling {
     Signed,
     /// A limit (U_max): the probe value is kept.
     Fixed,
+    /// The coupling's pairs: column j switches pair j on alone at k_c; the start is
+    /// k_c c_12 with the weights c_13 / c_12 and c_23 / c_12 (all kept positive).
+    Pairs,
 }
 
-/// Probes of every effect not yet in `params`, at values that change the response by a few
-/// percent of its range at the paper's excitation.
+/// Probes of every form of every effect not yet in `params`, at values that change the response
+/// by a few percent of its range at the paper's excitation (src/diagnose/diagnose.md,
+/// "Screening").
 pub fn probes(params: &Params, u_peak: f64) -> Vec<Probe> {
     let kb = params.act.iter().map(|a| a.kb).sum::<f64>() / 3.0;
-    let one = |effect, settings: Vec<(&'static str, f64)>| Probe {
-        effect,
-        columns: vec![settings],
-        scaling: Scaling::Magnitude,
-    };
     let mut out = Vec::new();
     for e in Effect::ALL
         .into_iter()
         .filter(|e| !e.is_active(&params.effects))
     {
-        match e {
-            Effect::Coupling => out.push(one(e, vec![("k_c", 1000.0)])),
-            Effect::ChargeDrift => {
-                for tau in [0.3, 1.0, 3.0] {
-                    out.push(one(e, vec![("R3", 3e4), ("tau3", tau)]));
+        for form in e.forms() {
+            let one = |settings: Vec<(&'static str, f64)>| Probe {
+                form,
+                columns: vec![[settings, form.settings.to_vec()].concat()],
+                scaling: Scaling::Magnitude,
+            };
+            match (e, form.name) {
+                (Effect::Coupling, "equal") => out.push(one(vec![("k_c", 1000.0)])),
+                (Effect::Coupling, _) => out.push(Probe {
+                    form,
+                    columns: [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]]
+                        .iter()
+                        .map(|w| {
+                            vec![
+                                ("k_c", 1000.0),
+                                ("w_c12", w[0]),
+                                ("w_c13", w[1]),
+                                ("w_c23", w[2]),
+                            ]
+                        })
+                        .collect(),
+                    scaling: Scaling::Pairs,
+                }),
+                (Effect::ChargeDrift, site) => {
+                    // the film's voltage is held by the source through R0 + R1: a branch
+                    // across it shows when its R3 = tau3 / C3 is a few times R0 + R1
+                    let r01 = params.act[0].r0 + params.act[0].r1;
+                    for tau in [0.3, 1.0, 3.0] {
+                        let magnitude = if site == "series" {
+                            ("R3", 3e4)
+                        } else {
+                            ("C3", tau / (3.0 * r01))
+                        };
+                        out.push(one(vec![magnitude, ("tau3", tau)]));
+                    }
                 }
-            }
-            Effect::Creep => {
-                for tau in [0.2, 0.6, 2.0] {
-                    out.push(one(e, vec![("k_v", 0.2 * kb), ("tau_v", tau)]));
+                (Effect::Creep, "one_time") => {
+                    for tau in [0.2, 0.6, 2.0] {
+                        out.push(one(vec![("k_v", 0.2 * kb), ("tau_v", tau)]));
+                    }
                 }
-            }
-            Effect::Hysteresis => {
-                for theta in [1e-3, 3e-3] {
-                    out.push(one(e, vec![("k_h", 0.2 * kb), ("theta_h", theta)]));
+                (Effect::Creep, _) => out.push(Probe {
+                    form,
+                    columns: vec![
+                        vec![("k_v", 0.2 * kb), ("tau_v", 0.2)],
+                        vec![("k_v2", 0.2 * kb), ("tau_v2", 2.0)],
+                    ],
+                    scaling: Scaling::Magnitude,
+                }),
+                (Effect::Hysteresis, name) => {
+                    let rates: &[f64] = if name == "rate_independent" {
+                        &[0.0]
+                    } else {
+                        &[3.0, 10.0]
+                    };
+                    for &r_h in rates {
+                        for theta in [1e-3, 3e-3] {
+                            let mut col = vec![("k_h", 0.2 * kb), ("theta_h", theta)];
+                            if r_h > 0.0 {
+                                col.push(("r_h", r_h));
+                            }
+                            out.push(one(col));
+                        }
+                    }
                 }
-            }
-            Effect::AmplifierLag => {
-                for tau in [0.01, 0.04] {
-                    out.push(one(e, vec![("tau_a", tau)]));
+                (Effect::AmplifierLag, name) => {
+                    for tau in [0.01, 0.04] {
+                        out.push(one(if name == "first_order" {
+                            vec![("tau_a", tau)]
+                        } else {
+                            vec![("tau_a", 0.5 * tau), ("tau_a2", 0.5 * tau)]
+                        }));
+                    }
                 }
-            }
-            Effect::Delay => {
-                for tau in [0.005, 0.02] {
-                    out.push(one(e, vec![("tau_d", tau)]));
+                (Effect::Delay, _) => {
+                    for tau in [0.005, 0.02] {
+                        out.push(one(vec![("tau_d", tau)]));
+                    }
                 }
-            }
-            Effect::Saturation => {
-                for f in [0.8, 0.9, 0.97] {
-                    out.push(Probe {
-                        effect: e,
-                        columns: vec![vec![("U_max", f * u_peak)]],
-                        scaling: Scaling::Fixed,
-                    });
+                (Effect::Saturation, _) => {
+                    for f in [0.8, 0.9, 0.97] {
+                        out.push(Probe {
+                            form,
+                            columns: vec![vec![("U_max", f * u_peak)]],
+                            scaling: Scaling::Fixed,
+                        });
+                    }
                 }
+                (Effect::Stiffening, _) => out.push(one(vec![("k3", 0.2 * kb / 0.015f64.powi(2))])),
+                (Effect::Preload, _) => out.push(Probe {
+                    form,
+                    columns: ["tau0_1", "tau0_2", "tau0_3"]
+                        .iter()
+                        .map(|n| vec![(*n, kb * 1e-3)])
+                        .collect(),
+                    scaling: Scaling::Signed,
+                }),
             }
-            Effect::Stiffening => out.push(one(e, vec![("k3", 0.2 * kb / 0.015f64.powi(2))])),
-            Effect::Preload => out.push(Probe {
-                effect: e,
-                columns: ["tau0_1", "tau0_2", "tau0_3"]
-                    .iter()
-                    .map(|n| vec![(*n, kb * 1e-3)])
-                    .collect(),
-                scaling: Scaling::Signed,
-            }),
         }
     }
     out
@@ -111,9 +167,13 @@ fn outputs(
 
 /// A probe's outcome: its score and the start values it suggests.
 pub struct Score {
-    pub effect: Effect,
+    pub form: &'static Form,
     /// Share of the weighted residual the probe explains beyond the base parameters [0, 1].
     pub score: f64,
+    /// What the form is worth: the weighted residual sum of squares it explains less ln N per
+    /// parameter it frees, the drop of the BIC it predicts (src/diagnose/diagnose.md,
+    /// "Families of forms").
+    pub worth: f64,
     pub start: Vec<(&'static str, f64)>,
 }
 
@@ -194,7 +254,23 @@ impl<'a> Point<'a> {
         let explained = (&d_perp * &coef).norm_squared();
         let total = r_perp.norm_squared().max(1e-300);
         let mut start = Vec::new();
-        for (k, column) in probe.columns.iter().enumerate() {
+        if probe.scaling == Scaling::Pairs {
+            // pair j's stiffness is k_c c_j; the weights are relative to pair (1, 2)
+            let c = |j: usize| coef[j].max(0.05 * coef.max().max(1e-12));
+            let k_c = probe.columns[0][0].1 * c(0);
+            start = vec![
+                ("k_c", k_c),
+                ("w_c12", 1.0),
+                ("w_c13", c(1) / c(0)),
+                ("w_c23", c(2) / c(0)),
+            ];
+        }
+        for (k, column) in probe
+            .columns
+            .iter()
+            .enumerate()
+            .filter(|_| probe.scaling != Scaling::Pairs)
+        {
             for (i, &(name, v)) in column.iter().enumerate() {
                 // the first setting of a column is its magnitude; the others (time constants,
                 // saturation angles) are kept
@@ -207,10 +283,17 @@ impl<'a> Point<'a> {
             }
         }
         // an effect that can only act with one sign explains nothing against it
-        let wrong_sign = probe.scaling == Scaling::Magnitude && coef[0] <= 0.0;
+        let wrong_sign = match probe.scaling {
+            Scaling::Magnitude => coef[0] <= 0.0,
+            Scaling::Pairs => coef.max() <= 0.0,
+            _ => false,
+        };
+        let explained = if wrong_sign { 0.0 } else { explained };
+        let n = self.residual.len() as f64;
         Ok(Score {
-            effect: probe.effect,
-            score: if wrong_sign { 0.0 } else { explained / total },
+            form: probe.form,
+            score: explained / total,
+            worth: explained - probe.form.free.len() as f64 * n.ln(),
             start,
         })
     }

@@ -557,8 +557,8 @@ mod tests {
         rows().iter().position(|r| r.name == name).unwrap() as u32
     }
 
-    /// The effects with states on (two stages each where an effect has a choice, when
-    /// `other_forms`), and the coupling that links the actuators.
+    /// The effects with states on (with their second stages and the hysteresis' relaxation,
+    /// when `other_forms`), and the coupling that links the actuators.
     fn effects_on(core: &mut HaselCore, other_forms: bool) {
         let effects = [
             ("R3", 2e4),
@@ -574,8 +574,11 @@ mod tests {
         for (name, value) in effects {
             core.set_real(vr(name), value).unwrap();
         }
-        core.params.effects.charge_drift.two_stages = other_forms;
-        core.params.effects.amplifier_lag.order = if other_forms { 2 } else { 1 };
+        if other_forms {
+            for (name, value) in [("tau_a2", 0.005), ("k_v2", 0.02), ("r_h", 2.0)] {
+                core.set_real(vr(name), value).unwrap();
+            }
+        }
     }
 
     /// A core of `kind` past initialization.
@@ -630,7 +633,7 @@ mod tests {
                 states += 1;
             }
         }
-        assert_eq!(states, 3 * 9);
+        assert_eq!(states, 3 * 11);
     }
 
     #[test]
@@ -646,7 +649,7 @@ mod tests {
     #[test]
     fn the_state_vector_is_the_table_states_with_their_derivatives() {
         let structure = model_structure();
-        assert_eq!(structure.derivatives.len(), 3 * 9);
+        assert_eq!(structure.derivatives.len(), 3 * 11);
         for d in &structure.derivatives {
             let (state, der) = (&rows()[d.state as usize], &rows()[d.derivative as usize]);
             assert_eq!(der.name, format!("der({})", state.name));

@@ -44,12 +44,12 @@ pub struct Row {
     pub description: String,
 }
 
-/// The states every actuator shows: the paper's five and the first state of each effect
-/// that has states (the effect's further stages are not variables).
+/// The states every actuator shows: the paper's five and every effect state the parameter
+/// table can switch on (synthetic data's further stages are not variables).
 fn fmu_states() -> impl Iterator<Item = BlockState> {
     (0..actuator::N)
         .map(BlockState::Paper)
-        .chain(Extra::FIRST_STAGES.map(BlockState::Extra))
+        .chain(Extra::TABLE_STATES.map(BlockState::Extra))
 }
 
 /// A state's description: the model's, with the effect and what it reads while off.

@@ -363,6 +363,8 @@ pub(super) fn fit_group(
                     },
                 ),
                 Rule::Finite => (f64::NEG_INFINITY, f64::INFINITY),
+                // a choice among forms is never fitted
+                Rule::Index(_) => (prior, prior),
             };
             opts.bounds.get(c.def.name).copied().unwrap_or(default)
         })

@@ -69,7 +69,9 @@ pub struct SynthArgs {
     noise: Option<f64>,
     /// Hide a mechanism in the data, in a form that differs from the library's term: an effect
     /// of the library (coupling, charge_drift, creep, hysteresis, amplifier_lag, delay,
-    /// saturation, stiffening, preload), `vibration` (outside the library) or `none`; with the
+    /// saturation, stiffening, preload), a second form of one (coupling_tilt,
+    /// charge_drift_film, creep_two_times, hysteresis_rate, amplifier_lag_second_order),
+    /// `vibration` or `supply_ripple` (outside the library) or `none`; with the
     /// base parameters Kb, b, gamma1, gamma2 off by up to 20 %, all drawn from --case
     #[arg(long, value_name = "NAME", conflicts_with_all = ["params", "set"])]
     effect: Option<String>,
@@ -169,7 +171,7 @@ pub fn synth(a: SynthArgs) -> Result<(), Error> {
                 Error::flag(
                     "effect",
                     name,
-                    "not an effect of the library, `vibration` or `none`",
+                    "not a hidden case (an effect of the library, one of its second forms such as `coupling_tilt`, `vibration`, `supply_ripple` or `none`)",
                 )
             })?;
             let mut hidden = hidden::hide(truth, a.case)?;

@@ -98,28 +98,101 @@ impl Effect {
         }
     }
 
-    /// The parameters of the effect (flat names of the parameter table): the ones that
-    /// switch it on first.
+    /// The parameters of the effect's library form (flat names of the parameter table): the
+    /// ones that switch it on first.
     pub fn parameters(self) -> &'static [&'static str] {
-        match self {
-            Effect::Coupling => &["k_c"],
-            Effect::ChargeDrift => &["R3", "tau3"],
-            Effect::Creep => &["k_v", "tau_v"],
-            Effect::Hysteresis => &["k_h", "theta_h"],
-            Effect::AmplifierLag => &["tau_a"],
-            Effect::Delay => &["tau_d"],
-            Effect::Saturation => &["U_max"],
-            Effect::Stiffening => &["k3"],
-            Effect::Preload => &["tau0_1", "tau0_2", "tau0_3"],
+        Form::library(self).free
+    }
+
+    /// The forms of the family (src/model/effects/effects.md, each effect's "Forms"), the
+    /// library form first; its parameters are [`Effect::parameters`].
+    pub fn forms(self) -> &'static [Form] {
+        const fn form(
+            effect: Effect,
+            name: &'static str,
+            free: &'static [&'static str],
+            settings: &'static [(&'static str, f64)],
+        ) -> Form {
+            Form {
+                effect,
+                name,
+                free,
+                settings,
+            }
         }
+        use Effect::*;
+        const COUPLING: [Form; 2] = [
+            form(Coupling, "equal", &["k_c"], &[]),
+            form(Coupling, "pairs", &["k_c", "w_c13", "w_c23"], &[]),
+        ];
+        const DRIFT: [Form; 3] = [
+            form(
+                ChargeDrift,
+                "series",
+                &["R3", "tau3"],
+                &[("drift_site", 0.0)],
+            ),
+            form(
+                ChargeDrift,
+                "electrode",
+                &["C3", "tau3"],
+                &[("drift_site", 1.0)],
+            ),
+            form(ChargeDrift, "film", &["C3", "tau3"], &[("drift_site", 2.0)]),
+        ];
+        const CREEP: [Form; 2] = [
+            form(Creep, "one_time", &["k_v", "tau_v"], &[]),
+            form(Creep, "two_times", &["k_v", "tau_v", "k_v2", "tau_v2"], &[]),
+        ];
+        const HYSTERESIS: [Form; 2] = [
+            form(Hysteresis, "rate_independent", &["k_h", "theta_h"], &[]),
+            form(
+                Hysteresis,
+                "rate_dependent",
+                &["k_h", "theta_h", "r_h"],
+                &[],
+            ),
+        ];
+        const AMPLIFIER: [Form; 2] = [
+            form(AmplifierLag, "first_order", &["tau_a"], &[]),
+            form(AmplifierLag, "second_order", &["tau_a", "tau_a2"], &[]),
+        ];
+        const DELAY: [Form; 1] = [form(Delay, "constant", &["tau_d"], &[])];
+        const SATURATION: [Form; 1] = [form(Saturation, "hard", &["U_max"], &[])];
+        const STIFFENING: [Form; 1] = [form(Stiffening, "quartic", &["k3"], &[])];
+        const PRELOAD: [Form; 1] = [form(
+            Preload,
+            "constant",
+            &["tau0_1", "tau0_2", "tau0_3"],
+            &[],
+        )];
+        match self {
+            Coupling => &COUPLING,
+            ChargeDrift => &DRIFT,
+            Creep => &CREEP,
+            Hysteresis => &HYSTERESIS,
+            AmplifierLag => &AMPLIFIER,
+            Delay => &DELAY,
+            Saturation => &SATURATION,
+            Stiffening => &STIFFENING,
+            Preload => &PRELOAD,
+        }
+    }
+
+    /// The form of the family called `name`.
+    pub fn form_named(self, name: &str) -> Option<&'static Form> {
+        self.forms().iter().find(|f| f.name == name)
     }
 
     /// Is the effect switched on by `p`?
     pub fn is_active(self, p: &EffectParams) -> bool {
         match self {
             Effect::Coupling => p.coupling.k_c != 0.0,
-            Effect::ChargeDrift => p.charge_drift.r3 > 0.0,
-            Effect::Creep => p.creep.k_v > 0.0,
+            Effect::ChargeDrift => match p.charge_drift.site {
+                DriftSite::Series => p.charge_drift.r3 > 0.0,
+                _ => p.charge_drift.c3 > 0.0,
+            },
+            Effect::Creep => p.creep.k_v > 0.0 || p.creep.k_v2 > 0.0,
             Effect::Hysteresis => p.hysteresis.k_h > 0.0,
             Effect::AmplifierLag => p.amplifier_lag.tau_a > 0.0,
             Effect::Delay => p.delay.tau_d > 0.0,
@@ -127,6 +200,29 @@ impl Effect {
             Effect::Stiffening => p.stiffening.k3 != 0.0,
             Effect::Preload => p.preload.tau0.iter().any(|&t| t != 0.0),
         }
+    }
+}
+
+/// One form of an effect's family: the parameters it frees (its magnitude first) and the
+/// settings that select it (src/model/effects/effects.md, each effect's "Forms").
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Form {
+    pub effect: Effect,
+    pub name: &'static str,
+    pub free: &'static [&'static str],
+    /// Parameters set to select the form, never fitted (e.g. `drift_site`).
+    pub settings: &'static [(&'static str, f64)],
+}
+
+impl Form {
+    /// The library form of `effect`.
+    pub fn library(effect: Effect) -> &'static Form {
+        &effect.forms()[0]
+    }
+
+    /// Is this the family's library form?
+    pub fn is_library(&self) -> bool {
+        self.name == self.effect.forms()[0].name
     }
 }
 
@@ -145,28 +241,63 @@ pub struct Coupling {
     pub weights: [f64; 3],
 }
 
-/// A slow charge-retention stage in series with the circuit, parameterized by R3 and
-/// τ3 = R3 C3 so that R3 = 0 is off.
+/// Where the charge-retention element sits in the circuit (src/model/effects/effects.md,
+/// "charge_drift").
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum DriftSite {
+    /// Library form: a (C3 ∥ R3) stage in series with the circuit; R3 is its magnitude.
+    Series,
+    /// A series R3–C3 absorption branch across the zipping capacitor C2; C3 is its magnitude.
+    Electrode,
+    /// The same branch across the whole film (C1 ∥ R1 and C2 ∥ R2 in series).
+    Film,
+}
+
+impl DriftSite {
+    pub const ALL: [DriftSite; 3] = [DriftSite::Series, DriftSite::Electrode, DriftSite::Film];
+
+    /// The value of the table's `drift_site`.
+    pub fn index(self) -> f64 {
+        match self {
+            DriftSite::Series => 0.0,
+            DriftSite::Electrode => 1.0,
+            DriftSite::Film => 2.0,
+        }
+    }
+
+    /// The site of a `drift_site` value (already checked to be 0, 1 or 2).
+    pub fn from_index(v: f64) -> DriftSite {
+        DriftSite::ALL[(v.round() as usize).min(2)]
+    }
+}
+
+/// A slow charge-retention element: in series (R3, τ3 = R3 C3, off at R3 = 0) or as an
+/// absorption branch across part of the film (C3, τ3 = R3 C3, off at C3 = 0).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ChargeDrift {
-    /// R3 [Ω]; 0 switches the stage off.
+    /// R3 [Ω] of the series stage; 0 switches it off.
     pub r3: f64,
     /// τ3 = R3 C3 [s].
     pub tau3: f64,
-    /// Library form: false. True splits the stage into two traps in series, (R3/2, τ3/3) and
-    /// (R3/2, 3 τ3): a spread of trapping times.
+    /// C3 [F] of an absorption branch (sites other than `Series`); 0 switches it off.
+    pub c3: f64,
+    pub site: DriftSite,
+    /// Only for synthetic data (series site): true splits the stage into two traps in series,
+    /// (R3/2, τ3/3) and (R3/2, 3 τ3): a spread of trapping times.
     pub two_stages: bool,
 }
 
-/// Viscoelastic creep: standard linear solid branches (k, τ) on θ. The library has one branch.
+/// Viscoelastic creep: standard linear solid branches (k, τ) on θ, one or two.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Creep {
-    /// k_v [N m/rad].
+    /// k_v [N m/rad] of the first branch; 0 switches it off.
     pub k_v: f64,
     /// τ_v = η / k_v [s].
     pub tau_v: f64,
-    /// Library form: false. True splits k_v into two equal branches at τ_v/3 and 3 τ_v.
-    pub two_branches: bool,
+    /// k_v2 [N m/rad] of the second branch; 0 (the default) switches it off.
+    pub k_v2: f64,
+    /// τ_v2 [s] of the second branch.
+    pub tau_v2: f64,
 }
 
 /// Hysteresis law of the zipping torque state.
@@ -184,17 +315,19 @@ pub struct Hysteresis {
     pub k_h: f64,
     /// θ_h [rad]: the angle where the hysteretic state saturates.
     pub theta_h: f64,
+    /// r_h [1/s]: the hysteretic state relaxes at this rate (0: rate-independent).
+    pub r_h: f64,
+    /// Only for synthetic data: the library's law is Bouc–Wen.
     pub law: HysteresisLaw,
 }
 
-/// Bandwidth of the amplifier: first order in the library, or two stages.
+/// Bandwidth of the amplifier: one first-order stage, or two in cascade.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct AmplifierLag {
     /// τ_a [s]; 0 is an ideal amplifier.
     pub tau_a: f64,
-    /// Library form: 1. With 2, two stages of 0.8 τ_a and 0.2 τ_a (the same low-frequency
-    /// phase lag, a steeper roll-off).
-    pub order: usize,
+    /// τ_a2 [s] of a second stage after the first; 0 (the default) is none.
+    pub tau_a2: f64,
 }
 
 /// Transport delay between the command and the actuator; applied by the simulation, which
@@ -264,21 +397,25 @@ impl Default for EffectParams {
             charge_drift: ChargeDrift {
                 r3: 0.0,
                 tau3: 1.0,
+                c3: 0.0,
+                site: DriftSite::Series,
                 two_stages: false,
             },
             creep: Creep {
                 k_v: 0.0,
                 tau_v: 1.0,
-                two_branches: false,
+                k_v2: 0.0,
+                tau_v2: 3.0,
             },
             hysteresis: Hysteresis {
                 k_h: 0.0,
                 theta_h: 1e-3,
+                r_h: 0.0,
                 law: HysteresisLaw::BoucWen,
             },
             amplifier_lag: AmplifierLag {
                 tau_a: 0.0,
-                order: 1,
+                tau_a2: 0.0,
             },
             delay: Delay { tau_d: 0.0 },
             saturation: Saturation {

@@ -5,7 +5,7 @@
 //! Each actuator's block of states is its five (θ, l_p, p, Q1, Q2) followed by the extra
 //! states of the active effects, in the order of [`Extra`]. Only `coupling` links the blocks.
 
-use super::{Effect, EffectParams, HysteresisLaw, PreloadLaw};
+use super::{DriftSite, Effect, EffectParams, HysteresisLaw, PreloadLaw};
 use crate::model::actuator::{self, Actuator, P, Q1, Q2, StateInfo, THETA};
 use crate::model::shell::DomainError;
 
@@ -26,13 +26,15 @@ pub enum Extra {
 }
 
 impl Extra {
-    /// The first (or only) state of each effect that has states, in block order: the effect
-    /// states every configuration can name.
-    pub const FIRST_STAGES: [Extra; 4] = [
+    /// The states the parameter table can switch on, in block order: the effect states
+    /// every configuration can name (the FMU's state variables).
+    pub const TABLE_STATES: [Extra; 6] = [
         Extra::Q3(0),
         Extra::Creep(0),
+        Extra::Creep(1),
         Extra::Hysteresis,
         Extra::Amplifier(0),
+        Extra::Amplifier(1),
     ];
 
     /// The effect that adds the state.
@@ -84,7 +86,9 @@ pub struct Terms {
     pub neutral: bool,
     /// The extra states of every actuator, in block order.
     pub extras: Vec<Extra>,
-    drift: Vec<(usize, f64, f64)>, // (index, R, τ) per stage
+    drift: Vec<(usize, f64, f64)>, // (index, R, τ) per series stage
+    /// The absorption branch across part of the film: (index, C3, τ3), the film's part.
+    branch: Option<(usize, f64, f64, DriftSite)>,
     creep: Vec<(usize, f64, f64)>, // (index, k, τ) per branch
     hyst: Option<usize>,
     amp: Vec<(usize, f64)>, // (index, time constant) per stage
@@ -106,20 +110,29 @@ impl Terms {
             Some(actuator::N + extras.len() - 1)
         };
         let mut drift = Vec::new();
-        if fx.charge_drift.r3 > 0.0 {
-            let stages = spread(
-                fx.charge_drift.r3,
-                fx.charge_drift.tau3,
-                fx.charge_drift.two_stages,
-            );
-            for (k, (rk, tk)) in stages.into_iter().enumerate() {
-                drift.push((push(Extra::Q3(k)).unwrap(), rk, tk));
+        let mut branch = None;
+        let cd = fx.charge_drift;
+        if Effect::ChargeDrift.is_active(fx) {
+            if cd.site == DriftSite::Series {
+                let stages = if cd.two_stages {
+                    vec![(0.5 * cd.r3, cd.tau3 / 3.0), (0.5 * cd.r3, 3.0 * cd.tau3)]
+                } else {
+                    vec![(cd.r3, cd.tau3)]
+                };
+                for (k, (rk, tk)) in stages.into_iter().enumerate() {
+                    drift.push((push(Extra::Q3(k)).unwrap(), rk, tk));
+                }
+            } else {
+                branch = Some((push(Extra::Q3(0)).unwrap(), cd.c3, cd.tau3, cd.site));
             }
         }
         let mut creep = Vec::new();
-        if fx.creep.k_v > 0.0 {
-            let branches = spread(fx.creep.k_v, fx.creep.tau_v, fx.creep.two_branches);
-            for (b, (kb, tb)) in branches.into_iter().enumerate() {
+        let cr = fx.creep;
+        for (b, (kb, tb)) in [(cr.k_v, cr.tau_v), (cr.k_v2, cr.tau_v2)]
+            .into_iter()
+            .enumerate()
+        {
+            if kb > 0.0 {
                 creep.push((push(Extra::Creep(b)).unwrap(), kb, tb));
             }
         }
@@ -129,16 +142,11 @@ impl Terms {
             None
         };
         let mut amp = Vec::new();
-        let tau = fx.amplifier_lag.tau_a;
-        if tau > 0.0 {
-            // two stages keep the low-frequency phase lag of one: τ = 0.8 τ_a + 0.2 τ_a
-            let stages = if fx.amplifier_lag.order >= 2 {
-                vec![0.8 * tau, 0.2 * tau]
-            } else {
-                vec![tau]
-            };
-            for (k, t) in stages.into_iter().enumerate() {
-                amp.push((push(Extra::Amplifier(k)).unwrap(), t));
+        let al = fx.amplifier_lag;
+        if al.tau_a > 0.0 {
+            amp.push((push(Extra::Amplifier(0)).unwrap(), al.tau_a));
+            if al.tau_a2 > 0.0 {
+                amp.push((push(Extra::Amplifier(1)).unwrap(), al.tau_a2));
             }
         }
         Terms {
@@ -146,6 +154,7 @@ impl Terms {
             neutral: fx.active().is_empty(),
             extras,
             drift,
+            branch,
             creep,
             hyst,
             amp,
@@ -174,8 +183,12 @@ impl Terms {
         self.extras
             .iter()
             .map(|e| match e {
-                // the charge at the stage's voltage i R3, with C3 = τ3 / R3
-                Extra::Q3(_) => i_dc * self.fx.charge_drift.tau3,
+                // the charge at the stage's voltage i R3, with C3 = τ3 / R3; a branch's C3 at
+                // the film's 100 V
+                Extra::Q3(_) => match self.branch {
+                    Some((_, c3, _, _)) => 100.0 * c3,
+                    None => i_dc * self.fx.charge_drift.tau3,
+                },
                 Extra::Creep(_) | Extra::Hysteresis => theta_star,
                 Extra::Amplifier(_) => 100.0,
             })
@@ -287,6 +300,15 @@ impl Terms {
                 dx[k] = i0 - xi[k] / tk;
             }
         }
+        if let Some((k, _, _, site)) = self.branch {
+            // the branch takes i3 from the part of the film it spans
+            let i3 = self.branch_current(&act.voltages(xi)?, xi);
+            dx[Q2] -= i3;
+            if site == DriftSite::Film {
+                dx[Q1] -= i3;
+            }
+            dx[k] = i3;
+        }
         // each stage follows the one before it (the first follows U)
         let mut prev = u;
         for &(k, t) in &self.amp {
@@ -301,8 +323,31 @@ impl Terms {
         self.drift.iter().map(|&(k, r, t)| r * xi[k] / t).sum()
     }
 
-    /// ż_h and its partial derivatives (∂/∂ω, ∂/∂z).
+    /// Current into the absorption branch, i3 = (C3 V_across − Q3) / τ3 (src/model/effects/
+    /// effects.md, "charge_drift"), V_across = V2 across the electrode, V1 + V2 across the film.
+    fn branch_current(&self, v: &actuator::Voltages, xi: &[f64]) -> f64 {
+        match self.branch {
+            Some((k, c3, t3, site)) => {
+                let across = if site == DriftSite::Film {
+                    v.v1 + v.v2
+                } else {
+                    v.v2
+                };
+                (c3 * across - xi[k]) / t3
+            }
+            None => 0.0,
+        }
+    }
+
+    /// ż_h and its partial derivatives (∂/∂ω, ∂/∂z), the relaxation −r_h z_h included.
     fn hysteresis_rate(&self, omega: f64, z: f64) -> (f64, f64, f64) {
+        let hy = self.fx.hysteresis;
+        let (rate, d_omega, d_z) = self.hysteresis_law(omega, z);
+        (rate - hy.r_h * z, d_omega, d_z - hy.r_h)
+    }
+
+    /// The hysteresis law's ż_h and its partial derivatives (∂/∂ω, ∂/∂z).
+    fn hysteresis_law(&self, omega: f64, z: f64) -> (f64, f64, f64) {
         let hy = self.fx.hysteresis;
         match hy.law {
             HysteresisLaw::BoucWen => {
@@ -396,6 +441,27 @@ impl Terms {
                 }
             }
         }
+        if let Some((k, c3, t3, site)) = self.branch {
+            let v = act.voltages(xi)?;
+            // ∂i3/∂x, entered in the branch's row and (negated) in the rows it takes from
+            let mut d = vec![
+                (THETA, c3 * v.v2_t / t3),
+                (actuator::L_P, c3 * v.v2_l / t3),
+                (Q2, c3 / (v.c2 * t3)),
+                (k, -1.0 / t3),
+            ];
+            let mut rows = vec![Q2];
+            if site == DriftSite::Film {
+                d.push((Q1, c3 / (act.par.c1 * t3)));
+                rows.push(Q1);
+            }
+            for (col, value) in d {
+                add(o + k, o + col, value);
+                for &r in &rows {
+                    add(o + r, o + col, -value);
+                }
+            }
+        }
         let mut prev = None;
         for &(k, t) in &self.amp {
             add(o + k, o + k, -1.0 / t);
@@ -457,6 +523,9 @@ impl Terms {
             for &(k, r, t) in &self.drift {
                 e += 0.5 * r * xi[k] * xi[k] / t;
             }
+            if let Some((k, c3, _, _)) = self.branch {
+                e += 0.5 * xi[k] * xi[k] / c3;
+            }
         }
         e
     }
@@ -488,17 +557,12 @@ impl Terms {
                 p += vk * vk / r;
             }
         }
+        if let Some((_, c3, t3, _)) = self.branch {
+            // the branch's resistor R3 = τ3 / C3
+            let i3 = self.branch_current(&act.voltages(xi)?, xi);
+            p += i3 * i3 * t3 / c3;
+        }
         Ok(p)
-    }
-}
-
-/// One element (magnitude, time constant), or its magnitude split in two halves at a third and
-/// three times the time constant: the other forms of the drift and creep.
-fn spread(magnitude: f64, tau: f64, two: bool) -> Vec<(f64, f64)> {
-    if two {
-        vec![(0.5 * magnitude, tau / 3.0), (0.5 * magnitude, 3.0 * tau)]
-    } else {
-        vec![(magnitude, tau)]
     }
 }
 

@@ -21,14 +21,32 @@ fn all_on(other_forms: bool) -> Params {
     if other_forms {
         f.coupling.weights = [1.0, 0.5, 1.5];
         f.charge_drift.two_stages = true;
-        f.creep.two_branches = true;
+        f.creep.k_v2 = 0.02;
+        f.creep.tau_v2 = 2.0;
+        f.hysteresis.r_h = 3.0;
         f.hysteresis.law = HysteresisLaw::Dahl;
-        f.amplifier_lag.order = 2;
+        f.amplifier_lag.tau_a2 = 0.004;
         f.saturation.soft = true;
         f.stiffening.exponent = 6;
         f.preload.law = PreloadLaw::Weight;
     }
     p
+}
+
+/// The library form, the other forms, and the other forms with the drift element across the
+/// zipping capacitor and across the film.
+fn configurations() -> Vec<(String, Params)> {
+    let mut out = vec![
+        ("library forms".to_string(), all_on(false)),
+        ("other forms".to_string(), all_on(true)),
+    ];
+    for site in [DriftSite::Electrode, DriftSite::Film] {
+        let mut p = all_on(true);
+        p.effects.charge_drift.site = site;
+        p.effects.charge_drift.c3 = 2e-9;
+        out.push((format!("other forms, drift {site:?}"), p));
+    }
+    out
 }
 
 /// A state away from rest: charges, momentum, a zipped electrode, effect states off rest.
@@ -71,16 +89,17 @@ fn neutral_by_default() {
 #[test]
 fn jacobian_matches_finite_differences_with_every_effect() {
     // U inside the clipping range (the hard clamp has no derivative at its corners)
-    check_jacobian(all_on(false), [40.0, 25.0, -30.0]);
-    check_jacobian(all_on(true), [40.0, 25.0, -30.0]);
+    for (_, p) in configurations() {
+        check_jacobian(p, [40.0, 25.0, -30.0]);
+    }
     check_jacobian(all_on(false), [70.0, 25.0, -80.0]);
 }
 
 #[test]
 fn power_balance_holds_with_every_effect() {
     // dH/dt along f (central difference in time) = supplied − dissipated
-    for other in [false, true] {
-        let m = Platform::new(all_on(other)).unwrap();
+    for (other, p) in configurations() {
+        let m = Platform::new(p).unwrap();
         let x = busy_state(&m);
         let u = [40.0, 25.0, -30.0];
         let n = m.n_states();
@@ -97,7 +116,7 @@ fn power_balance_holds_with_every_effect() {
         let scale = supplied.abs() + dissipated;
         assert!(
             (dh - (supplied - dissipated)).abs() < 1e-7 * scale,
-            "other forms {other}: dH/dt {dh:e}, supplied − dissipated {:e}",
+            "{other}: dH/dt {dh:e}, supplied − dissipated {:e}",
             supplied - dissipated
         );
         let stored = m.stored_power(&x, u).unwrap();
@@ -107,8 +126,8 @@ fn power_balance_holds_with_every_effect() {
 
 #[test]
 fn rest_state_is_an_equilibrium_with_static_loads() {
-    for other in [false, true] {
-        let m = Platform::new(all_on(other)).unwrap();
+    for (_, p) in configurations() {
+        let m = Platform::new(p).unwrap();
         let x = m.rest_state().unwrap();
         let mut dx = vec![0.0; m.n_states()];
         m.rhs(&x, [0.0; 3], &mut dx).unwrap();
@@ -151,9 +170,36 @@ fn effects_have_parameters_in_the_table() {
 }
 
 #[test]
+fn every_form_is_in_the_table_and_neutral_until_its_magnitude() {
+    for e in Effect::ALL {
+        assert!(
+            !e.forms().is_empty() && Form::library(e).is_library(),
+            "{e}"
+        );
+        for f in e.forms() {
+            let mut p = Params::default();
+            for &(name, v) in f.settings {
+                p.set(name, v).unwrap();
+            }
+            assert!(
+                !e.is_active(&p.effects),
+                "{e}/{}: on before its magnitude",
+                f.name
+            );
+            for name in f.free {
+                assert!(p.get(name).is_ok(), "{e}/{}: {name}", f.name);
+            }
+            // the form's magnitude switches the effect on
+            p.set(f.free[0], 1e-3).unwrap();
+            assert!(e.is_active(&p.effects), "{e}/{}", f.name);
+        }
+    }
+}
+
+#[test]
 fn state_positions_agree_with_the_names() {
-    for other in [false, true] {
-        let m = Platform::new(all_on(other)).unwrap();
+    for (_, p) in configurations() {
+        let m = Platform::new(p).unwrap();
         for i in 0..3 {
             for s in m.block_states() {
                 let name = format!("{}_{}", s.name(), i + 1);
@@ -163,7 +209,7 @@ fn state_positions_agree_with_the_names() {
         }
     }
     let paper = Platform::new(Params::default()).unwrap();
-    for e in terms::Extra::FIRST_STAGES {
+    for e in terms::Extra::TABLE_STATES {
         assert_eq!(paper.state_position(0, BlockState::Extra(e)), None, "{e:?}");
     }
 }

@@ -17,8 +17,8 @@ use crate::error::Error;
 fn expected(t: Truth) -> &'static str {
     match t {
         Truth::Nothing => "none",
-        Truth::Outside => "unexplained",
-        Truth::Effect(e) => e.name(),
+        Truth::Outside | Truth::Ripple => "unexplained",
+        Truth::Effect(e) | Truth::Variant(e) => e.name(),
     }
 }
 
@@ -59,7 +59,11 @@ pub fn run(
     let mut slowest: f64 = 0.0;
     let mut stages: BTreeMap<String, f64> = BTreeMap::new();
     for truth in Truth::all() {
-        if only.as_deref().is_some_and(|o| o != truth.name()) {
+        // `--only coupling` runs every case of the family, `--only coupling_tilt` one
+        if only
+            .as_deref()
+            .is_some_and(|o| o != truth.name() && truth.effect().is_none_or(|e| e.name() != o))
+        {
             continue;
         }
         for seed in 1..=seeds {
@@ -87,7 +91,7 @@ pub fn run(
             }
             total += 1;
             right += ok as usize;
-            if let Truth::Effect(_) = truth {
+            if truth.effect().is_some() {
                 effect_cases += 1;
                 effect_right += ok as usize;
             }
@@ -99,10 +103,11 @@ pub fn run(
                 .filter(|x| x.experiment != d.estimation)
                 .map(|x| format!("{:.1}", 100.0 * x.excess))
                 .collect();
+            let forms: Vec<&str> = d.forms.iter().map(|f| f.name).collect();
             say!(
-                "  {:<13} seed {seed}: {:<28} {} {:5.1} s | held-out fit {} -> {} | {gap:.2} below floor | excess after {} % | {} outlier(s) | {}",
+                "  {:<26} seed {seed}: {:<28} {} {:5.1} s | held-out fit {} -> {} | {gap:.2} below floor | excess after {} % | {} outlier(s) | {}",
                 truth.name(),
-                got,
+                format!("{got} [{}]", forms.join("+")),
                 if ok { "ok  " } else { "MISS" },
                 seconds,
                 fmt_fits(&before),
@@ -115,8 +120,9 @@ pub fn run(
                 for c in &r.candidates {
                     if let Some(f) = &c.refit {
                         say!(
-                            "      {:<13} score {:.3} dBIC {:9.1} gain {:6.2} gap {:5.2} {}",
+                            "      {:<13} {:<17} score {:.3} dBIC {:9.1} gain {:6.2} gap {:5.2} {}",
                             c.effect.name(),
+                            c.form.name,
                             c.score,
                             f.delta_bic,
                             f.fit_gain,
@@ -129,8 +135,9 @@ pub fn run(
                         );
                     } else {
                         say!(
-                            "      {:<13} score {:.3}{}",
+                            "      {:<13} {:<17} score {:.3}{}",
                             c.effect.name(),
+                            c.form.name,
                             c.score,
                             c.refit_error
                                 .as_ref()
@@ -145,7 +152,7 @@ pub fn run(
     }
     say!("confusion (hidden -> answer: count)");
     for ((t, a), n) in &matrix {
-        say!("  {t:<13} -> {a:<28} {n}");
+        say!("  {t:<26} -> {a:<28} {n}");
     }
     times.sort_by(f64::total_cmp);
     let typical = times.get(times.len() / 2).copied().unwrap_or(0.0);
