@@ -10,7 +10,8 @@
 use nalgebra::Complex;
 use serde::{Deserialize, Serialize};
 
-use super::{OdeSystem, SolverError, Stats, Tolerances, lu};
+use super::lu::{self, BlockLu};
+use super::{OdeSystem, SolverError, Stats, Tolerances};
 
 const SQRT6: f64 = 2.449_489_742_783_178;
 /// Collocation nodes c1, c2 (c3 = 1).
@@ -135,13 +136,10 @@ pub struct Radau5 {
     err_vec: Vec<f64>,
     scal: Vec<f64>,
     jac: Vec<f64>,
-    e1: Vec<f64>,
-    piv1: Vec<usize>,
-    e2: Vec<Complex<f64>>,
-    piv2: Vec<usize>,
+    /// The factors of E1 = (γ/h) I − J and E2 = ((α + iβ)/h) I − J, block by block.
+    e1: BlockLu<f64>,
+    e2: BlockLu<Complex<f64>>,
     rhs2: Vec<Complex<f64>>,
-    /// Diagonal block sizes of the Jacobian.
-    blocks: Vec<usize>,
     /// The Jacobian was evaluated at the current point.
     jac_current: bool,
     /// The next step must evaluate a new Jacobian.
@@ -208,12 +206,9 @@ impl Radau5 {
             err_vec: vec![0.0; n],
             scal: vec![0.0; n],
             jac: vec![0.0; n * n],
-            e1: vec![0.0; n * n],
-            piv1: vec![0; n],
-            e2: vec![zero_c; n * n],
-            piv2: vec![0; n],
+            e1: BlockLu::new(vec![n]),
+            e2: BlockLu::new(vec![n]),
             rhs2: vec![zero_c; n],
-            blocks: vec![n],
             jac_current: false,
             need_jac: true,
             lu_h: f64::NAN,
@@ -245,12 +240,16 @@ impl Radau5 {
         self.lu_h = f64::NAN;
         self.first = true;
         self.reject = false;
-        self.blocks = sys.jacobian_blocks();
+        let blocks = sys.jacobian_blocks();
         assert_eq!(
-            self.blocks.iter().sum::<usize>(),
+            blocks.iter().sum::<usize>(),
             self.n,
             "Jacobian blocks must cover the states"
         );
+        if blocks != self.e1.blocks() {
+            self.e2 = BlockLu::new(blocks.clone());
+            self.e1 = BlockLu::new(blocks);
+        }
         self.update_scal();
         self.restart(sys)
     }
@@ -453,20 +452,11 @@ impl Radau5 {
 
     /// E1 = (γ/h) I − J and E2 = ((α + iβ)/h) I − J, factored.
     fn decompose(&mut self, h: f64) -> Result<(), lu::Singular> {
-        let n = self.n;
-        let (fac1, alphn, betan) = (GAMMA / h, ALPHA / h, BETA / h);
-        for k in 0..n * n {
-            self.e1[k] = -self.jac[k];
-            self.e2[k] = Complex::new(-self.jac[k], 0.0);
-        }
-        for i in 0..n {
-            self.e1[i * n + i] += fac1;
-            self.e2[i * n + i] += Complex::new(alphn, betan);
-        }
         self.stats.decompositions += 1;
         self.lu_h = f64::NAN;
-        lu::factor_blocks(&mut self.e1, n, &self.blocks, &mut self.piv1)?;
-        lu::factor_blocks(&mut self.e2, n, &self.blocks, &mut self.piv2)?;
+        self.e1.factor_shifted(GAMMA / h, &self.jac)?;
+        self.e2
+            .factor_shifted(Complex::new(ALPHA / h, BETA / h), &self.jac)?;
         self.lu_h = h;
         Ok(())
     }
@@ -531,8 +521,8 @@ impl Radau5 {
                     a[2] - alphn * w3 - betan * w2,
                 );
             }
-            lu::solve_blocks(&self.e1, n, &self.blocks, &self.piv1, &mut self.z[..n]);
-            lu::solve_blocks(&self.e2, n, &self.blocks, &self.piv2, &mut self.rhs2);
+            self.e1.solve(&mut self.z[..n]);
+            self.e2.solve(&mut self.rhs2);
             let mut sum = 0.0;
             for i in 0..n {
                 let (d1, d2, d3) = (self.z[i], self.rhs2[i].re, self.rhs2[i].im);
@@ -594,13 +584,13 @@ impl Radau5 {
             self.stage_f[i] = f2;
             self.err_vec[i] = f2 + self.f0[i];
         }
-        lu::solve_blocks(&self.e1, n, &self.blocks, &self.piv1, &mut self.err_vec);
+        self.e1.solve(&mut self.err_vec);
         if self.after_jump {
             // a jump leaves a stiff transient that L-stability removes (R(∞) = 0), but the
             // estimate above tends to the jump's size as hλ → −∞; filtering once more through
             // (I − γ0 h J)⁻¹ = (γ/h) E1⁻¹ sends its stiff limit to zero and leaves smooth
             // components unchanged to first order
-            lu::solve_blocks(&self.e1, n, &self.blocks, &self.piv1, &mut self.err_vec);
+            self.e1.solve(&mut self.err_vec);
             let fac1 = GAMMA / h;
             for v in self.err_vec.iter_mut() {
                 *v *= fac1;
@@ -619,7 +609,7 @@ impl Radau5 {
                 for i in 0..n {
                     self.err_vec[i] = f1[i] + f2[i];
                 }
-                lu::solve_blocks(&self.e1, n, &self.blocks, &self.piv1, &mut self.err_vec);
+                self.e1.solve(&mut self.err_vec);
                 err = self.weighted_norm();
             }
         }
@@ -643,7 +633,7 @@ impl Radau5 {
             h: self.h_old,
             y: &self.y,
             z: &self.z,
-            blocks: &self.blocks,
+            blocks: self.e1.blocks(),
             n,
         }
     }

@@ -139,7 +139,7 @@ impl Sensitivities {
                     }
                 }
             }
-            lu::factor(mat, dim, 0, dim, &mut self.piv[..dim])
+            lu::factor(mat, &mut self.piv[..dim])
                 .map_err(|lu::Singular(row)| SensitivityError::Singular { t: t_end, row })?;
             for j in 0..m {
                 // g_l = J_l s + ∂f/∂θ_j (Y_l) on this block; right-hand side h Σ_l a_kl g_l
@@ -159,7 +159,7 @@ impl Sensitivities {
                         b[k * mb + r] = h * (A[k][0] * gr[0] + A[k][1] * gr[1] + A[k][2] * gr[2]);
                     }
                 }
-                lu::solve(&self.matrix[..dim * dim], dim, 0, &self.piv[..dim], b);
+                lu::solve(&self.matrix[..dim * dim], &self.piv[..dim], b);
             }
             o += mb;
         }
