@@ -62,6 +62,10 @@ pub struct HaselCore {
     u: [f64; 3],
     t_start: f64,
     run: Option<Run>,
+    /// The outputs (h1, h2, h3, tip) at a Co-Simulation run's current state, computed on the
+    /// first read after a step: an importer reads them one by one, and each tip coordinate
+    /// needs all three heights.
+    outputs: Option<[f64; 6]>,
 }
 
 /// The model after initialization.
@@ -250,6 +254,17 @@ impl HaselCore {
         }
     }
 
+    /// Output `k` of [`Platform::outputs`] of a Co-Simulation run, from the cache.
+    fn stepped_output(&mut self, k: usize) -> Option<f64> {
+        let Some(Run::Steps(sim)) = &self.run else {
+            return None;
+        };
+        let outputs = self
+            .outputs
+            .get_or_insert_with(|| sim.model().outputs(sim.state()));
+        Some(outputs[k])
+    }
+
     fn value(&self, slot: Slot, model: &Platform, x: &[f64]) -> Result<f64, String> {
         let ok = |r: Result<f64, crate::model::ModelError>| r.map_err(|e| e.to_string());
         Ok(match slot {
@@ -294,6 +309,7 @@ impl FmuCore for HaselCore {
             u: [0.0; 3],
             t_start: 0.0,
             run: None,
+            outputs: None,
         })
     }
 
@@ -307,6 +323,16 @@ impl FmuCore for HaselCore {
             Slot::Input(i) => return Ok(self.u[i]),
             Slot::Param(d) => return Ok((d.get)(&self.params)),
             Slot::Rtol => return Ok(self.rtol),
+            Slot::Height(i) => {
+                if let Some(h) = self.stepped_output(i) {
+                    return Ok(h);
+                }
+            }
+            Slot::Tip(i) => {
+                if let Some(tip) = self.stepped_output(3 + i) {
+                    return Ok(tip);
+                }
+            }
             _ => {}
         }
         self.evaluate(|model, x| self.value(row.slot, model, x))
@@ -352,6 +378,7 @@ impl FmuCore for HaselCore {
 
     fn exit_initialization(&mut self) -> Result<(), String> {
         let (model, x) = self.at_rest()?;
+        self.outputs = None;
         self.run = Some(match self.kind {
             InstanceKind::CoSimulation => Run::Steps(Box::new(
                 Simulator::from_state(model, self.t_start, &x, self.effective_rtol())
@@ -380,6 +407,7 @@ impl FmuCore for HaselCore {
         let Some(Run::Steps(sim)) = self.run.as_mut() else {
             return Err("the simulation has not been initialized for Co-Simulation".into());
         };
+        self.outputs = None;
         let t_end = sim.t() + step;
         sim.step_held(self.u, t_end).map_err(|e| e.to_string())
     }
@@ -544,6 +572,7 @@ impl FmuCore for HaselCore {
             u: state.u,
             t_start: state.t_start,
             run,
+            outputs: None,
         })
     }
 }

@@ -143,6 +143,7 @@ impl Actuator {
         }
     }
 
+    #[inline(always)]
     fn eval(&self, x: &[f64]) -> Result<Eval, DomainError> {
         let shell = Shell::new(x[THETA], x[L_P], self.lv)?;
         let c2 = self.c2_0 + self.c2_a * shell.a_s;
@@ -155,7 +156,7 @@ impl Actuator {
             v1,
             v2,
             omega: x[P] / self.inertia,
-            h_t: self.par.kb * x[THETA] + self.gravity * x[THETA].cos() + e_x * shell.a_s_t,
+            h_t: self.par.kb * x[THETA] + self.gravity * shell.cos_theta + e_x * shell.a_s_t,
             h_l: 0.5 * self.par.k * (x[L_P] - self.lp) + e_x * shell.a_s_l,
             shell,
         })
@@ -200,7 +201,7 @@ impl Actuator {
         let e = self.eval(x)?;
         let dl = x[L_P] - self.lp;
         Ok(0.5 * self.par.kb * x[THETA] * x[THETA]
-            + self.gravity * x[THETA].sin()
+            + self.gravity * e.shell.sin_theta
             + 0.25 * self.par.k * dl * dl
             + 0.5 * x[P] * e.omega
             + 0.5 * x[Q1] * e.v1
@@ -214,6 +215,7 @@ impl Actuator {
     }
 
     /// ẋ = (J − R) ∇H + g U.
+    #[inline]
     pub fn rhs(&self, x: &[f64], u: f64, dx: &mut [f64]) -> Result<(), DomainError> {
         let e = self.eval(x)?;
         let d = e.shell.d;
@@ -242,7 +244,7 @@ impl Actuator {
         let w = e.v2 * e.v2 / e.c2;
         let half_v2sq = 0.5 * e.v2 * e.v2 * self.c2_a;
         let h_tt =
-            self.par.kb - self.gravity * x[THETA].sin() + w * c2_t * c2_t - half_v2sq * s.a_s_tt;
+            self.par.kb - self.gravity * e.shell.sin_theta + w * c2_t * c2_t - half_v2sq * s.a_s_tt;
         let h_tl = w * c2_t * c2_l - half_v2sq * s.a_s_tl;
         let h_ll = 0.5 * self.par.k + w * c2_l * c2_l - half_v2sq * s.a_s_ll;
         let h_tq2 = -e.v2 * c2_t / e.c2;
@@ -281,7 +283,7 @@ impl Actuator {
         let half_v2sq = 0.5 * e.v2 * e.v2 * self.c2_a;
         let mut h = [[0.0; N]; N];
         h[THETA][THETA] =
-            self.par.kb - self.gravity * x[THETA].sin() + w * c2_t * c2_t - half_v2sq * s.a_s_tt;
+            self.par.kb - self.gravity * e.shell.sin_theta + w * c2_t * c2_t - half_v2sq * s.a_s_tt;
         h[THETA][L_P] = w * c2_t * c2_l - half_v2sq * s.a_s_tl;
         h[L_P][L_P] = 0.5 * self.par.k + w * c2_l * c2_l - half_v2sq * s.a_s_ll;
         h[THETA][Q2] = -e.v2 * c2_t / e.c2;

@@ -256,7 +256,8 @@ impl Platform {
 
     /// The outputs y = (h1, h2, h3, tip_x, tip_y, tip_z) [m], as the FMU's.
     pub fn outputs(&self, x: &[f64]) -> [f64; 6] {
-        let (h, tip) = (self.heights(x), self.tip(x));
+        let h = self.heights(x);
+        let tip = self.kinematics.tip(h);
         [h[0], h[1], h[2], tip[0], tip[1], tip[2]]
     }
 

@@ -8,7 +8,9 @@
 //! ```
 //!
 //! Second derivatives are needed for the analytic Jacobian (∇²H). sin δ1 and cos δ1 come from
-//! the angle-difference formulas, so the right-hand side needs no asin.
+//! the angle-difference formulas, so the right-hand side needs no asin; sin θ and cos θ come
+//! from the half angle's by the double-angle formulas, so one `sin_cos` serves the shell, the
+//! gravity terms and the heights of one evaluation.
 
 /// The model is defined only where the asin argument is below 1, i.e. l_p > Lv cos(θ/2).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -53,6 +55,9 @@ pub struct Shell {
     /// ∂δ1/∂θ, ∂δ1/∂l_p
     dl_t: f64,
     dl_l: f64,
+    /// sin θ and cos θ
+    pub sin_theta: f64,
+    pub cos_theta: f64,
 }
 
 /// Second partials of A_s and first partials of d.
@@ -66,6 +71,7 @@ pub struct Curvature {
 }
 
 impl Shell {
+    #[inline]
     pub fn new(theta: f64, l_p: f64, lv: f64) -> Result<Shell, DomainError> {
         // s = (Lv/l_p) sin((π − θ)/2) = (Lv/l_p) cos(θ/2)
         let (sin_h, cos_h) = (theta / 2.0).sin_cos();
@@ -97,6 +103,8 @@ impl Shell {
             cos_d,
             dl_t,
             dl_l,
+            sin_theta: 2.0 * sin_h * cos_h,
+            cos_theta: (cos_h - sin_h) * (cos_h + sin_h),
         })
     }
 
@@ -178,6 +186,9 @@ mod tests {
             close(c.d_t, (pt.d - mt.d) / (2.0 * ht), "d_t");
             close(c.d_l, (pl.d - ml.d) / (2.0 * hl), "d_l");
             close(s.d, 2.0 * s.a_s / l, "d = 2 A_s / l_p");
+            assert!(
+                (s.sin_theta - th.sin()).abs() <= 1e-16 && (s.cos_theta - th.cos()).abs() <= 2e-16
+            );
         }
     }
 

@@ -192,7 +192,11 @@ impl<T: Entry> BlockLu<T> {
     pub fn solve(&self, b: &mut [T]) {
         let (mut o, mut at) = (0, 0);
         for &m in &self.blocks {
-            solve(&self.lu[at..at + m * m], &self.piv[o..o + m], &mut b[o..o + m]);
+            solve(
+                &self.lu[at..at + m * m],
+                &self.piv[o..o + m],
+                &mut b[o..o + m],
+            );
             o += m;
             at += m * m;
         }
@@ -248,7 +252,11 @@ mod tests {
         let sigma = Complex::new(2.0, -1.5);
         let x = DVector::from_fn(n, |i, _| Complex::new(1.0 + i as f64, 0.5));
         let shifted = DMatrix::from_fn(n, n, |r, c| {
-            let s = if r == c { sigma } else { Complex::new(0.0, 0.0) };
+            let s = if r == c {
+                sigma
+            } else {
+                Complex::new(0.0, 0.0)
+            };
             s - Complex::new(m[(r, c)], 0.0)
         });
         let b = &shifted * &x;

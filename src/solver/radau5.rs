@@ -104,6 +104,19 @@ fn eigenvalues() -> (f64, f64, f64) {
     (gamma, alpha / cno, beta / cno)
 }
 
+/// The three stage parts [0, n), [n, 2n) and [2n, 3n) of a stage vector.
+fn stages(v: &[f64], n: usize) -> [&[f64]; 3] {
+    let (first, rest) = v.split_at(n);
+    let (second, third) = rest.split_at(n);
+    [first, second, &third[..n]]
+}
+
+fn stages_mut(v: &mut [f64], n: usize) -> [&mut [f64]; 3] {
+    let (first, rest) = v.split_at_mut(n);
+    let (second, third) = rest.split_at_mut(n);
+    [first, second, &mut third[..n]]
+}
+
 /// The Radau IIA(5) integrator and its whole state.
 #[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct Radau5 {
@@ -493,8 +506,9 @@ impl Radau5 {
         let (mut dynold, mut thqold) = (0.0, 0.0);
         for newt in 1..=NIT {
             for (k, c) in [C1, C2, 1.0].into_iter().enumerate() {
-                for i in 0..n {
-                    self.work[i] = self.y[i] + self.z[k * n + i];
+                let zk = &self.z[k * n..(k + 1) * n];
+                for ((w, y), z) in self.work.iter_mut().zip(&self.y).zip(zk) {
+                    *w = y + z;
                 }
                 if let Err(e) = sys.rhs(
                     self.t + c * h,
@@ -506,31 +520,32 @@ impl Radau5 {
             }
             self.stats.rhs_evals += 3;
             self.stats.newton_iterations += 1;
-            // right-hand sides of the transformed, decoupled linear systems
+            // right-hand sides of the transformed, decoupled linear systems (every slice of
+            // length n, so that the loops index without bounds checks)
+            let [f1, f2, f3] = stages(&self.stage_f, n);
+            let [w1, w2, w3] = stages(&self.w, n);
+            let (z1, rhs2) = (&mut self.z[..n], &mut self.rhs2[..n]);
             for i in 0..n {
-                let f = [
-                    self.stage_f[i],
-                    self.stage_f[n + i],
-                    self.stage_f[2 * n + i],
-                ];
+                let f = [f1[i], f2[i], f3[i]];
                 let a = [0, 1, 2].map(|k| TI[k][0] * f[0] + TI[k][1] * f[1] + TI[k][2] * f[2]);
-                let (w1, w2, w3) = (self.w[i], self.w[n + i], self.w[2 * n + i]);
-                self.z[i] = a[0] - fac1 * w1;
-                self.rhs2[i] = Complex::new(
-                    a[1] - alphn * w2 + betan * w3,
-                    a[2] - alphn * w3 - betan * w2,
+                z1[i] = a[0] - fac1 * w1[i];
+                rhs2[i] = Complex::new(
+                    a[1] - alphn * w2[i] + betan * w3[i],
+                    a[2] - alphn * w3[i] - betan * w2[i],
                 );
             }
-            self.e1.solve(&mut self.z[..n]);
-            self.e2.solve(&mut self.rhs2);
+            self.e1.solve(z1);
+            self.e2.solve(rhs2);
             let mut sum = 0.0;
+            let [w1, w2, w3] = stages_mut(&mut self.w, n);
+            let (z1, rhs2, scal) = (&self.z[..n], &self.rhs2[..n], &self.scal[..n]);
             for i in 0..n {
-                let (d1, d2, d3) = (self.z[i], self.rhs2[i].re, self.rhs2[i].im);
-                let s = self.scal[i];
+                let (d1, d2, d3) = (z1[i], rhs2[i].re, rhs2[i].im);
+                let s = scal[i];
                 sum += (d1 / s).powi(2) + (d2 / s).powi(2) + (d3 / s).powi(2);
-                self.w[i] += d1;
-                self.w[n + i] += d2;
-                self.w[2 * n + i] += d3;
+                w1[i] += d1;
+                w2[i] += d2;
+                w3[i] += d3;
             }
             let dyno = (sum / (3 * n) as f64).sqrt();
             if !dyno.is_finite() {
@@ -561,11 +576,13 @@ impl Radau5 {
                 }
             }
             dynold = dyno.max(UROUND);
+            let [w1, w2, w3] = stages(&self.w, n);
+            let [z1, z2, z3] = stages_mut(&mut self.z, n);
             for i in 0..n {
-                let (w1, w2, w3) = (self.w[i], self.w[n + i], self.w[2 * n + i]);
-                self.z[i] = T[0][0] * w1 + T[0][1] * w2 + T[0][2] * w3;
-                self.z[n + i] = T[1][0] * w1 + T[1][1] * w2 + T[1][2] * w3;
-                self.z[2 * n + i] = T[2][0] * w1 + T[2][1] * w2 + T[2][2] * w3;
+                let w = [w1[i], w2[i], w3[i]];
+                z1[i] = T[0][0] * w[0] + T[0][1] * w[1] + T[0][2] * w[2];
+                z2[i] = T[1][0] * w[0] + T[1][1] * w[1] + T[1][2] * w[2];
+                z3[i] = T[2][0] * w[0] + T[2][1] * w[1] + T[2][2] * w[2];
             }
             if self.faccon * dyno <= self.fnewt {
                 return Newton::Converged(newt);
