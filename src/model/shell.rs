@@ -75,7 +75,10 @@ impl Shell {
     pub fn new(theta: f64, l_p: f64, lv: f64) -> Result<Shell, DomainError> {
         // s = (Lv/l_p) sin((π − θ)/2) = (Lv/l_p) cos(θ/2)
         let (sin_h, cos_h) = (theta / 2.0).sin_cos();
-        let s = lv / l_p * cos_h;
+        // one division for the three quotients by l_p
+        let inv_lp = 1.0 / l_p;
+        let lv_lp = lv * inv_lp;
+        let s = lv_lp * cos_h;
         if l_p <= 0.0 || s.abs() >= 1.0 || s.is_nan() || !theta.is_finite() {
             return Err(DomainError { theta, l_p, lv });
         }
@@ -84,8 +87,8 @@ impl Shell {
         // δ1 = (π + θ)/2 − a with sin a = s: sin δ1 and cos δ1 by the angle-difference formulas
         let sin_d = cos_h * cos_a + sin_h * s;
         let cos_d = -sin_h * cos_a + cos_h * s;
-        let s_t = -0.5 * lv / l_p * sin_h;
-        let s_l = -s / l_p;
+        let s_t = -0.5 * lv_lp * sin_h;
+        let s_l = -s * inv_lp;
         let (dl_t, dl_l) = (0.5 - k * s_t, -k * s_l);
         let q = 0.25 * lv;
         Ok(Shell {

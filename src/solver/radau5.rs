@@ -147,7 +147,9 @@ pub struct Radau5 {
     stage_f: Vec<f64>,
     work: Vec<f64>,
     err_vec: Vec<f64>,
-    scal: Vec<f64>,
+    /// 1/(atol_int + rtol_int |y|): the error weights, as reciprocals so that the norms
+    /// multiply (a division costs several multiplications, and the norms take hundreds a step).
+    inv_scal: Vec<f64>,
     jac: Vec<f64>,
     /// The factors of E1 = (γ/h) I − J and E2 = ((α + iβ)/h) I − J, block by block.
     e1: BlockLu<f64>,
@@ -217,7 +219,7 @@ impl Radau5 {
             stage_f: vec![0.0; 3 * n],
             work: vec![0.0; n],
             err_vec: vec![0.0; n],
-            scal: vec![0.0; n],
+            inv_scal: vec![0.0; n],
             jac: vec![0.0; n * n],
             e1: BlockLu::new(vec![n]),
             e2: BlockLu::new(vec![n]),
@@ -298,7 +300,7 @@ impl Radau5 {
 
     fn update_scal(&mut self) {
         for i in 0..self.n {
-            self.scal[i] = self.atol_int[i] + self.rtol_int * self.y[i].abs();
+            self.inv_scal[i] = 1.0 / (self.atol_int[i] + self.rtol_int * self.y[i].abs());
         }
     }
 
@@ -538,11 +540,11 @@ impl Radau5 {
             self.e2.solve(rhs2);
             let mut sum = 0.0;
             let [w1, w2, w3] = stages_mut(&mut self.w, n);
-            let (z1, rhs2, scal) = (&self.z[..n], &self.rhs2[..n], &self.scal[..n]);
+            let (z1, rhs2, inv_scal) = (&self.z[..n], &self.rhs2[..n], &self.inv_scal[..n]);
             for i in 0..n {
                 let (d1, d2, d3) = (z1[i], rhs2[i].re, rhs2[i].im);
-                let s = scal[i];
-                sum += (d1 / s).powi(2) + (d2 / s).powi(2) + (d3 / s).powi(2);
+                let w = inv_scal[i];
+                sum += (d1 * w).powi(2) + (d2 * w).powi(2) + (d3 * w).powi(2);
                 w1[i] += d1;
                 w2[i] += d2;
                 w3[i] += d3;
@@ -635,7 +637,7 @@ impl Radau5 {
 
     fn weighted_norm(&self) -> f64 {
         let sum: f64 = (0..self.n)
-            .map(|i| (self.err_vec[i] / self.scal[i]).powi(2))
+            .map(|i| (self.err_vec[i] * self.inv_scal[i]).powi(2))
             .sum();
         (sum / self.n as f64).sqrt().max(1e-10)
     }
@@ -660,10 +662,11 @@ impl Radau5 {
         let n = self.n;
         for i in 0..n {
             let (z1, z2, z3) = (self.z[i], self.z[n + i], self.z[2 * n + i]);
-            let c1 = (z2 - z3) / C2M1;
-            let ak = (z1 - z2) / C1MC2;
-            let acont3 = (ak - z1 / C1) / C2;
-            let c2 = (ak - c1) / C1M1;
+            // divisions by the constants as multiplications by their reciprocals (folded)
+            let c1 = (z2 - z3) * (1.0 / C2M1);
+            let ak = (z1 - z2) * (1.0 / C1MC2);
+            let acont3 = (ak - z1 * (1.0 / C1)) * (1.0 / C2);
+            let c2 = (ak - c1) * (1.0 / C1M1);
             self.cont[i] = c1;
             self.cont[n + i] = c2;
             self.cont[2 * n + i] = c2 - acont3;
