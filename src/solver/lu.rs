@@ -71,16 +71,18 @@ pub fn factor<T: Entry>(a: &mut [T], piv: &mut [usize]) -> Result<(), Singular> 
     by_size!(piv.len(), factor_m(a, piv))
 }
 
-// The loops run over the whole block with the triangle as a condition inside: with m a
-// constant, the compiler then unrolls them all and drops the conditions, which it does not do
-// for loops that start at k + 1.
+// For the sizes up to UNROLLED the loops run over the whole block with the triangle as a
+// condition inside: with m a constant, the compiler then unrolls them all and drops the
+// conditions, which it does not do for loops that start at k + 1. Larger blocks start there
+// and skip the zeros of sparse columns (the sensitivities' stage systems are mostly zeros).
 #[inline(always)]
 fn factor_m<T: Entry>(m: usize, a: &mut [T], piv: &mut [usize]) -> Result<(), Singular> {
     let (a, piv) = (&mut a[..m * m], &mut piv[..m]);
     for k in 0..m {
+        let below = if m <= UNROLLED { 0 } else { k + 1 };
         let mut p = k;
         let mut best = a[k * m + k].norm1();
-        for i in 0..m {
+        for i in below..m {
             let v = a[k * m + i].norm1();
             if i > k && v > best {
                 best = v;
@@ -98,15 +100,15 @@ fn factor_m<T: Entry>(m: usize, a: &mut [T], piv: &mut [usize]) -> Result<(), Si
         }
         let inv = a[k * m + k].recip();
         a[k * m + k] = inv;
-        for i in 0..m {
+        for i in below..m {
             if i > k {
                 a[k * m + i] = a[k * m + i] * inv;
             }
         }
-        for j in 0..m {
-            if j > k {
-                let akj = a[j * m + k];
-                for i in 0..m {
+        for j in below..m {
+            let akj = a[j * m + k];
+            if j > k && (m <= UNROLLED || akj != T::from(0.0)) {
+                for i in below..m {
                     if i > k {
                         a[j * m + i] = a[j * m + i] - a[k * m + i] * akj;
                     }
@@ -129,8 +131,12 @@ fn solve_m<T: Entry>(m: usize, lu: &[T], piv: &[usize], b: &mut [T]) {
     for (k, &p) in piv.iter().enumerate() {
         b.swap(k, p);
     }
+    let sparse = m > UNROLLED;
     for k in 0..m {
         let bk = b[k];
+        if sparse && bk == T::from(0.0) {
+            continue;
+        }
         for i in k + 1..m {
             b[i] = b[i] - lu[k * m + i] * bk;
         }
@@ -138,6 +144,9 @@ fn solve_m<T: Entry>(m: usize, lu: &[T], piv: &[usize], b: &mut [T]) {
     for k in (0..m).rev() {
         let bk = b[k] * lu[k * m + k];
         b[k] = bk;
+        if sparse && bk == T::from(0.0) {
+            continue;
+        }
         for i in 0..k {
             b[i] = b[i] - lu[k * m + i] * bk;
         }
