@@ -4,8 +4,10 @@
 //!
 //! Written here rather than taken from nalgebra because nalgebra's `LU` owns and reallocates
 //! its matrix, and the solver must not allocate per step. Blocks of up to [`UNROLLED`] rows are
-//! factored and solved by code compiled for their size (loops unrolled, no bounds checks): a
-//! 5 × 5 complex solve costs about a tenth of the generic code's (README, "The solver").
+//! factored and solved by code compiled for their size (loops unrolled, no bounds checks), with
+//! the pivots' reciprocals kept so that solving only multiplies: the block solves of a 1 ms
+//! co-simulation step of the platform take a tenth of the instructions of generic code over
+//! runtime sizes (README, "The solver").
 
 use std::ops::{Add, Mul, Sub};
 
