@@ -3,7 +3,7 @@
 
 use std::path::{Path, PathBuf};
 
-use super::file::{FileError, write_bytes_atomic};
+use super::file::{FileError, write_parts_atomic};
 
 /// A numeric table: column names and rows of equal length.
 #[derive(Clone, Debug, PartialEq)]
@@ -136,18 +136,48 @@ impl Table {
 
 /// Writes a table to `path` through a temporary file in the same folder, renamed into place.
 /// Each number is written in its shortest form that parses back to the same `f64` (zmij's
-/// shortest round-trip conversion), into one buffer written once: no allocation per row or
-/// per number, so writing costs less than the simulation that made the rows.
-pub fn write_atomic<R: AsRef<[f64]>>(
+/// shortest round-trip conversion), without allocation per row or per number. A long table is
+/// formatted in consecutive slices on the machine's threads (formatting is nine tenths of
+/// writing a trajectory), then written in order.
+pub fn write_atomic<R: AsRef<[f64]> + Sync>(
     path: &Path,
     header: &[&str],
-    rows: impl IntoIterator<Item = R>,
+    rows: &[R],
 ) -> Result<(), FileError> {
-    let rows = rows.into_iter();
+    let mut head = header.join(",").into_bytes();
+    head.push(b'\n');
+    let threads = std::thread::available_parallelism().map_or(1, |n| n.get());
+    let slices = threads.min(rows.len() / ROWS_PER_THREAD).max(1);
+    let per = rows.len().div_ceil(slices).max(1);
+    let bodies: Vec<Vec<u8>> = if slices == 1 {
+        vec![format_rows(rows)]
+    } else {
+        std::thread::scope(|s| {
+            let handles: Vec<_> = rows
+                .chunks(per)
+                .map(|chunk| s.spawn(|| format_rows(chunk)))
+                .collect();
+            handles
+                .into_iter()
+                .map(|h| h.join().expect("formatting numbers does not panic"))
+                .collect()
+        })
+    };
+    let parts: Vec<&[u8]> = std::iter::once(head.as_slice())
+        .chain(bodies.iter().map(Vec::as_slice))
+        .collect();
+    write_parts_atomic(path, &parts)
+}
+
+/// Fewest rows worth a thread of their own (a thread costs tens of microseconds; a row about
+/// 0.3 µs).
+const ROWS_PER_THREAD: usize = 2_000;
+
+/// The rows as CSV lines, into one buffer.
+fn format_rows<R: AsRef<[f64]>>(rows: &[R]) -> Vec<u8> {
+    let width = rows.first().map_or(0, |r| r.as_ref().len());
     // ~20 bytes a number is the common case (sign, 17 digits, point, exponent)
-    let mut text = Vec::with_capacity(64 + rows.size_hint().0 * header.len() * 20);
-    text.extend_from_slice(header.join(",").as_bytes());
-    text.push(b'\n');
+    let mut text = Vec::with_capacity(rows.len() * width * 20);
     let mut number = zmij::Buffer::new();
     for row in rows {
         for (k, v) in row.as_ref().iter().enumerate() {
@@ -158,7 +188,7 @@ pub fn write_atomic<R: AsRef<[f64]>>(
         }
         text.push(b'\n');
     }
-    write_bytes_atomic(path, &text)
+    text
 }
 
 #[cfg(test)]
@@ -210,7 +240,16 @@ mod tests {
             0.1 + 0.2,
             123456789.0,
         ];
-        let rows: Vec<[f64; 3]> = values.iter().map(|&v| [v, -v, v * 1e-9]).collect();
+        // the values, then enough rows to be formatted in slices on several threads, which
+        // must come back in order
+        let rows: Vec<[f64; 3]> = values
+            .iter()
+            .map(|&v| [v, -v, v * 1e-9])
+            .chain(
+                (0..3 * ROWS_PER_THREAD)
+                    .map(|k| [k as f64, (k as f64).sqrt(), 1.0 / (k as f64 + 0.5)]),
+            )
+            .collect();
         write_atomic(&path, &["a", "b", "c"], &rows).unwrap();
         let back = Table::read(&path).unwrap();
         std::fs::remove_dir_all(&dir).unwrap();

@@ -61,6 +61,11 @@ pub fn write_text_atomic(path: &Path, text: &str) -> Result<(), FileError> {
 
 /// Writes `bytes` to `path` through a temporary file renamed into place.
 pub fn write_bytes_atomic(path: &Path, bytes: &[u8]) -> Result<(), FileError> {
+    write_parts_atomic(path, &[bytes])
+}
+
+/// [`write_bytes_atomic`] of the concatenation of `parts`, written one after the other.
+pub fn write_parts_atomic(path: &Path, parts: &[&[u8]]) -> Result<(), FileError> {
     let dir = path
         .parent()
         .filter(|d| !d.as_os_str().is_empty())
@@ -75,7 +80,14 @@ pub fn write_bytes_atomic(path: &Path, bytes: &[u8]) -> Result<(), FileError> {
         name.to_string_lossy(),
         std::process::id()
     ));
-    std::fs::write(&tmp, bytes).map_err(|e| FileError::new(path, format!("cannot write: {e}")))?;
+    let written = std::fs::File::create(&tmp).and_then(|mut f| {
+        use std::io::Write;
+        parts.iter().try_for_each(|part| f.write_all(part))
+    });
+    if let Err(e) = written {
+        let _ = std::fs::remove_file(&tmp);
+        return Err(FileError::new(path, format!("cannot write: {e}")));
+    }
     std::fs::rename(&tmp, path).map_err(|e| {
         let _ = std::fs::remove_file(&tmp);
         FileError::new(path, format!("cannot move into place: {e}"))

@@ -13,11 +13,14 @@ pub const COLUMNS: [&str; 10] = [
 
 /// Writes `samples` to `path` atomically.
 pub fn write(path: &Path, samples: &[Sample]) -> Result<(), FileError> {
-    let rows = samples.iter().map(|s| {
-        let [u1, u2, u3] = s.u;
-        let [h1, h2, h3] = s.h;
-        let [x, y, z] = s.tip;
-        [s.t, u1, u2, u3, h1, h2, h3, x, y, z]
-    });
-    write_atomic(path, &COLUMNS, rows)
+    let rows: Vec<[f64; 10]> = samples
+        .iter()
+        .map(|s| {
+            let [u1, u2, u3] = s.u;
+            let [h1, h2, h3] = s.h;
+            let [x, y, z] = s.tip;
+            [s.t, u1, u2, u3, h1, h2, h3, x, y, z]
+        })
+        .collect();
+    write_atomic(path, &COLUMNS, &rows)
 }

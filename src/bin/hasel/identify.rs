@@ -197,7 +197,7 @@ pub fn synth(a: SynthArgs) -> Result<(), Error> {
     };
     let (header, rows) = synth::synthesize(&spec)?;
     let n = rows.len();
-    write_atomic(&a.out, &header, rows)?;
+    write_atomic(&a.out, &header, &rows)?;
     say!(
         "wrote {} ({n} samples, {})",
         a.out.display(),

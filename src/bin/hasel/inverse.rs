@@ -83,7 +83,7 @@ pub fn run(a: Args) -> Result<(), Error> {
     let (h_min, h_max) = range(rows.iter().flat_map(|r| r[1..4].to_vec()));
     let (u_min, u_max) = range(rows.iter().flat_map(|r| r[4..7].to_vec()));
     let n = rows.len();
-    csv::write_atomic(&a.out, &["t", "h1", "h2", "h3", "U1", "U2", "U3"], rows)?;
+    csv::write_atomic(&a.out, &["t", "h1", "h2", "h3", "U1", "U2", "U3"], &rows)?;
     say!(
         "wrote {} ({n} points, --method {}): heights {:.3} .. {:.3} um, voltages {:.3} .. {:.3} V",
         a.out.display(),
