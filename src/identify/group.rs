@@ -205,6 +205,26 @@ impl Reduced<'_, '_> {
             .collect()
     }
 
+    /// Bounds on z: a column of B along one coordinate of x carries that coordinate's bounds
+    /// (so the optimiser keeps it inside, and it can leave its bound again); a column mixing
+    /// several is unbounded, its coordinates clamped in [`Reduced::x_of`].
+    fn z_bounds(&self) -> (Vec<f64>, Vec<f64>) {
+        (0..self.basis.ncols())
+            .map(|k| {
+                let col = self.basis.column(k);
+                let i = col.iamax();
+                if (col[i].abs() - 1.0).abs() > 1e-9 {
+                    return (f64::NEG_INFINITY, f64::INFINITY);
+                }
+                let (a, b) = (
+                    (self.lo[i] - self.x0[i]) / col[i],
+                    (self.hi[i] - self.x0[i]) / col[i],
+                );
+                (a.min(b), a.max(b))
+            })
+            .unzip()
+    }
+
     fn x_of(&self, z: &[f64]) -> Vec<f64> {
         let x = self.unclamped(z);
         (0..x.len())
@@ -219,6 +239,21 @@ impl lm::Residuals for Reduced<'_, '_> {
     }
     fn eval(&self, z: &[f64], r: &mut [f64]) -> Result<(), Error> {
         self.inner.eval(&self.x_of(z), r)
+    }
+    fn jacobian(&self, z: &[f64]) -> Option<Result<DMatrix<f64>, Error>> {
+        Some(self.sensitivity_jacobian(z))
+    }
+    /// z whose image is nearest to the clamped point: a step past a bound along a column that
+    /// mixes coordinates is pulled back, so z never drifts where the residuals are flat.
+    fn project(&self, z: &mut [f64]) {
+        let (u, x) = (self.unclamped(z), self.x_of(z));
+        if u != x {
+            for (k, zk) in z.iter_mut().enumerate() {
+                *zk = (0..x.len())
+                    .map(|i| self.basis[(i, k)] * (x[i] - self.x0[i]))
+                    .sum();
+            }
+        }
     }
 }
 
@@ -415,13 +450,8 @@ pub(super) fn fit_group(
                 },
             ));
         }
-        let sol = lm::minimize(
-            &reduced,
-            &vec![0.0; m],
-            &vec![f64::NEG_INFINITY; m],
-            &vec![f64::INFINITY; m],
-            &opts.lm,
-        )?;
+        let (z_lo, z_hi) = reduced.z_bounds();
+        let sol = lm::minimize(&reduced, &vec![0.0; m], &z_lo, &z_hi, &opts.lm)?;
         iterations += sol.iterations;
         // polish with Gauss–Newton on the sensitivities of tighter simulations, which
         // also gives the covariance: Kb and gamma1 correlate to 0.999, and forward differences
@@ -441,7 +471,10 @@ pub(super) fn fit_group(
             else {
                 break;
             };
-            let z_new: Vec<f64> = z.iter().zip(step.iter()).map(|(a, b)| a + b).collect();
+            let mut z_new: Vec<f64> = (0..m)
+                .map(|k| (z[k] + step[k]).clamp(z_lo[k], z_hi[k]))
+                .collect();
+            lm::Residuals::project(&sharp, &mut z_new);
             match lm::evaluate(&sharp, &z_new) {
                 Ok(r_new) if r_new.norm_squared() < r.norm_squared() => {
                     (z, r) = (z_new, r_new);
