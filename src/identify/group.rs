@@ -169,6 +169,11 @@ const COVARIANCE_RTOL_FACTOR: f64 = 1e-2;
 /// Central-difference step (in log parameters) of the covariance Jacobian.
 const COVARIANCE_FD_STEP: f64 = 1e-3;
 
+/// A step that lowers the sum of squared residuals by less than this share of one sample's mean
+/// square ends the fit: at the noise floor Δχ² < 0.01, a move of a tenth of a standard error,
+/// which no decision drawn from the fit can see (a BIC moves by 0.01).
+const NOISE_TELL: f64 = 0.01;
+
 /// Gauss–Newton iterations at most in the polish.
 const GN_POLISH: usize = 10;
 
@@ -419,6 +424,13 @@ pub(super) fn fit_group(
     let mut held: Vec<DVector<f64>> = Vec::new();
     let mut reasons: Vec<String> = Vec::new();
     let mut iterations = 0;
+    // the fit stops where the noise can no longer tell a step (see NOISE_TELL)
+    let lm_opts = lm::Options {
+        ftol: opts.lm.ftol.max(NOISE_TELL / len as f64),
+        ..opts.lm.clone()
+    };
+    // where the last fit ended: a refit after holding a direction starts there
+    let mut x_last = x0.clone();
     loop {
         let basis = complement(n, &held);
         let reduced = Reduced {
@@ -451,7 +463,14 @@ pub(super) fn fit_group(
             ));
         }
         let (z_lo, z_hi) = reduced.z_bounds();
-        let sol = lm::minimize(&reduced, &vec![0.0; m], &z_lo, &z_hi, &opts.lm)?;
+        // the last fit's point without its component along the held directions
+        let z_start: Vec<f64> = (0..m)
+            .map(|k| {
+                let z: f64 = (0..n).map(|i| basis[(i, k)] * (x_last[i] - x0[i])).sum();
+                z.clamp(z_lo[k], z_hi[k])
+            })
+            .collect();
+        let sol = lm::minimize(&reduced, &z_start, &z_lo, &z_hi, &lm_opts)?;
         iterations += sol.iterations;
         // polish with Gauss–Newton on the sensitivities of tighter simulations, which
         // also gives the covariance: Kb and gamma1 correlate to 0.999, and forward differences
@@ -545,6 +564,7 @@ pub(super) fn fit_group(
             }
             held.push(v.normalize());
             reasons.push(reason);
+            x_last = x;
             continue;
         }
         let cov = cov_z.expect("checked above");
