@@ -26,7 +26,9 @@ pub enum Truth {
     Effect(Effect),
     /// The effect in its second hidden form (the families with several forms).
     Variant(Effect),
-    /// A floor vibration at a frequency unrelated to the drive, added to the measurements.
+    /// A floor vibration at a frequency unrelated to the drive, added to the measurements: more
+    /// than two frequency resolutions of a [`RECORD_S`] record from every harmonic of both
+    /// drive frequencies.
     Outside,
     /// The amplifier's supply rippling: its gain modulated at a frequency unrelated to the
     /// drive.
@@ -125,7 +127,15 @@ pub fn hide(truth: Truth, seed: u64) -> Result<Hidden, Error> {
     let description = match truth {
         Truth::Nothing => "no effect".to_string(),
         Truth::Outside => {
-            let (a, f) = (between(0.03, 0.06), between(5.3, 8.7));
+            let a = between(0.03, 0.06);
+            // off the drive by construction: a frequency a record cannot tell from a harmonic
+            // would be counted as harmonic residual, which a library term might explain
+            let f = loop {
+                let f = between(5.3, 8.7);
+                if clear_of_harmonics(f) {
+                    break f;
+                }
+            };
             vibration = Some((a, f, between(0.0, 2.0 * PI)));
             format!(
                 "floor vibration of {:.1} % of each output's range at {f:.2} Hz",
@@ -304,6 +314,25 @@ pub fn hide(truth: Truth, seed: u64) -> Result<Hidden, Error> {
         ripple,
         artifacts: None,
         description: format!("{description}; noise {:.2} % of range", 100.0 * noise),
+    })
+}
+
+/// Length of the records the generator's cases are drawn for (the benchmark's and the tests'
+/// experiments) [s]: their frequency resolution is 1 / RECORD_S [Hz].
+pub const RECORD_S: f64 = 6.0;
+
+/// Clearance of the floor vibration from every harmonic of either drive frequency, in units of
+/// the record's frequency resolution. A sine Δf away from k·ω/2π leaves |sinc(π Δf T)| of its
+/// amplitude in the fit of that harmonic, at most 1/(2π) beyond 2 resolutions (2.5 % of its power).
+const HARMONIC_CLEARANCE: f64 = 2.0;
+
+/// Whether a vibration at `f` [Hz] is more than HARMONIC_CLEARANCE resolutions from every
+/// harmonic of both drive frequencies in [`OMEGAS`].
+fn clear_of_harmonics(f: f64) -> bool {
+    OMEGAS.iter().all(|omega| {
+        let f_drive = omega / (2.0 * PI);
+        let nearest = (f / f_drive).round().max(1.0) * f_drive;
+        (f - nearest).abs() > HARMONIC_CLEARANCE / RECORD_S
     })
 }
 

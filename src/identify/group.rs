@@ -169,6 +169,11 @@ const COVARIANCE_RTOL_FACTOR: f64 = 1e-2;
 /// Central-difference step (in log parameters) of the covariance Jacobian.
 const COVARIANCE_FD_STEP: f64 = 1e-3;
 
+/// A step that lowers the sum of squared residuals by less than this share of one sample's mean
+/// square ends the fit: at the noise floor Δχ² < 0.01, a move of a tenth of a standard error,
+/// which no decision drawn from the fit can see (a BIC moves by 0.01).
+const NOISE_TELL: f64 = 0.01;
+
 /// Gauss–Newton iterations at most in the polish.
 const GN_POLISH: usize = 10;
 
@@ -205,6 +210,26 @@ impl Reduced<'_, '_> {
             .collect()
     }
 
+    /// Bounds on z: a column of B along one coordinate of x carries that coordinate's bounds
+    /// (so the optimiser keeps it inside, and it can leave its bound again); a column mixing
+    /// several is unbounded, its coordinates clamped in [`Reduced::x_of`].
+    fn z_bounds(&self) -> (Vec<f64>, Vec<f64>) {
+        (0..self.basis.ncols())
+            .map(|k| {
+                let col = self.basis.column(k);
+                let i = col.iamax();
+                if (col[i].abs() - 1.0).abs() > 1e-9 {
+                    return (f64::NEG_INFINITY, f64::INFINITY);
+                }
+                let (a, b) = (
+                    (self.lo[i] - self.x0[i]) / col[i],
+                    (self.hi[i] - self.x0[i]) / col[i],
+                );
+                (a.min(b), a.max(b))
+            })
+            .unzip()
+    }
+
     fn x_of(&self, z: &[f64]) -> Vec<f64> {
         let x = self.unclamped(z);
         (0..x.len())
@@ -219,6 +244,21 @@ impl lm::Residuals for Reduced<'_, '_> {
     }
     fn eval(&self, z: &[f64], r: &mut [f64]) -> Result<(), Error> {
         self.inner.eval(&self.x_of(z), r)
+    }
+    fn jacobian(&self, z: &[f64]) -> Option<Result<DMatrix<f64>, Error>> {
+        Some(self.sensitivity_jacobian(z))
+    }
+    /// z whose image is nearest to the clamped point: a step past a bound along a column that
+    /// mixes coordinates is pulled back, so z never drifts where the residuals are flat.
+    fn project(&self, z: &mut [f64]) {
+        let (u, x) = (self.unclamped(z), self.x_of(z));
+        if u != x {
+            for (k, zk) in z.iter_mut().enumerate() {
+                *zk = (0..x.len())
+                    .map(|i| self.basis[(i, k)] * (x[i] - self.x0[i]))
+                    .sum();
+            }
+        }
     }
 }
 
@@ -384,6 +424,13 @@ pub(super) fn fit_group(
     let mut held: Vec<DVector<f64>> = Vec::new();
     let mut reasons: Vec<String> = Vec::new();
     let mut iterations = 0;
+    // the fit stops where the noise can no longer tell a step (see NOISE_TELL)
+    let lm_opts = lm::Options {
+        ftol: opts.lm.ftol.max(NOISE_TELL / len as f64),
+        ..opts.lm.clone()
+    };
+    // where the last fit ended: a refit after holding a direction starts there
+    let mut x_last = x0.clone();
     loop {
         let basis = complement(n, &held);
         let reduced = Reduced {
@@ -415,13 +462,15 @@ pub(super) fn fit_group(
                 },
             ));
         }
-        let sol = lm::minimize(
-            &reduced,
-            &vec![0.0; m],
-            &vec![f64::NEG_INFINITY; m],
-            &vec![f64::INFINITY; m],
-            &opts.lm,
-        )?;
+        let (z_lo, z_hi) = reduced.z_bounds();
+        // the last fit's point without its component along the held directions
+        let z_start: Vec<f64> = (0..m)
+            .map(|k| {
+                let z: f64 = (0..n).map(|i| basis[(i, k)] * (x_last[i] - x0[i])).sum();
+                z.clamp(z_lo[k], z_hi[k])
+            })
+            .collect();
+        let sol = lm::minimize(&reduced, &z_start, &z_lo, &z_hi, &lm_opts)?;
         iterations += sol.iterations;
         // polish with Gauss–Newton on the sensitivities of tighter simulations, which
         // also gives the covariance: Kb and gamma1 correlate to 0.999, and forward differences
@@ -441,7 +490,10 @@ pub(super) fn fit_group(
             else {
                 break;
             };
-            let z_new: Vec<f64> = z.iter().zip(step.iter()).map(|(a, b)| a + b).collect();
+            let mut z_new: Vec<f64> = (0..m)
+                .map(|k| (z[k] + step[k]).clamp(z_lo[k], z_hi[k]))
+                .collect();
+            lm::Residuals::project(&sharp, &mut z_new);
             match lm::evaluate(&sharp, &z_new) {
                 Ok(r_new) if r_new.norm_squared() < r.norm_squared() => {
                     (z, r) = (z_new, r_new);
@@ -512,6 +564,7 @@ pub(super) fn fit_group(
             }
             held.push(v.normalize());
             reasons.push(reason);
+            x_last = x;
             continue;
         }
         let cov = cov_z.expect("checked above");

@@ -197,8 +197,20 @@ pub fn identify(
     let mut not_identifiable = Vec::new();
     let mut held_combinations = Vec::new();
     let mut blocks: Vec<(Vec<String>, DMatrix<f64>)> = Vec::new();
-    for group in groups(&free, estimation) {
-        let (fitted, r) = fit_group(start, &group, estimation, opts)?;
+    let groups = groups(&free, estimation);
+    // each group is fitted from `start` on its own: side by side, in threads
+    let fitted_groups: Vec<_> = std::thread::scope(|s| {
+        let handles: Vec<_> = groups
+            .iter()
+            .map(|g| s.spawn(|| fit_group(start, g, estimation, opts)))
+            .collect();
+        handles
+            .into_iter()
+            .map(|h| h.join().expect("a group's fit does not panic"))
+            .collect()
+    });
+    for (group, fitted) in groups.iter().zip(fitted_groups) {
+        let (fitted, r) = fitted?;
         for d in &group.params {
             params.set(d.name, (d.get)(&fitted))?;
         }
