@@ -20,6 +20,9 @@ pub enum Error {
     /// Hidden data asked for a second form of an effect that has none.
     #[error("{0} has no second hidden form")]
     NoVariant(crate::model::Effect),
+    /// Hidden data asked for a pair of mechanisms that is not in the table.
+    #[error("no two-mechanism case {0}")]
+    NoPair(usize),
     /// The screening's least-squares projection could not be solved.
     #[error("{0}")]
     Projection(&'static str),

@@ -6,8 +6,9 @@
 //! hidden form beside the first where the library has several (a tilt spring, retention across
 //! the film, unequal creep times, rate-dependent Dahl hysteresis, a second-order amplifier of
 //! equal stages). Also data with no effect and with two mechanisms outside the library (a floor
-//! vibration picked up by the sensor, a ripple of the amplifier's supply). Any case can be
-//! recorded as lab data, with artifacts on top ([`Hidden::with_artifacts`]).
+//! vibration picked up by the sensor, a ripple of the amplifier's supply), and data with two
+//! mechanisms of the library at once ([`PAIRS`]). Any case can be recorded as lab data, with
+//! artifacts on top ([`Hidden::with_artifacts`]).
 
 use std::f64::consts::PI;
 
@@ -33,6 +34,8 @@ pub enum Truth {
     /// The amplifier's supply rippling: its gain modulated at a frequency unrelated to the
     /// drive.
     Ripple,
+    /// Two mechanisms at once: the two cases of [`PAIRS`]`[k]`.
+    Two(usize),
 }
 
 /// The families with a second hidden form, and its name.
@@ -42,6 +45,39 @@ const VARIANTS: [(Effect, &str); 5] = [
     (Effect::Creep, "creep_two_times"),
     (Effect::Hysteresis, "hysteresis_rate"),
     (Effect::AmplifierLag, "amplifier_lag_second_order"),
+];
+
+/// The two-mechanism cases: physically independent causes that leave different marks
+/// (src/diagnose/diagnose.md, "Two mechanisms at once"), each in a form that differs from the
+/// library's term, each at the magnitude of its own case.
+pub const PAIRS: [(&str, [Truth; 2]); 3] = [
+    // the platform's tilt spring and the film's creep: one couples the heights elastically,
+    // the other relaxes each actuator alone
+    (
+        "coupling_tilt+creep",
+        [
+            Truth::Variant(Effect::Coupling),
+            Truth::Effect(Effect::Creep),
+        ],
+    ),
+    // charge absorbed across the film (electrical, slow, driven by the voltage) and the
+    // zipping's Dahl hysteresis (mechanical, rate-independent, driven by the motion)
+    (
+        "charge_drift_film+hysteresis",
+        [
+            Truth::Variant(Effect::ChargeDrift),
+            Truth::Effect(Effect::Hysteresis),
+        ],
+    ),
+    // the amplifier's two stages (linear, before the actuator) and the film's fifth-power
+    // stiffening (nonlinear, in the actuator)
+    (
+        "amplifier_lag+stiffening",
+        [
+            Truth::Effect(Effect::AmplifierLag),
+            Truth::Effect(Effect::Stiffening),
+        ],
+    ),
 ];
 
 impl Truth {
@@ -55,6 +91,7 @@ impl Truth {
                 .map_or(e.name(), |(_, n)| n),
             Truth::Outside => "vibration",
             Truth::Ripple => "supply_ripple",
+            Truth::Two(k) => PAIRS.get(k).map_or("two", |p| p.0),
         }
     }
 
@@ -70,13 +107,24 @@ impl Truth {
         }
     }
 
+    /// The effects the data hide: one, both of a pair, or none.
+    pub fn effects(self) -> Vec<Effect> {
+        match self {
+            Truth::Two(k) => PAIRS.get(k).map_or(Vec::new(), |p| {
+                p.1.iter().filter_map(|t| t.effect()).collect()
+            }),
+            t => t.effect().into_iter().collect(),
+        }
+    }
+
     /// Every truth: no effect, the nine effects, the five second forms, the two mechanisms
-    /// outside the library.
+    /// outside the library, the pairs.
     pub fn all() -> Vec<Truth> {
         std::iter::once(Truth::Nothing)
             .chain(Effect::ALL.into_iter().map(Truth::Effect))
             .chain(VARIANTS.iter().map(|(e, _)| Truth::Variant(*e)))
             .chain([Truth::Outside, Truth::Ripple])
+            .chain((0..PAIRS.len()).map(Truth::Two))
             .collect()
     }
 }
@@ -118,6 +166,29 @@ pub fn hide(truth: Truth, seed: u64) -> Result<Hidden, Error> {
         params.set(&name, v * between(0.8, 1.2))?;
     }
     let noise = between(0.005, 0.02);
+    let mut case = Hidden {
+        truth,
+        params,
+        noise,
+        wandering_delay: None,
+        vibration: None,
+        ripple: None,
+        artifacts: None,
+        description: String::new(),
+    };
+    let description = plant(&mut case, truth, &mut between)?;
+    case.description = format!("{description}; noise {:.2} % of range", 100.0 * noise);
+    Ok(case)
+}
+
+/// Plants the mechanisms of `truth` in `case` (both of a pair, the first drawn first), their
+/// values drawn by `between`; returns them in words.
+fn plant(
+    case: &mut Hidden,
+    truth: Truth,
+    mut between: &mut dyn FnMut(f64, f64) -> f64,
+) -> Result<String, Error> {
+    let params = &mut case.params;
     let kb = params.act.map(|a| a.kb);
     let mean_kb = kb.iter().sum::<f64>() / 3.0;
     let mut wandering_delay = None;
@@ -304,17 +375,16 @@ pub fn hide(truth: Truth, seed: u64) -> Result<Hidden, Error> {
                 fx.preload.tau0[0], fx.preload.tau0[1], fx.preload.tau0[2]
             )
         }
+        Truth::Two(k) => {
+            let [a, b] = PAIRS.get(k).ok_or(Error::NoPair(k))?.1;
+            let first = plant(case, a, between)?;
+            format!("{first}; and {}", plant(case, b, between)?)
+        }
     };
-    Ok(Hidden {
-        truth,
-        params,
-        noise,
-        wandering_delay,
-        vibration,
-        ripple,
-        artifacts: None,
-        description: format!("{description}; noise {:.2} % of range", 100.0 * noise),
-    })
+    case.wandering_delay = case.wandering_delay.or(wandering_delay);
+    case.vibration = case.vibration.or(vibration);
+    case.ripple = case.ripple.or(ripple);
+    Ok(description)
 }
 
 /// Length of the records the generator's cases are drawn for (the benchmark's and the tests'

@@ -160,6 +160,22 @@ pub struct Round {
     pub added: Option<Effect>,
     /// The form of the effect added.
     pub added_form: Option<&'static Form>,
+    /// After a later effect was added: earlier effects tried against their rounds' runners-up.
+    pub revisits: Vec<Revisit>,
+}
+
+/// An earlier effect tried against the best other candidate that passed in its round, once a
+/// later effect explains its share (src/diagnose/diagnose.md, "Two mechanisms at once").
+#[derive(Clone, Debug)]
+pub struct Revisit {
+    pub replaced: Effect,
+    /// The runner-up, in the form it was refitted in.
+    pub by: &'static Form,
+    /// BIC with the runner-up in its place minus BIC of the model, on the estimation data; or
+    /// why the refit failed.
+    pub delta_bic: Result<f64, String>,
+    /// Whether the runner-up took the effect's place.
+    pub swapped: bool,
 }
 
 /// Everything a diagnosis found.
@@ -588,11 +604,35 @@ pub fn diagnose(
                 Some(best.effect)
             }
         };
+        let added_form = added.and(forms.last().copied());
+        let t0 = Instant::now();
+        let revisits = if added.is_some() && effects.len() > 1 {
+            let o = id_opts(Vec::new());
+            revisit(
+                &rounds,
+                &mut forms,
+                &mut current,
+                estimation,
+                held,
+                &o,
+                opts,
+            )?
+        } else {
+            Vec::new()
+        };
+        if !revisits.is_empty() {
+            effects = forms.iter().map(|f| f.effect).collect();
+            timing.push((
+                format!("revisit earlier effects (round {})", rounds.len() + 1),
+                t0.elapsed().as_secs_f64(),
+            ));
+        }
         rounds.push(Round {
             effects_before: round_effects,
-            added_form: added.and(forms.last().copied()),
+            added_form,
             candidates,
             added,
+            revisits,
         });
         if added.is_none() {
             break;
@@ -625,6 +665,78 @@ pub fn diagnose(
         experiments: ordered,
         outliers,
     })
+}
+
+/// Once a later effect has been added, each earlier effect (the model's `forms`, `current`) is
+/// tried against the best other candidate that passed in its round, refitted with the later
+/// effects beside it; the runner-up takes the effect's place when it lowers the BIC on the
+/// estimation data by [`BIC_MARGIN`] and keeps every held-out fit within [`FIT_TOLERANCE`] of its
+/// noise floor (src/diagnose/diagnose.md, "Two mechanisms at once"). The earlier choice was made
+/// while the later effect's share of the data was still unexplained.
+fn revisit(
+    rounds: &[Round],
+    forms: &mut [&'static Form],
+    current: &mut Identification,
+    estimation: &[Experiment],
+    held: &[Experiment],
+    id_opts: &IdOptions,
+    opts: &Options,
+) -> Result<Vec<Revisit>, Error> {
+    let mut out = Vec::new();
+    for round in rounds {
+        let Some(pos) = forms.iter().position(|f| Some(f.effect) == round.added) else {
+            continue;
+        };
+        let runner_up = round
+            .candidates
+            .iter()
+            .filter(|c| forms.iter().all(|f| f.effect != c.effect))
+            .filter_map(|c| c.refit.as_ref().filter(|r| r.passes()).map(|r| (c, r)))
+            .min_by(|a, b| a.1.delta_bic.total_cmp(&b.1.delta_bic));
+        let Some((c, r)) = runner_up else {
+            continue;
+        };
+        // the runner-up's refit, with the other effects' parameters as the model has them
+        let replaced = forms[pos].effect;
+        let mut start = r.id.params.clone();
+        for (_, f) in forms.iter().enumerate().filter(|(k, _)| *k != pos) {
+            for name in f.free.iter().chain(f.settings.iter().map(|(n, _)| n)) {
+                start.set(name, current.params.get(name)?)?;
+            }
+        }
+        let mut with: Vec<&'static Form> = forms.to_vec();
+        with[pos] = c.form;
+        let mut o = id_opts.clone();
+        o.free = free_list(&with);
+        o.lm.deadline = Some(Instant::now() + opts.refit_budget);
+        let refit = identify::identify(&start, estimation, held, &o);
+        let (delta_bic, swapped) = match refit {
+            Ok(id) => {
+                let delta = bic(&estimation[0], &id.simulated[0], o.free.len())
+                    - bic(
+                        &estimation[0],
+                        &current.simulated[0],
+                        free_list(forms).len(),
+                    );
+                let at_floor =
+                    worst_gap_to_floor(held_or_estimation(estimation, held), &id) <= FIT_TOLERANCE;
+                let swapped = delta <= -BIC_MARGIN && at_floor;
+                if swapped {
+                    forms[pos] = c.form;
+                    *current = id;
+                }
+                (Ok(delta), swapped)
+            }
+            Err(e) => (Err(e.to_string()), false),
+        };
+        out.push(Revisit {
+            replaced,
+            by: c.form,
+            delta_bic,
+            swapped,
+        });
+    }
+    Ok(out)
 }
 
 /// One refitted candidate as the decision sees it.

@@ -121,6 +121,19 @@ pub fn to_json(d: &Diagnosis) -> Value {
             "added": r.added.map(|e| e.name()),
             "added_form": r.added_form.map(|f| f.name),
             "candidates": r.candidates.iter().map(candidate_json).collect::<Vec<_>>(),
+            "revisits": r.revisits.iter().map(|v| {
+                let mut j = json!({
+                    "replaced": v.replaced.name(),
+                    "by": v.by.effect.name(),
+                    "by_form": v.by.name,
+                    "swapped": v.swapped,
+                });
+                match &v.delta_bic {
+                    Ok(b) => j["delta_bic"] = json!(b),
+                    Err(e) => j["refit_error"] = json!(e),
+                }
+                j
+            }).collect::<Vec<_>>(),
         })).collect::<Vec<_>>(),
         "parameters": effect_params,
         "estimation": d.estimation,
@@ -434,6 +447,20 @@ pub fn write(dir: &Path, d: &Diagnosis) -> Result<(), FileError> {
                 (None, _) => "Nothing added in this round.".into(),
             }
         );
+        for v in &r.revisits {
+            let _ = writeln!(
+                md,
+                "Revisited: `{}` against `{}` in the form `{}`, its round's runner-up, refitted beside the later effects: {}.\n",
+                v.replaced.name(),
+                v.by.effect.name(),
+                v.by.name,
+                match (&v.delta_bic, v.swapped) {
+                    (Ok(b), true) => format!("ΔBIC {b:.1}, the runner-up takes its place"),
+                    (Ok(b), false) => format!("ΔBIC {b:.1}, kept"),
+                    (Err(e), _) => format!("the refit failed ({e}), kept"),
+                }
+            );
+        }
     }
     let _ = writeln!(
         md,

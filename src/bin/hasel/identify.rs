@@ -71,7 +71,8 @@ pub struct SynthArgs {
     /// of the library (coupling, charge_drift, creep, hysteresis, amplifier_lag, delay,
     /// saturation, stiffening, preload), a second form of one (coupling_tilt,
     /// charge_drift_film, creep_two_times, hysteresis_rate, amplifier_lag_second_order),
-    /// `vibration` or `supply_ripple` (outside the library) or `none`; with the
+    /// `vibration` or `supply_ripple` (outside the library), `none`, or two at once
+    /// (coupling_tilt+creep, charge_drift_film+hysteresis, amplifier_lag+stiffening); with the
     /// base parameters Kb, b, gamma1, gamma2 off by up to 20 %, all drawn from --case
     #[arg(long, value_name = "NAME", conflicts_with_all = ["params", "set"])]
     effect: Option<String>,
@@ -171,7 +172,7 @@ pub fn synth(a: SynthArgs) -> Result<(), Error> {
                 Error::flag(
                     "effect",
                     name,
-                    "not a hidden case (an effect of the library, one of its second forms such as `coupling_tilt`, `vibration`, `supply_ripple` or `none`)",
+                    "not a hidden case (an effect of the library, one of its second forms such as `coupling_tilt`, a pair such as `coupling_tilt+creep`, `vibration`, `supply_ripple` or `none`)",
                 )
             })?;
             let mut hidden = hidden::hide(truth, a.case)?;

@@ -38,7 +38,8 @@ pub struct Args {
     /// With --diagnose: recorded outputs, h or tip
     #[arg(long, default_value = "h", value_parser = ["h", "tip"])]
     columns: String,
-    /// With --diagnose: only this hidden mechanism (an effect, `none` or `vibration`)
+    /// With --diagnose: only this hidden mechanism (an effect, a case such as `coupling_tilt`
+    /// or `coupling_tilt+creep`, `none`, `vibration`, or `two` for every two-effect case)
     #[arg(long)]
     only: Option<String>,
     /// With --diagnose: record every case as lab data (sensor lag, resolution, outliers, dropouts)
