@@ -15,13 +15,14 @@
 #![allow(clippy::missing_safety_doc)]
 
 use std::ffi::{CStr, c_char, c_void};
-use std::panic::{AssertUnwindSafe, catch_unwind};
+use std::panic::catch_unwind;
 use std::ptr::null_mut;
 
-use super::instance::Instance;
-use super::logging::Logger;
+use super::instance::{Fmi2, Instance};
+use super::logging::logger;
 use super::types::*;
 use crate::fmi_common::calls::with_instance;
+use crate::fmi_common::logging::Status;
 use crate::fmi_common::model_api::{FmuCore, InstanceKind};
 use crate::fmi_common::shell::{in_slice, opt_str, out_slice, panic_message};
 
@@ -45,8 +46,8 @@ pub unsafe fn instantiate<M: FmuCore>(
         )
     };
     let fail = |msg: &str| {
-        Logger::new(callbacks, name.as_deref().unwrap_or(""), false)
-            .log(Fmi2Status::Error, &format!("fmi2Instantiate: {msg}"));
+        logger(callbacks, name.as_deref().unwrap_or(""), false)
+            .log(Status::Error, &format!("fmi2Instantiate: {msg}"));
         null_mut()
     };
     let kind = match fmu_type {
@@ -62,7 +63,7 @@ pub unsafe fn instantiate<M: FmuCore>(
         return fail("instanceName or fmuGUID is NULL");
     };
     match catch_unwind(|| {
-        Instance::<M>::instantiate(
+        Instance::<M>::create(
             name,
             kind,
             guid,
@@ -80,14 +81,6 @@ pub unsafe fn instantiate<M: FmuCore>(
     }
 }
 
-pub unsafe fn free_instance<M: FmuCore>(c: fmi2Component) {
-    if !c.is_null() {
-        // SAFETY: `c` came from `instantiate::<M>` and is not used after this call.
-        let instance = unsafe { Box::from_raw(c.cast::<Instance<M>>()) };
-        let _ = catch_unwind(AssertUnwindSafe(move || drop(instance)));
-    }
-}
-
 pub unsafe fn set_debug_logging<M: FmuCore>(
     c: fmi2Component,
     on: fmi2Boolean,
@@ -96,7 +89,7 @@ pub unsafe fn set_debug_logging<M: FmuCore>(
 ) -> Fmi2Status {
     const F: &str = "fmi2SetDebugLogging";
     unsafe {
-        with_instance::<Instance<M>>(c, F, |inst| {
+        with_instance::<Fmi2, M>(c, F, |inst| {
             let Some(pointers) = in_slice(categories, n) else {
                 return inst.null_argument(F, "categories");
             };
@@ -123,7 +116,7 @@ pub unsafe fn setup_experiment<M: FmuCore>(
     let tolerance = (tolerance_defined != FMI2_FALSE).then_some(tolerance);
     let stop_time = (stop_time_defined != FMI2_FALSE).then_some(stop_time);
     unsafe {
-        with_instance::<Instance<M>>(c, "fmi2SetupExperiment", |inst| {
+        with_instance::<Fmi2, M>(c, "fmi2SetupExperiment", |inst| {
             inst.setup_experiment(tolerance, start_time, stop_time)
         })
     }
@@ -131,7 +124,7 @@ pub unsafe fn setup_experiment<M: FmuCore>(
 
 pub unsafe fn enter_initialization_mode<M: FmuCore>(c: fmi2Component) -> Fmi2Status {
     unsafe {
-        with_instance::<Instance<M>>(c, "fmi2EnterInitializationMode", |inst| {
+        with_instance::<Fmi2, M>(c, "fmi2EnterInitializationMode", |inst| {
             inst.enter_initialization_mode()
         })
     }
@@ -139,18 +132,18 @@ pub unsafe fn enter_initialization_mode<M: FmuCore>(c: fmi2Component) -> Fmi2Sta
 
 pub unsafe fn exit_initialization_mode<M: FmuCore>(c: fmi2Component) -> Fmi2Status {
     unsafe {
-        with_instance::<Instance<M>>(c, "fmi2ExitInitializationMode", |inst| {
+        with_instance::<Fmi2, M>(c, "fmi2ExitInitializationMode", |inst| {
             inst.exit_initialization_mode()
         })
     }
 }
 
 pub unsafe fn terminate<M: FmuCore>(c: fmi2Component) -> Fmi2Status {
-    unsafe { with_instance::<Instance<M>>(c, "fmi2Terminate", |inst| inst.terminate()) }
+    unsafe { with_instance::<Fmi2, M>(c, "fmi2Terminate", |inst| inst.terminate()) }
 }
 
 pub unsafe fn reset<M: FmuCore>(c: fmi2Component) -> Fmi2Status {
-    unsafe { with_instance::<Instance<M>>(c, "fmi2Reset", |inst| inst.reset()) }
+    unsafe { with_instance::<Fmi2, M>(c, "fmi2Reset", |inst| inst.reset()) }
 }
 
 pub unsafe fn get_real<M: FmuCore>(
@@ -161,9 +154,9 @@ pub unsafe fn get_real<M: FmuCore>(
 ) -> Fmi2Status {
     const F: &str = "fmi2GetReal";
     unsafe {
-        with_instance::<Instance<M>>(c, F, |inst| {
+        with_instance::<Fmi2, M>(c, F, |inst| {
             match (in_slice(vr, nvr), out_slice(value, nvr)) {
-                (Some(vrs), Some(values)) => inst.get_real(vrs, values),
+                (Some(vrs), Some(values)) => inst.get_values(vrs, values),
                 (None, _) => inst.null_argument(F, "vr"),
                 (_, None) => inst.null_argument(F, "value"),
             }
@@ -179,9 +172,9 @@ pub unsafe fn set_real<M: FmuCore>(
 ) -> Fmi2Status {
     const F: &str = "fmi2SetReal";
     unsafe {
-        with_instance::<Instance<M>>(c, F, |inst| {
+        with_instance::<Fmi2, M>(c, F, |inst| {
             match (in_slice(vr, nvr), in_slice(value, nvr)) {
-                (Some(vrs), Some(values)) => inst.set_real(vrs, values),
+                (Some(vrs), Some(values)) => inst.set_values(vrs, values),
                 (None, _) => inst.null_argument(F, "vr"),
                 (_, None) => inst.null_argument(F, "value"),
             }
@@ -201,7 +194,7 @@ pub unsafe fn no_variables<M: FmuCore>(
     let setter = func.starts_with("fmi2Set");
     let type_name = func.get("fmi2Get".len()..).unwrap_or(func);
     unsafe {
-        with_instance::<Instance<M>>(c, func, |inst| match in_slice(vr, nvr) {
+        with_instance::<Fmi2, M>(c, func, |inst| match in_slice(vr, nvr) {
             None => inst.null_argument(func, "vr"),
             Some(_) if nvr > 0 && value.is_null() => inst.null_argument(func, "value"),
             Some(vrs) => inst.no_variables_of_type(func, type_name, setter, vrs),
@@ -215,7 +208,7 @@ pub unsafe fn not_offered<M: FmuCore>(
     func: &'static str,
     what: &str,
 ) -> Fmi2Status {
-    unsafe { with_instance::<Instance<M>>(c, func, |inst| inst.not_offered(func, what)) }
+    unsafe { with_instance::<Fmi2, M>(c, func, |inst| inst.not_offered(func, what)) }
 }
 
 pub unsafe fn get_directional_derivative<M: FmuCore>(
@@ -229,7 +222,7 @@ pub unsafe fn get_directional_derivative<M: FmuCore>(
 ) -> Fmi2Status {
     const F: &str = "fmi2GetDirectionalDerivative";
     unsafe {
-        with_instance::<Instance<M>>(c, F, |inst| {
+        with_instance::<Fmi2, M>(c, F, |inst| {
             match (
                 in_slice(unknown, n_unknown),
                 in_slice(known, n_known),
@@ -249,7 +242,7 @@ pub unsafe fn get_directional_derivative<M: FmuCore>(
 }
 
 pub unsafe fn enter_event_mode<M: FmuCore>(c: fmi2Component) -> Fmi2Status {
-    unsafe { with_instance::<Instance<M>>(c, "fmi2EnterEventMode", |inst| inst.enter_event_mode()) }
+    unsafe { with_instance::<Fmi2, M>(c, "fmi2EnterEventMode", |inst| inst.enter_event_mode()) }
 }
 
 pub unsafe fn new_discrete_states<M: FmuCore>(
@@ -258,7 +251,7 @@ pub unsafe fn new_discrete_states<M: FmuCore>(
 ) -> Fmi2Status {
     const F: &str = "fmi2NewDiscreteStates";
     unsafe {
-        with_instance::<Instance<M>>(c, F, |inst| {
+        with_instance::<Fmi2, M>(c, F, |inst| {
             let Some(out) = event_info.as_mut() else {
                 return inst.null_argument(F, "fmi2eventInfo");
             };
@@ -276,7 +269,7 @@ pub unsafe fn new_discrete_states<M: FmuCore>(
                         next_event_time_defined: info.next_event_time.is_some().into(),
                         next_event_time: info.next_event_time.unwrap_or(0.0),
                     };
-                    Fmi2Status::Ok
+                    Status::Ok
                 }
                 Err(status) => status,
             }
@@ -286,7 +279,7 @@ pub unsafe fn new_discrete_states<M: FmuCore>(
 
 pub unsafe fn enter_continuous_time_mode<M: FmuCore>(c: fmi2Component) -> Fmi2Status {
     unsafe {
-        with_instance::<Instance<M>>(c, "fmi2EnterContinuousTimeMode", |inst| {
+        with_instance::<Fmi2, M>(c, "fmi2EnterContinuousTimeMode", |inst| {
             inst.enter_continuous_time_mode()
         })
     }
@@ -299,12 +292,12 @@ pub unsafe fn completed_integrator_step<M: FmuCore>(
 ) -> Fmi2Status {
     const F: &str = "fmi2CompletedIntegratorStep";
     unsafe {
-        with_instance::<Instance<M>>(c, F, |inst| {
+        with_instance::<Fmi2, M>(c, F, |inst| {
             match (enter_event_mode.as_mut(), terminate_simulation.as_mut()) {
                 (Some(event), Some(terminate)) => match inst.completed_integrator_step() {
                     Ok((e, t)) => {
                         (*event, *terminate) = (e.into(), t.into());
-                        Fmi2Status::Ok
+                        Status::Ok
                     }
                     Err(status) => status,
                 },
@@ -316,7 +309,7 @@ pub unsafe fn completed_integrator_step<M: FmuCore>(
 }
 
 pub unsafe fn set_time<M: FmuCore>(c: fmi2Component, time: f64) -> Fmi2Status {
-    unsafe { with_instance::<Instance<M>>(c, "fmi2SetTime", |inst| inst.set_time(time)) }
+    unsafe { with_instance::<Fmi2, M>(c, "fmi2SetTime", |inst| inst.set_time(time)) }
 }
 
 pub unsafe fn set_continuous_states<M: FmuCore>(
@@ -326,7 +319,7 @@ pub unsafe fn set_continuous_states<M: FmuCore>(
 ) -> Fmi2Status {
     const F: &str = "fmi2SetContinuousStates";
     unsafe {
-        with_instance::<Instance<M>>(c, F, |inst| match in_slice(x, nx) {
+        with_instance::<Fmi2, M>(c, F, |inst| match in_slice(x, nx) {
             Some(x) => inst.set_continuous_states(x),
             None => inst.null_argument(F, "x"),
         })
@@ -341,10 +334,10 @@ pub unsafe fn get_state_vector<M: FmuCore>(
     argument: &'static str,
     out: *mut f64,
     nx: usize,
-    get: fn(&mut Instance<M>, &mut [f64]) -> Fmi2Status,
+    get: fn(&mut Instance<M>, &mut [f64]) -> Status,
 ) -> Fmi2Status {
     unsafe {
-        with_instance::<Instance<M>>(c, func, |inst| match out_slice(out, nx) {
+        with_instance::<Fmi2, M>(c, func, |inst| match out_slice(out, nx) {
             Some(out) => get(inst, out),
             None => inst.null_argument(func, argument),
         })
@@ -358,7 +351,7 @@ pub unsafe fn get_event_indicators<M: FmuCore>(
 ) -> Fmi2Status {
     const F: &str = "fmi2GetEventIndicators";
     unsafe {
-        with_instance::<Instance<M>>(c, F, |inst| match out_slice(indicators, ni) {
+        with_instance::<Fmi2, M>(c, F, |inst| match out_slice(indicators, ni) {
             Some(_) => inst.get_event_indicators(ni),
             None => inst.null_argument(F, "eventIndicators"),
         })
@@ -372,14 +365,14 @@ pub unsafe fn do_step<M: FmuCore>(
     no_set_fmu_state_prior: fmi2Boolean,
 ) -> Fmi2Status {
     unsafe {
-        with_instance::<Instance<M>>(c, "fmi2DoStep", |inst| {
+        with_instance::<Fmi2, M>(c, "fmi2DoStep", |inst| {
             inst.do_step(tc, h, no_set_fmu_state_prior != FMI2_FALSE)
         })
     }
 }
 
 pub unsafe fn cancel_step<M: FmuCore>(c: fmi2Component) -> Fmi2Status {
-    unsafe { with_instance::<Instance<M>>(c, "fmi2CancelStep", |inst| inst.cancel_step()) }
+    unsafe { with_instance::<Fmi2, M>(c, "fmi2CancelStep", |inst| inst.cancel_step()) }
 }
 
 /// `fmi2GetStatus`, `fmi2GetIntegerStatus`, `fmi2GetStringStatus` (`func`): no value is ever
@@ -391,7 +384,7 @@ pub unsafe fn get_valueless_status<M: FmuCore>(
     value: *mut c_void,
 ) -> Fmi2Status {
     unsafe {
-        with_instance::<Instance<M>>(c, func, |inst| {
+        with_instance::<Fmi2, M>(c, func, |inst| {
             if value.is_null() {
                 return inst.null_argument(func, "value");
             }
@@ -407,7 +400,7 @@ pub unsafe fn get_real_status<M: FmuCore>(
 ) -> Fmi2Status {
     const F: &str = "fmi2GetRealStatus";
     unsafe {
-        with_instance::<Instance<M>>(c, F, |inst| match value.as_mut() {
+        with_instance::<Fmi2, M>(c, F, |inst| match value.as_mut() {
             Some(v) => inst.get_real_status(kind, v),
             None => inst.null_argument(F, "value"),
         })
@@ -421,11 +414,11 @@ pub unsafe fn get_boolean_status<M: FmuCore>(
 ) -> Fmi2Status {
     const F: &str = "fmi2GetBooleanStatus";
     unsafe {
-        with_instance::<Instance<M>>(c, F, |inst| match value.as_mut() {
+        with_instance::<Fmi2, M>(c, F, |inst| match value.as_mut() {
             Some(v) => {
                 let mut b = false;
                 let status = inst.get_boolean_status(kind, &mut b);
-                if status == Fmi2Status::Ok {
+                if status == Status::Ok {
                     *v = fmi2Boolean::from(b);
                 }
                 status
@@ -503,7 +496,7 @@ macro_rules! __fmi2_functions {
 
         $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)]
         pub unsafe extern "C" fn fmi2FreeInstance(c: fmi2Component) {
-            unsafe { shell::free_instance::<$core>(c) }
+            unsafe { $crate::fmi_common::calls::free_instance::<$crate::fmi2::instance::Fmi2, $core>(c) }
         }
 
         // Initialization, termination and reset (section 2.1.6)
@@ -631,7 +624,7 @@ macro_rules! __fmi2_functions {
             c: fmi2Component,
             state: *mut fmi2FMUstate,
         ) -> fmi2Status {
-            unsafe { $crate::fmi_common::calls::get_fmu_state::<$crate::fmi2::instance::Instance<$core>>(c, "fmi2GetFMUstate", state) }
+            unsafe { $crate::fmi_common::calls::get_fmu_state::<$crate::fmi2::instance::Fmi2, $core>(c, "fmi2GetFMUstate", state) }
         }
 
         $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)]
@@ -639,7 +632,7 @@ macro_rules! __fmi2_functions {
             c: fmi2Component,
             state: fmi2FMUstate,
         ) -> fmi2Status {
-            unsafe { $crate::fmi_common::calls::set_fmu_state::<$crate::fmi2::instance::Instance<$core>>(c, "fmi2SetFMUstate", state) }
+            unsafe { $crate::fmi_common::calls::set_fmu_state::<$crate::fmi2::instance::Fmi2, $core>(c, "fmi2SetFMUstate", state) }
         }
 
         $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)]
@@ -647,7 +640,7 @@ macro_rules! __fmi2_functions {
             c: fmi2Component,
             state: *mut fmi2FMUstate,
         ) -> fmi2Status {
-            unsafe { $crate::fmi_common::calls::free_fmu_state::<$crate::fmi2::instance::Instance<$core>>(c, "fmi2FreeFMUstate", state) }
+            unsafe { $crate::fmi_common::calls::free_fmu_state::<$crate::fmi2::instance::Fmi2, $core>(c, "fmi2FreeFMUstate", state) }
         }
 
         $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)]
@@ -656,7 +649,7 @@ macro_rules! __fmi2_functions {
             state: fmi2FMUstate,
             size: *mut usize,
         ) -> fmi2Status {
-            unsafe { $crate::fmi_common::calls::serialized_fmu_state_size::<$crate::fmi2::instance::Instance<$core>>(c, "fmi2SerializedFMUstateSize", state, size) }
+            unsafe { $crate::fmi_common::calls::serialized_fmu_state_size::<$crate::fmi2::instance::Fmi2, $core>(c, "fmi2SerializedFMUstateSize", state, size) }
         }
 
         $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)]
@@ -666,7 +659,7 @@ macro_rules! __fmi2_functions {
             bytes: *mut fmi2Byte,
             size: usize,
         ) -> fmi2Status {
-            unsafe { $crate::fmi_common::calls::serialize_fmu_state::<$crate::fmi2::instance::Instance<$core>>(c, "fmi2SerializeFMUstate", state, bytes.cast(), size) }
+            unsafe { $crate::fmi_common::calls::serialize_fmu_state::<$crate::fmi2::instance::Fmi2, $core>(c, "fmi2SerializeFMUstate", state, bytes.cast(), size) }
         }
 
         $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)]
@@ -676,7 +669,7 @@ macro_rules! __fmi2_functions {
             size: usize,
             state: *mut fmi2FMUstate,
         ) -> fmi2Status {
-            unsafe { $crate::fmi_common::calls::deserialize_fmu_state::<$crate::fmi2::instance::Instance<$core>>(c, "fmi2DeSerializeFMUstate", bytes.cast(), size, state) }
+            unsafe { $crate::fmi_common::calls::deserialize_fmu_state::<$crate::fmi2::instance::Fmi2, $core>(c, "fmi2DeSerializeFMUstate", bytes.cast(), size, state) }
         }
 
         // Directional derivatives (section 2.1.9)

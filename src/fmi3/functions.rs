@@ -116,7 +116,7 @@ macro_rules! __fmi3_functions {
 
         $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)]
         pub unsafe extern "C" fn fmi3FreeInstance(c: fmi3Instance) {
-            unsafe { shell::free_instance::<$core>(c) }
+            unsafe { $crate::fmi_common::calls::free_instance::<$crate::fmi3::instance::Fmi3, $core>(c) }
         }
 
         // Initialization, events, termination and reset (sections 2.3.2 to 2.3.5)
@@ -249,17 +249,17 @@ macro_rules! __fmi3_functions {
 
         $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)]
         pub unsafe extern "C" fn fmi3GetFMUState(c: fmi3Instance, state: *mut fmi3FMUState) -> fmi3Status {
-            unsafe { $crate::fmi_common::calls::get_fmu_state::<$crate::fmi3::instance::Instance<$core>>(c, "fmi3GetFMUState", state) }
+            unsafe { $crate::fmi_common::calls::get_fmu_state::<$crate::fmi3::instance::Fmi3, $core>(c, "fmi3GetFMUState", state) }
         }
 
         $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)]
         pub unsafe extern "C" fn fmi3SetFMUState(c: fmi3Instance, state: fmi3FMUState) -> fmi3Status {
-            unsafe { $crate::fmi_common::calls::set_fmu_state::<$crate::fmi3::instance::Instance<$core>>(c, "fmi3SetFMUState", state) }
+            unsafe { $crate::fmi_common::calls::set_fmu_state::<$crate::fmi3::instance::Fmi3, $core>(c, "fmi3SetFMUState", state) }
         }
 
         $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)]
         pub unsafe extern "C" fn fmi3FreeFMUState(c: fmi3Instance, state: *mut fmi3FMUState) -> fmi3Status {
-            unsafe { $crate::fmi_common::calls::free_fmu_state::<$crate::fmi3::instance::Instance<$core>>(c, "fmi3FreeFMUState", state) }
+            unsafe { $crate::fmi_common::calls::free_fmu_state::<$crate::fmi3::instance::Fmi3, $core>(c, "fmi3FreeFMUState", state) }
         }
 
         $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)]
@@ -268,7 +268,7 @@ macro_rules! __fmi3_functions {
             state: fmi3FMUState,
             size: *mut usize,
         ) -> fmi3Status {
-            unsafe { $crate::fmi_common::calls::serialized_fmu_state_size::<$crate::fmi3::instance::Instance<$core>>(c, "fmi3SerializedFMUStateSize", state, size) }
+            unsafe { $crate::fmi_common::calls::serialized_fmu_state_size::<$crate::fmi3::instance::Fmi3, $core>(c, "fmi3SerializedFMUStateSize", state, size) }
         }
 
         $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)]
@@ -278,7 +278,7 @@ macro_rules! __fmi3_functions {
             bytes: *mut fmi3Byte,
             size: usize,
         ) -> fmi3Status {
-            unsafe { $crate::fmi_common::calls::serialize_fmu_state::<$crate::fmi3::instance::Instance<$core>>(c, "fmi3SerializeFMUState", state, bytes.cast(), size) }
+            unsafe { $crate::fmi_common::calls::serialize_fmu_state::<$crate::fmi3::instance::Fmi3, $core>(c, "fmi3SerializeFMUState", state, bytes.cast(), size) }
         }
 
         $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)]
@@ -288,7 +288,7 @@ macro_rules! __fmi3_functions {
             size: usize,
             state: *mut fmi3FMUState,
         ) -> fmi3Status {
-            unsafe { $crate::fmi_common::calls::deserialize_fmu_state::<$crate::fmi3::instance::Instance<$core>>(c, "fmi3DeserializeFMUState", bytes.cast(), size, state) }
+            unsafe { $crate::fmi_common::calls::deserialize_fmu_state::<$crate::fmi3::instance::Fmi3, $core>(c, "fmi3DeserializeFMUState", bytes.cast(), size, state) }
         }
 
         // Partial derivatives (section 2.3.8)

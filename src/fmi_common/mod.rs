@@ -10,6 +10,8 @@
 
 pub mod calls;
 pub mod fmu_state;
+pub mod instance;
+pub mod logging;
 pub mod model_api;
 pub mod shell;
 pub mod state_machine;
