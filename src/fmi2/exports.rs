@@ -81,30 +81,6 @@ pub unsafe fn instantiate<M: FmuCore>(
     }
 }
 
-pub unsafe fn set_debug_logging<M: FmuCore>(
-    c: fmi2Component,
-    on: fmi2Boolean,
-    n: usize,
-    categories: *const fmi2String,
-) -> Fmi2Status {
-    const F: &str = "fmi2SetDebugLogging";
-    unsafe {
-        with_instance::<Fmi2, M>(c, F, |inst| {
-            let Some(pointers) = in_slice(categories, n) else {
-                return inst.null_argument(F, "categories");
-            };
-            let mut names = Vec::with_capacity(n);
-            for &p in pointers {
-                let Some(name) = opt_str(p) else {
-                    return inst.null_argument(F, "categories[i]");
-                };
-                names.push(name.into_owned());
-            }
-            inst.set_debug_logging(on != FMI2_FALSE, &names)
-        })
-    }
-}
-
 pub unsafe fn setup_experiment<M: FmuCore>(
     c: fmi2Component,
     tolerance_defined: fmi2Boolean,
@@ -120,95 +96,6 @@ pub unsafe fn setup_experiment<M: FmuCore>(
             inst.setup_experiment(tolerance, start_time, stop_time)
         })
     }
-}
-
-pub unsafe fn enter_initialization_mode<M: FmuCore>(c: fmi2Component) -> Fmi2Status {
-    unsafe {
-        with_instance::<Fmi2, M>(c, "fmi2EnterInitializationMode", |inst| {
-            inst.enter_initialization_mode()
-        })
-    }
-}
-
-pub unsafe fn exit_initialization_mode<M: FmuCore>(c: fmi2Component) -> Fmi2Status {
-    unsafe {
-        with_instance::<Fmi2, M>(c, "fmi2ExitInitializationMode", |inst| {
-            inst.exit_initialization_mode()
-        })
-    }
-}
-
-pub unsafe fn terminate<M: FmuCore>(c: fmi2Component) -> Fmi2Status {
-    unsafe { with_instance::<Fmi2, M>(c, "fmi2Terminate", |inst| inst.terminate()) }
-}
-
-pub unsafe fn reset<M: FmuCore>(c: fmi2Component) -> Fmi2Status {
-    unsafe { with_instance::<Fmi2, M>(c, "fmi2Reset", |inst| inst.reset()) }
-}
-
-pub unsafe fn get_real<M: FmuCore>(
-    c: fmi2Component,
-    vr: *const fmi2ValueReference,
-    nvr: usize,
-    value: *mut f64,
-) -> Fmi2Status {
-    const F: &str = "fmi2GetReal";
-    unsafe {
-        with_instance::<Fmi2, M>(c, F, |inst| {
-            match (in_slice(vr, nvr), out_slice(value, nvr)) {
-                (Some(vrs), Some(values)) => inst.get_values(vrs, values),
-                (None, _) => inst.null_argument(F, "vr"),
-                (_, None) => inst.null_argument(F, "value"),
-            }
-        })
-    }
-}
-
-pub unsafe fn set_real<M: FmuCore>(
-    c: fmi2Component,
-    vr: *const fmi2ValueReference,
-    nvr: usize,
-    value: *const f64,
-) -> Fmi2Status {
-    const F: &str = "fmi2SetReal";
-    unsafe {
-        with_instance::<Fmi2, M>(c, F, |inst| {
-            match (in_slice(vr, nvr), in_slice(value, nvr)) {
-                (Some(vrs), Some(values)) => inst.set_values(vrs, values),
-                (None, _) => inst.null_argument(F, "vr"),
-                (_, None) => inst.null_argument(F, "value"),
-            }
-        })
-    }
-}
-
-/// `fmi2Get/Set{Integer,Boolean,String}` (`func`, whose name ends in the type); `value` is the
-/// value array, of whichever type.
-pub unsafe fn no_variables<M: FmuCore>(
-    c: fmi2Component,
-    func: &'static str,
-    vr: *const fmi2ValueReference,
-    nvr: usize,
-    value: *const c_void,
-) -> Fmi2Status {
-    let setter = func.starts_with("fmi2Set");
-    let type_name = func.get("fmi2Get".len()..).unwrap_or(func);
-    unsafe {
-        with_instance::<Fmi2, M>(c, func, |inst| match in_slice(vr, nvr) {
-            None => inst.null_argument(func, "vr"),
-            Some(_) if nvr > 0 && value.is_null() => inst.null_argument(func, "value"),
-            Some(vrs) => inst.no_variables_of_type(func, type_name, setter, vrs),
-        })
-    }
-}
-
-/// Functions of capabilities (`what`) this FMU does not offer.
-pub unsafe fn not_offered<M: FmuCore>(
-    c: fmi2Component,
-    func: &'static str,
-    what: &str,
-) -> Fmi2Status {
-    unsafe { with_instance::<Fmi2, M>(c, func, |inst| inst.not_offered(func, what)) }
 }
 
 pub unsafe fn get_directional_derivative<M: FmuCore>(
@@ -241,10 +128,6 @@ pub unsafe fn get_directional_derivative<M: FmuCore>(
     }
 }
 
-pub unsafe fn enter_event_mode<M: FmuCore>(c: fmi2Component) -> Fmi2Status {
-    unsafe { with_instance::<Fmi2, M>(c, "fmi2EnterEventMode", |inst| inst.enter_event_mode()) }
-}
-
 pub unsafe fn new_discrete_states<M: FmuCore>(
     c: fmi2Component,
     event_info: *mut fmi2EventInfo,
@@ -273,14 +156,6 @@ pub unsafe fn new_discrete_states<M: FmuCore>(
                 }
                 Err(status) => status,
             }
-        })
-    }
-}
-
-pub unsafe fn enter_continuous_time_mode<M: FmuCore>(c: fmi2Component) -> Fmi2Status {
-    unsafe {
-        with_instance::<Fmi2, M>(c, "fmi2EnterContinuousTimeMode", |inst| {
-            inst.enter_continuous_time_mode()
         })
     }
 }
@@ -371,10 +246,6 @@ pub unsafe fn do_step<M: FmuCore>(
     }
 }
 
-pub unsafe fn cancel_step<M: FmuCore>(c: fmi2Component) -> Fmi2Status {
-    unsafe { with_instance::<Fmi2, M>(c, "fmi2CancelStep", |inst| inst.cancel_step()) }
-}
-
 /// `fmi2GetStatus`, `fmi2GetIntegerStatus`, `fmi2GetStringStatus` (`func`): no value is ever
 /// delivered, so `value` may point to any type.
 pub unsafe fn get_valueless_status<M: FmuCore>(
@@ -453,7 +324,9 @@ macro_rules! export_fmi2 {
 macro_rules! __fmi2_functions {
     ([$($attr:tt)*] $core:ty) => {
         use $crate::fmi2::exports as shell;
+        use $crate::fmi2::instance::{Fmi2, Instance};
         use $crate::fmi2::types::*;
+        use $crate::fmi_common::calls as common;
 
         // Inquire platform and version number of the header files (section 2.1.4)
 
@@ -476,7 +349,7 @@ macro_rules! __fmi2_functions {
             n_categories: usize,
             categories: *const fmi2String,
         ) -> fmi2Status {
-            unsafe { shell::set_debug_logging::<$core>(c, logging_on, n_categories, categories) }
+            unsafe { common::set_debug_logging::<Fmi2, $core>(c, logging_on != FMI2_FALSE, n_categories, categories) }
         }
 
         $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)]
@@ -496,7 +369,7 @@ macro_rules! __fmi2_functions {
 
         $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)]
         pub unsafe extern "C" fn fmi2FreeInstance(c: fmi2Component) {
-            unsafe { $crate::fmi_common::calls::free_instance::<$crate::fmi2::instance::Fmi2, $core>(c) }
+            unsafe { common::free_instance::<Fmi2, $core>(c) }
         }
 
         // Initialization, termination and reset (section 2.1.6)
@@ -517,22 +390,22 @@ macro_rules! __fmi2_functions {
 
         $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)]
         pub unsafe extern "C" fn fmi2EnterInitializationMode(c: fmi2Component) -> fmi2Status {
-            unsafe { shell::enter_initialization_mode::<$core>(c) }
+            unsafe { common::simple::<Fmi2, $core>(c, "fmi2EnterInitializationMode", Instance::enter_initialization_mode) }
         }
 
         $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)]
         pub unsafe extern "C" fn fmi2ExitInitializationMode(c: fmi2Component) -> fmi2Status {
-            unsafe { shell::exit_initialization_mode::<$core>(c) }
+            unsafe { common::simple::<Fmi2, $core>(c, "fmi2ExitInitializationMode", Instance::exit_initialization_mode) }
         }
 
         $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)]
         pub unsafe extern "C" fn fmi2Terminate(c: fmi2Component) -> fmi2Status {
-            unsafe { shell::terminate::<$core>(c) }
+            unsafe { common::simple::<Fmi2, $core>(c, "fmi2Terminate", Instance::terminate) }
         }
 
         $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)]
         pub unsafe extern "C" fn fmi2Reset(c: fmi2Component) -> fmi2Status {
-            unsafe { shell::reset::<$core>(c) }
+            unsafe { common::simple::<Fmi2, $core>(c, "fmi2Reset", Instance::reset) }
         }
 
         // Getting and setting variable values (section 2.1.7); Real variables only
@@ -544,7 +417,7 @@ macro_rules! __fmi2_functions {
             nvr: usize,
             value: *mut fmi2Real,
         ) -> fmi2Status {
-            unsafe { shell::get_real::<$core>(c, vr, nvr, value) }
+            unsafe { common::get_values::<Fmi2, $core>(c, (vr, nvr), (value, nvr)) }
         }
 
         $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)]
@@ -554,7 +427,7 @@ macro_rules! __fmi2_functions {
             nvr: usize,
             value: *mut fmi2Integer,
         ) -> fmi2Status {
-            unsafe { shell::no_variables::<$core>(c, "fmi2GetInteger", vr, nvr, value.cast()) }
+            unsafe { common::no_variables::<Fmi2, $core>(c, "fmi2GetInteger", (vr, nvr), value.cast()) }
         }
 
         $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)]
@@ -564,7 +437,7 @@ macro_rules! __fmi2_functions {
             nvr: usize,
             value: *mut fmi2Boolean,
         ) -> fmi2Status {
-            unsafe { shell::no_variables::<$core>(c, "fmi2GetBoolean", vr, nvr, value.cast()) }
+            unsafe { common::no_variables::<Fmi2, $core>(c, "fmi2GetBoolean", (vr, nvr), value.cast()) }
         }
 
         $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)]
@@ -574,7 +447,7 @@ macro_rules! __fmi2_functions {
             nvr: usize,
             value: *mut fmi2String,
         ) -> fmi2Status {
-            unsafe { shell::no_variables::<$core>(c, "fmi2GetString", vr, nvr, value.cast()) }
+            unsafe { common::no_variables::<Fmi2, $core>(c, "fmi2GetString", (vr, nvr), value.cast()) }
         }
 
         $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)]
@@ -584,7 +457,7 @@ macro_rules! __fmi2_functions {
             nvr: usize,
             value: *const fmi2Real,
         ) -> fmi2Status {
-            unsafe { shell::set_real::<$core>(c, vr, nvr, value) }
+            unsafe { common::set_values::<Fmi2, $core>(c, (vr, nvr), (value, nvr)) }
         }
 
         $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)]
@@ -594,7 +467,7 @@ macro_rules! __fmi2_functions {
             nvr: usize,
             value: *const fmi2Integer,
         ) -> fmi2Status {
-            unsafe { shell::no_variables::<$core>(c, "fmi2SetInteger", vr, nvr, value.cast()) }
+            unsafe { common::no_variables::<Fmi2, $core>(c, "fmi2SetInteger", (vr, nvr), value.cast()) }
         }
 
         $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)]
@@ -604,7 +477,7 @@ macro_rules! __fmi2_functions {
             nvr: usize,
             value: *const fmi2Boolean,
         ) -> fmi2Status {
-            unsafe { shell::no_variables::<$core>(c, "fmi2SetBoolean", vr, nvr, value.cast()) }
+            unsafe { common::no_variables::<Fmi2, $core>(c, "fmi2SetBoolean", (vr, nvr), value.cast()) }
         }
 
         $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)]
@@ -614,7 +487,7 @@ macro_rules! __fmi2_functions {
             nvr: usize,
             value: *const fmi2String,
         ) -> fmi2Status {
-            unsafe { shell::no_variables::<$core>(c, "fmi2SetString", vr, nvr, value.cast()) }
+            unsafe { common::no_variables::<Fmi2, $core>(c, "fmi2SetString", (vr, nvr), value.cast()) }
         }
 
         // FMU states (section 2.1.8)
@@ -624,7 +497,7 @@ macro_rules! __fmi2_functions {
             c: fmi2Component,
             state: *mut fmi2FMUstate,
         ) -> fmi2Status {
-            unsafe { $crate::fmi_common::calls::get_fmu_state::<$crate::fmi2::instance::Fmi2, $core>(c, "fmi2GetFMUstate", state) }
+            unsafe { common::get_fmu_state::<Fmi2, $core>(c, "fmi2GetFMUstate", state) }
         }
 
         $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)]
@@ -632,7 +505,7 @@ macro_rules! __fmi2_functions {
             c: fmi2Component,
             state: fmi2FMUstate,
         ) -> fmi2Status {
-            unsafe { $crate::fmi_common::calls::set_fmu_state::<$crate::fmi2::instance::Fmi2, $core>(c, "fmi2SetFMUstate", state) }
+            unsafe { common::set_fmu_state::<Fmi2, $core>(c, "fmi2SetFMUstate", state) }
         }
 
         $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)]
@@ -640,7 +513,7 @@ macro_rules! __fmi2_functions {
             c: fmi2Component,
             state: *mut fmi2FMUstate,
         ) -> fmi2Status {
-            unsafe { $crate::fmi_common::calls::free_fmu_state::<$crate::fmi2::instance::Fmi2, $core>(c, "fmi2FreeFMUstate", state) }
+            unsafe { common::free_fmu_state::<Fmi2, $core>(c, "fmi2FreeFMUstate", state) }
         }
 
         $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)]
@@ -649,7 +522,7 @@ macro_rules! __fmi2_functions {
             state: fmi2FMUstate,
             size: *mut usize,
         ) -> fmi2Status {
-            unsafe { $crate::fmi_common::calls::serialized_fmu_state_size::<$crate::fmi2::instance::Fmi2, $core>(c, "fmi2SerializedFMUstateSize", state, size) }
+            unsafe { common::serialized_fmu_state_size::<Fmi2, $core>(c, "fmi2SerializedFMUstateSize", state, size) }
         }
 
         $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)]
@@ -659,7 +532,7 @@ macro_rules! __fmi2_functions {
             bytes: *mut fmi2Byte,
             size: usize,
         ) -> fmi2Status {
-            unsafe { $crate::fmi_common::calls::serialize_fmu_state::<$crate::fmi2::instance::Fmi2, $core>(c, "fmi2SerializeFMUstate", state, bytes.cast(), size) }
+            unsafe { common::serialize_fmu_state::<Fmi2, $core>(c, "fmi2SerializeFMUstate", state, bytes.cast(), size) }
         }
 
         $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)]
@@ -669,7 +542,7 @@ macro_rules! __fmi2_functions {
             size: usize,
             state: *mut fmi2FMUstate,
         ) -> fmi2Status {
-            unsafe { $crate::fmi_common::calls::deserialize_fmu_state::<$crate::fmi2::instance::Fmi2, $core>(c, "fmi2DeSerializeFMUstate", bytes.cast(), size, state) }
+            unsafe { common::deserialize_fmu_state::<Fmi2, $core>(c, "fmi2DeSerializeFMUstate", bytes.cast(), size, state) }
         }
 
         // Directional derivatives (section 2.1.9)
@@ -701,7 +574,7 @@ macro_rules! __fmi2_functions {
 
         $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)]
         pub unsafe extern "C" fn fmi2EnterEventMode(c: fmi2Component) -> fmi2Status {
-            unsafe { shell::enter_event_mode::<$core>(c) }
+            unsafe { common::simple::<Fmi2, $core>(c, "fmi2EnterEventMode", Instance::enter_event_mode) }
         }
 
         $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)]
@@ -714,7 +587,7 @@ macro_rules! __fmi2_functions {
 
         $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)]
         pub unsafe extern "C" fn fmi2EnterContinuousTimeMode(c: fmi2Component) -> fmi2Status {
-            unsafe { shell::enter_continuous_time_mode::<$core>(c) }
+            unsafe { common::simple::<Fmi2, $core>(c, "fmi2EnterContinuousTimeMode", Instance::enter_continuous_time_mode) }
         }
 
         $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)]
@@ -821,7 +694,7 @@ macro_rules! __fmi2_functions {
             _value: *const fmi2Real,
         ) -> fmi2Status {
             let what = "canInterpolateInputs (input derivatives)";
-            unsafe { shell::not_offered::<$core>(c, "fmi2SetRealInputDerivatives", what) }
+            unsafe { common::not_offered::<Fmi2, $core>(c, "fmi2SetRealInputDerivatives", what) }
         }
 
         $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)]
@@ -833,7 +706,7 @@ macro_rules! __fmi2_functions {
             _value: *mut fmi2Real,
         ) -> fmi2Status {
             let what = "maxOutputDerivativeOrder > 0 (output derivatives)";
-            unsafe { shell::not_offered::<$core>(c, "fmi2GetRealOutputDerivatives", what) }
+            unsafe { common::not_offered::<Fmi2, $core>(c, "fmi2GetRealOutputDerivatives", what) }
         }
 
         $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)]
@@ -848,7 +721,7 @@ macro_rules! __fmi2_functions {
 
         $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)]
         pub unsafe extern "C" fn fmi2CancelStep(c: fmi2Component) -> fmi2Status {
-            unsafe { shell::cancel_step::<$core>(c) }
+            unsafe { common::simple::<Fmi2, $core>(c, "fmi2CancelStep", |inst| inst.cancel_step()) }
         }
 
         $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)]

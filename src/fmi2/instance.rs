@@ -57,6 +57,8 @@ impl Version for Fmi2 {
         set_fmu_state: "fmi2SetFMUstate",
         deserialize_fmu_state: "fmi2DeSerializeFMUstate",
         serialized_size: "fmi2SerializedFMUstateSize",
+        value_references: "vr",
+        values: "value",
         fmu_state: "FMUstate",
         value_type: "",
     };

@@ -14,7 +14,6 @@
 //! two threads at once.
 #![allow(clippy::missing_safety_doc)]
 
-use std::ffi::c_void;
 use std::panic::{AssertUnwindSafe, catch_unwind};
 use std::ptr::null_mut;
 
@@ -90,30 +89,6 @@ pub unsafe fn instantiate_not_offered(
     null_mut()
 }
 
-pub unsafe fn set_debug_logging<M: FmuCore>(
-    c: fmi3Instance,
-    on: fmi3Boolean,
-    n: usize,
-    categories: *const fmi3String,
-) -> Fmi3Status {
-    const F: &str = "fmi3SetDebugLogging";
-    unsafe {
-        with_instance::<Fmi3, M>(c, F, |inst| {
-            let Some(pointers) = in_slice(categories, n) else {
-                return inst.null_argument(F, "categories");
-            };
-            let mut names = Vec::with_capacity(n);
-            for &p in pointers {
-                let Some(name) = opt_str(p) else {
-                    return inst.null_argument(F, "categories[i]");
-                };
-                names.push(name.into_owned());
-            }
-            inst.set_debug_logging(on != FMI3_FALSE, &names)
-        })
-    }
-}
-
 pub unsafe fn enter_initialization_mode<M: FmuCore>(
     c: fmi3Instance,
     tolerance_defined: fmi3Boolean,
@@ -132,15 +107,6 @@ pub unsafe fn enter_initialization_mode<M: FmuCore>(
             inst.enter_initialization_mode(experiment)
         })
     }
-}
-
-/// The calls without arguments: `call` is the [`Instance`] method of `func`.
-pub unsafe fn simple<M: FmuCore>(
-    c: fmi3Instance,
-    func: &'static str,
-    call: fn(&mut Instance<M>) -> Status,
-) -> Fmi3Status {
-    unsafe { with_instance::<Fmi3, M>(c, func, call) }
 }
 
 /// Writes `value` to each output flag that is not NULL; a NULL one is an error.
@@ -191,73 +157,6 @@ pub unsafe fn update_discrete_states<M: FmuCore>(
             status
         })
     }
-}
-
-pub unsafe fn get_float64<M: FmuCore>(
-    c: fmi3Instance,
-    vr: *const fmi3ValueReference,
-    nvr: usize,
-    values: *mut f64,
-    n_values: usize,
-) -> Fmi3Status {
-    const F: &str = "fmi3GetFloat64";
-    unsafe {
-        with_instance::<Fmi3, M>(c, F, |inst| {
-            match (in_slice(vr, nvr), out_slice(values, n_values)) {
-                (Some(vrs), Some(values)) => inst.get_values(vrs, values),
-                (None, _) => inst.null_argument(F, "valueReferences"),
-                (_, None) => inst.null_argument(F, "values"),
-            }
-        })
-    }
-}
-
-pub unsafe fn set_float64<M: FmuCore>(
-    c: fmi3Instance,
-    vr: *const fmi3ValueReference,
-    nvr: usize,
-    values: *const f64,
-    n_values: usize,
-) -> Fmi3Status {
-    const F: &str = "fmi3SetFloat64";
-    unsafe {
-        with_instance::<Fmi3, M>(c, F, |inst| {
-            match (in_slice(vr, nvr), in_slice(values, n_values)) {
-                (Some(vrs), Some(values)) => inst.set_values(vrs, values),
-                (None, _) => inst.null_argument(F, "valueReferences"),
-                (_, None) => inst.null_argument(F, "values"),
-            }
-        })
-    }
-}
-
-/// `fmi3Get/Set{Float32,Int8,…,Binary,Clock}` (`func`, whose name ends in the type); `values`
-/// is the value array, of whichever type.
-pub unsafe fn no_variables<M: FmuCore>(
-    c: fmi3Instance,
-    func: &'static str,
-    vr: *const fmi3ValueReference,
-    nvr: usize,
-    values: *const c_void,
-) -> Fmi3Status {
-    let setter = func.starts_with("fmi3Set");
-    let type_name = func.get("fmi3Get".len()..).unwrap_or(func);
-    unsafe {
-        with_instance::<Fmi3, M>(c, func, |inst| match in_slice(vr, nvr) {
-            None => inst.null_argument(func, "valueReferences"),
-            Some(_) if nvr > 0 && values.is_null() => inst.null_argument(func, "values"),
-            Some(vrs) => inst.no_variables_of_type(func, type_name, setter, vrs),
-        })
-    }
-}
-
-/// Functions of interfaces or capabilities (`what`) this FMU does not offer.
-pub unsafe fn not_offered<M: FmuCore>(
-    c: fmi3Instance,
-    func: &'static str,
-    what: &str,
-) -> Fmi3Status {
-    unsafe { with_instance::<Fmi3, M>(c, func, |inst| inst.not_offered(func, what)) }
 }
 
 #[allow(clippy::too_many_arguments)]

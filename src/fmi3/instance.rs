@@ -60,6 +60,8 @@ impl Version for Fmi3 {
         set_fmu_state: "fmi3SetFMUState",
         deserialize_fmu_state: "fmi3DeserializeFMUState",
         serialized_size: "fmi3SerializedFMUStateSize",
+        value_references: "valueReferences",
+        values: "values",
         fmu_state: "FMUState",
         value_type: "Float64",
     };

@@ -10,7 +10,7 @@
 //! of elements, and one instance is not used by two threads at once.
 #![allow(clippy::missing_safety_doc)]
 
-use std::ffi::c_void;
+use std::ffi::{c_char, c_void};
 use std::panic::{AssertUnwindSafe, catch_unwind};
 use std::ptr::null_mut;
 
@@ -18,7 +18,7 @@ use super::fmu_state::Snapshot;
 use super::instance::{Instance, Version};
 use super::logging::Status;
 use super::model_api::FmuCore;
-use super::shell::{in_slice, out_slice, panic_message};
+use super::shell::{in_slice, opt_str, out_slice, panic_message};
 
 /// The FMU state of an instance of `V` around `M`.
 type State<V, M> = Snapshot<M, <V as Version>::Phase>;
@@ -53,6 +53,106 @@ pub unsafe fn free_instance<V: Version, M: FmuCore>(c: *mut c_void) {
         let instance = unsafe { Box::from_raw(c.cast::<Instance<V, M>>()) };
         let _ = catch_unwind(AssertUnwindSafe(move || drop(instance)));
     }
+}
+
+/// The calls of one instance method without arguments (`call`, of function `func`).
+pub unsafe fn simple<V: Version, M: FmuCore>(
+    c: *mut c_void,
+    func: &str,
+    call: fn(&mut Instance<V, M>) -> Status,
+) -> V::Status {
+    unsafe { with_instance::<V, M>(c, func, call) }
+}
+
+/// `fmi2SetDebugLogging` / `fmi3SetDebugLogging` with the `n` category names `categories`.
+pub unsafe fn set_debug_logging<V: Version, M: FmuCore>(
+    c: *mut c_void,
+    on: bool,
+    n: usize,
+    categories: *const *const c_char,
+) -> V::Status {
+    let func = V::NAMES.set_debug_logging;
+    unsafe {
+        with_instance::<V, M>(c, func, |inst| {
+            let Some(pointers) = in_slice(categories, n) else {
+                return inst.null_argument(func, "categories");
+            };
+            let mut names = Vec::with_capacity(n);
+            for &p in pointers {
+                let Some(name) = opt_str(p) else {
+                    return inst.null_argument(func, "categories[i]");
+                };
+                names.push(name.into_owned());
+            }
+            inst.set_debug_logging(on, &names)
+        })
+    }
+}
+
+/// `fmi2GetReal` / `fmi3GetFloat64`: `nvr` references, `n_values` values.
+pub unsafe fn get_values<V: Version, M: FmuCore>(
+    c: *mut c_void,
+    (vr, nvr): (*const u32, usize),
+    (values, n_values): (*mut f64, usize),
+) -> V::Status {
+    let (func, n) = (V::NAMES.get_values, &V::NAMES);
+    unsafe {
+        with_instance::<V, M>(c, func, |inst| {
+            match (in_slice(vr, nvr), out_slice(values, n_values)) {
+                (Some(vrs), Some(values)) => inst.get_values(vrs, values),
+                (None, _) => inst.null_argument(func, n.value_references),
+                (_, None) => inst.null_argument(func, n.values),
+            }
+        })
+    }
+}
+
+/// `fmi2SetReal` / `fmi3SetFloat64`: `nvr` references, `n_values` values.
+pub unsafe fn set_values<V: Version, M: FmuCore>(
+    c: *mut c_void,
+    (vr, nvr): (*const u32, usize),
+    (values, n_values): (*const f64, usize),
+) -> V::Status {
+    let (func, n) = (V::NAMES.set_values, &V::NAMES);
+    unsafe {
+        with_instance::<V, M>(c, func, |inst| {
+            match (in_slice(vr, nvr), in_slice(values, n_values)) {
+                (Some(vrs), Some(values)) => inst.set_values(vrs, values),
+                (None, _) => inst.null_argument(func, n.value_references),
+                (_, None) => inst.null_argument(func, n.values),
+            }
+        })
+    }
+}
+
+/// The getters and setters of the types this FMU has no variables of (`func`, named
+/// `fmiXGet<type>` / `fmiXSet<type>`); `values` is the value array, of whichever type.
+pub unsafe fn no_variables<V: Version, M: FmuCore>(
+    c: *mut c_void,
+    func: &str,
+    (vr, nvr): (*const u32, usize),
+    values: *const c_void,
+) -> V::Status {
+    const PREFIX: usize = "fmiXGet".len();
+    let setter = func.get(PREFIX - 3..PREFIX) == Some("Set");
+    let type_name = func.get(PREFIX..).unwrap_or(func);
+    let n = &V::NAMES;
+    unsafe {
+        with_instance::<V, M>(c, func, |inst| match in_slice(vr, nvr) {
+            None => inst.null_argument(func, n.value_references),
+            Some(_) if nvr > 0 && values.is_null() => inst.null_argument(func, n.values),
+            Some(vrs) => inst.no_variables_of_type(func, type_name, setter, vrs),
+        })
+    }
+}
+
+/// Functions of interfaces or capabilities (`what`) this FMU does not offer.
+pub unsafe fn not_offered<V: Version, M: FmuCore>(
+    c: *mut c_void,
+    func: &str,
+    what: &str,
+) -> V::Status {
+    unsafe { with_instance::<V, M>(c, func, |inst| inst.not_offered(func, what)) }
 }
 
 /// `fmi2GetFMUstate` / `fmi3GetFMUState`: a new state, or the one in `*state` overwritten.

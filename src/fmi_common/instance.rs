@@ -37,6 +37,9 @@ pub struct Names {
     pub deserialize_fmu_state: &'static str,
     /// The function that tells the size of a serialized FMU state.
     pub serialized_size: &'static str,
+    /// The names of the value-reference and value arguments of the getters and setters.
+    pub value_references: &'static str,
+    pub values: &'static str,
     /// The name of an FMU-state argument in the version's headers.
     pub fmu_state: &'static str,
     /// The type of this FMU's variables in the version ("" where there is one real type).
