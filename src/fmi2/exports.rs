@@ -18,7 +18,8 @@ use std::ffi::{CStr, c_char, c_void};
 use std::panic::catch_unwind;
 use std::ptr::null_mut;
 
-use super::instance::{Fmi2, Instance};
+use super::Fmi2;
+use super::instance::Instance;
 use super::logging::logger;
 use super::types::*;
 use crate::fmi_common::calls::with_instance;
@@ -324,7 +325,8 @@ macro_rules! export_fmi2 {
 macro_rules! __fmi2_functions {
     ([$($attr:tt)*] $core:ty) => {
         use $crate::fmi2::exports as shell;
-        use $crate::fmi2::instance::{Fmi2, Instance};
+        use $crate::fmi2::Fmi2;
+        use $crate::fmi2::instance::Instance;
         use $crate::fmi2::types::*;
         use $crate::fmi_common::calls as common;
 

@@ -11,8 +11,9 @@
 //! only `fmi2Reset`, `fmi2SetFMUstate`, `fmi2FreeInstance`, the getters (for debugging) and
 //! the FMU-state functions are allowed.
 
+use super::Fmi2;
 use super::fmu_state::Snapshot;
-use super::logging::{Callbacks, WRAPPER_CATEGORIES, logger};
+use super::logging::{Callbacks, logger};
 use super::model_description::guid_for;
 use super::state_machine::{Experiment, Mask, Phase, allowed};
 use super::types::{
@@ -28,9 +29,6 @@ use crate::fmi_common::state_machine::States;
 use crate::fmi_common::variables::{Causality, ModelInfo, Variable, check_variable_table};
 
 use Phase::*;
-
-/// FMI 2.0 as a [`Version`] of the generic instance.
-pub struct Fmi2;
 
 /// One FMI 2.0 instance around a core `M`.
 pub type Instance<M> = instance::Instance<Fmi2, M>;
@@ -68,7 +66,6 @@ impl Version for Fmi2 {
         get_values: allowed::GET_VALUES,
         set_values: allowed::SET_VALUES,
     };
-    const CATEGORIES: [(&'static str, &'static str); 5] = WRAPPER_CATEGORIES;
 
     /// The core's table as it is, checked, and the GUID of its description.
     fn variables_and_token(

@@ -17,7 +17,8 @@
 use std::panic::{AssertUnwindSafe, catch_unwind};
 use std::ptr::null_mut;
 
-use super::instance::{Fmi3, Instance, Request};
+use super::Fmi3;
+use super::instance::{Instance, Request};
 use super::logging::logger;
 use super::state_machine::Experiment;
 use super::types::*;

@@ -21,7 +21,8 @@ macro_rules! export_fmi3 {
 macro_rules! __fmi3_functions {
     ([$($attr:tt)*] $core:ty) => {
         use $crate::fmi3::exports as shell;
-        use $crate::fmi3::instance::{Fmi3, Instance};
+        use $crate::fmi3::Fmi3;
+        use $crate::fmi3::instance::Instance;
         use $crate::fmi_common::calls as common;
         use $crate::fmi_common::model_api::FmuCore as _;
         use $crate::fmi3::types::*;

@@ -14,8 +14,9 @@
 
 use std::path::PathBuf;
 
+use super::Fmi3;
 use super::fmu_state::Snapshot;
-use super::logging::{Callback, Logger, SHELL_CATEGORIES};
+use super::logging::{Callback, Logger};
 use super::model_description::{Model, instantiation_token, with_time};
 use super::state_machine::{Experiment, Phase, allowed};
 use super::types::{Fmi3Status, InstanceKind};
@@ -26,9 +27,6 @@ use crate::fmi_common::shell::same_time;
 use crate::fmi_common::variables::{Causality, ModelInfo, Variable};
 
 use Phase::*;
-
-/// FMI 3.0 as a [`Version`] of the generic instance.
-pub struct Fmi3;
 
 /// One FMI 3.0 instance around a core `M`.
 pub type Instance<M> = instance::Instance<Fmi3, M>;
@@ -71,7 +69,6 @@ impl Version for Fmi3 {
         get_values: allowed::GET_VALUES,
         set_values: allowed::SET_VALUES,
     };
-    const CATEGORIES: [(&'static str, &'static str); 5] = SHELL_CATEGORIES;
 
     /// The core's table with the independent variable `time`, and the instantiationToken of
     /// its description.

@@ -21,6 +21,7 @@ use super::model_api::{FmuCore, InstanceKind, ModelStructure};
 use super::state_machine::{Experiment, Mask, States, names};
 use super::values;
 use super::variables::{ModelInfo, Variable};
+use super::xml::{Dialect, log_categories};
 
 /// The names of a version's functions and arguments the shared code writes in messages.
 pub struct Names {
@@ -54,8 +55,8 @@ pub struct Masks {
     pub set_values: Mask,
 }
 
-/// What a version brings to the generic instance.
-pub trait Version: Sized + 'static {
+/// What a version brings to the generic instance, beyond how it writes its description.
+pub trait Version: Dialect + Sized + 'static {
     /// The version's C status enumeration.
     type Status: Copy + From<Status>;
     /// The states of the version's state machine.
@@ -72,8 +73,6 @@ pub trait Version: Sized + 'static {
     const ERROR: Self::Phase;
     const NAMES: Names;
     const MASKS: Masks;
-    /// The shell's log categories, `(name, description)`, listed before the model's own.
-    const CATEGORIES: [(&'static str, &'static str); 5];
 
     /// The instance's variable table and token (GUID, instantiationToken) for a core's
     /// `variables`.
@@ -181,7 +180,7 @@ impl<V: Version, M: FmuCore> Instance<V, M> {
         if built.token != request.token {
             return fail(V::token_mismatch(request.token, &built.token));
         }
-        let categories = super::xml::log_categories(&V::CATEGORIES, &M::model_info())
+        let categories = log_categories(&V::CATEGORIES, &M::model_info())
             .into_iter()
             .map(|(n, _)| n)
             .collect();
