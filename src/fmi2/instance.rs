@@ -12,7 +12,6 @@
 //! the FMU-state functions are allowed.
 
 use super::Fmi2;
-use super::fmu_state::Snapshot;
 use super::logging::{Callbacks, logger};
 use super::model_description::guid_for;
 use super::state_machine::{Experiment, Mask, Phase, allowed};
@@ -21,7 +20,7 @@ use super::types::{
     Fmi2Status, fmi2CallbackFunctions, fmi2StatusKind,
 };
 use super::uri::path_from_file_uri;
-use crate::fmi_common::instance::{self, Masks, Names, Request, Version, optional};
+use crate::fmi_common::instance::{self, Masks, Names, Request, Version, Wording, optional};
 use crate::fmi_common::logging::Status;
 use crate::fmi_common::model_api::{FmuCore, InstanceKind, ModelStructure};
 use crate::fmi_common::shell::same_time;
@@ -35,7 +34,6 @@ pub type Instance<M> = instance::Instance<Fmi2, M>;
 
 impl Version for Fmi2 {
     type Status = Fmi2Status;
-    type Phase = Phase;
     type Sink = Callbacks;
     type Options = ();
 
@@ -66,6 +64,12 @@ impl Version for Fmi2 {
         get_values: allowed::GET_VALUES,
         set_values: allowed::SET_VALUES,
     };
+    const WORDING: Wording = Wording {
+        wrong_interface: "is a {} function; this instance was instantiated for {}",
+        token_mismatch: "GUID {} given by the importer does not match the FMU's GUID {}",
+        token_changed: "GUID is now {} instead of {}",
+        foreign_state: "the state belongs to GUID {}, this instance has GUID {}",
+    };
 
     /// The core's table as it is, checked, and the GUID of its description.
     fn variables_and_token(
@@ -84,39 +88,6 @@ impl Version for Fmi2 {
             InstanceKind::ModelExchange => EventMode,
             InstanceKind::CoSimulation => StepComplete,
         }
-    }
-
-    fn wrong_interface(of: InstanceKind, kind: InstanceKind) -> String {
-        format!(
-            "is a {} function; this instance was instantiated for {}",
-            of.name(),
-            kind.name()
-        )
-    }
-
-    fn token_mismatch(given: &str, token: &str) -> String {
-        format!("GUID {given} given by the importer does not match the FMU's GUID {token}")
-    }
-
-    fn token_changed(now: &str, before: &str) -> String {
-        format!("GUID is now {now} instead of {before}")
-    }
-
-    fn foreign_state(theirs: &str, ours: &str) -> String {
-        format!("the state belongs to GUID {theirs}, this instance has GUID {ours}")
-    }
-
-    fn to_bytes<M: FmuCore>(state: &Snapshot<M>) -> Vec<u8> {
-        state.to_bytes()
-    }
-
-    fn from_bytes<M: FmuCore>(
-        bytes: &[u8],
-        token: &str,
-        kind: InstanceKind,
-        core: &M,
-    ) -> Result<Snapshot<M>, String> {
-        Snapshot::from_bytes(bytes, token, kind, core)
     }
 }
 

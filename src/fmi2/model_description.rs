@@ -7,7 +7,7 @@ use sha2::{Digest, Sha256};
 
 use super::Fmi2;
 use super::logging::WRAPPER_CATEGORIES;
-use crate::fmi_common::model_api::ModelStructure;
+use crate::fmi_common::model_api::{InstanceKind, ModelStructure};
 use crate::fmi_common::variables::{Causality, ModelInfo, Variable, check_variable_table};
 use crate::fmi_common::xml::{
     Description, Dialect, XmlWriter, check_info, check_structure, flag, initial_unknowns,
@@ -72,77 +72,54 @@ impl Dialect for Fmi2 {
         check_structure(d.vars, d.structure)
     }
 
-    /// `<ModelExchange>` with the capability flags (section 3.3.1): the same binary and model
-    /// identifier as Co-Simulation.
-    fn write_model_exchange(w: &mut XmlWriter, info: &ModelInfo) -> io::Result<()> {
-        w.create_element("ModelExchange")
-            .with_attributes([
-                ("modelIdentifier", info.model_identifier.as_str()),
-                ("needsExecutionTool", "false"),
-                ("completedIntegratorStepNotNeeded", "true"),
-                ("canBeInstantiatedOnlyOncePerProcess", "false"),
-                ("canNotUseMemoryManagementFunctions", "true"),
-                ("canGetAndSetFMUstate", "true"),
-                ("canSerializeFMUstate", "true"),
-                (
-                    "providesDirectionalDerivative",
-                    flag(info.directional_derivatives),
-                ),
-            ])
-            .write_empty()?;
-        Ok(())
-    }
-
-    /// `<CoSimulation>` with the capability flags (section 4.3.1).
-    fn write_co_simulation(w: &mut XmlWriter, info: &ModelInfo) -> io::Result<()> {
-        w.create_element("CoSimulation")
-            .with_attributes([
-                ("modelIdentifier", info.model_identifier.as_str()),
-                ("needsExecutionTool", "false"),
+    /// `<ModelExchange>` (section 3.3.1: the same binary and model identifier as
+    /// Co-Simulation) and `<CoSimulation>` (section 4.3.1) with their capability flags.
+    fn interface_attributes(kind: InstanceKind, info: &ModelInfo) -> Vec<(&'static str, &str)> {
+        let mut attributes = vec![
+            ("modelIdentifier", info.model_identifier.as_str()),
+            ("needsExecutionTool", "false"),
+        ];
+        attributes.extend_from_slice(match kind {
+            InstanceKind::ModelExchange => &[("completedIntegratorStepNotNeeded", "true")][..],
+            InstanceKind::CoSimulation => &[
                 ("canHandleVariableCommunicationStepSize", "true"),
                 ("canInterpolateInputs", "false"),
                 ("maxOutputDerivativeOrder", "0"),
                 ("canRunAsynchronuously", "false"),
-                ("canBeInstantiatedOnlyOncePerProcess", "false"),
-                ("canNotUseMemoryManagementFunctions", "true"),
-                ("canGetAndSetFMUstate", "true"),
-                ("canSerializeFMUstate", "true"),
-                (
-                    "providesDirectionalDerivative",
-                    flag(info.directional_derivatives),
-                ),
-            ])
-            .write_empty()?;
-        Ok(())
+            ],
+        });
+        attributes.extend([
+            ("canBeInstantiatedOnlyOncePerProcess", "false"),
+            ("canNotUseMemoryManagementFunctions", "true"),
+            ("canGetAndSetFMUstate", "true"),
+            ("canSerializeFMUstate", "true"),
+            (
+                "providesDirectionalDerivative",
+                flag(info.directional_derivatives),
+            ),
+        ]);
+        attributes
     }
 
-    /// `<ModelVariables>` (section 2.2.7). `initial` is written whenever the table allows it,
-    /// as the declared or default value, so readers need not know the defaults; a state
-    /// derivative names its state's index in `derivative`.
-    fn write_variables(w: &mut XmlWriter, vars: &[Variable]) -> io::Result<()> {
-        w.create_element("ModelVariables")
-            .write_inner_content(|w| {
-                for v in vars {
-                    let sv = variable_element(w, "ScalarVariable", v);
-                    let start = v.start.map(xs_double);
-                    let derivative = v.derivative.map(|state| index_of(vars, state));
-                    sv.write_inner_content(|w| {
-                        let mut real_el = w.create_element("Real");
-                        if let Some(unit) = &v.unit {
-                            real_el = real_el.with_attribute(("unit", unit.as_str()));
-                        }
-                        if let Some(state) = &derivative {
-                            real_el = real_el.with_attribute(("derivative", state.as_str()));
-                        }
-                        if let Some(start) = &start {
-                            real_el = real_el.with_attribute(("start", start.as_str()));
-                        }
-                        real_el.write_empty()?;
-                        Ok(())
-                    })?;
-                }
-                Ok(())
-            })?;
+    /// A `<ScalarVariable>` (section 2.2.7) with its `<Real>`; a state derivative names its
+    /// state's index in `derivative`.
+    fn write_variable(w: &mut XmlWriter, vars: &[Variable], v: &Variable) -> io::Result<()> {
+        let start = v.start.map(xs_double);
+        let derivative = v.derivative.map(|state| index_of(vars, state));
+        variable_element(w, "ScalarVariable", v).write_inner_content(|w| {
+            let mut real_el = w.create_element("Real");
+            if let Some(unit) = &v.unit {
+                real_el = real_el.with_attribute(("unit", unit.as_str()));
+            }
+            if let Some(state) = &derivative {
+                real_el = real_el.with_attribute(("derivative", state.as_str()));
+            }
+            if let Some(start) = &start {
+                real_el = real_el.with_attribute(("start", start.as_str()));
+            }
+            real_el.write_empty()?;
+            Ok(())
+        })?;
         Ok(())
     }
 

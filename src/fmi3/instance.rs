@@ -15,12 +15,11 @@
 use std::path::PathBuf;
 
 use super::Fmi3;
-use super::fmu_state::Snapshot;
 use super::logging::{Callback, Logger};
 use super::model_description::{Model, instantiation_token, with_time};
 use super::state_machine::{Experiment, Phase, allowed};
 use super::types::{Fmi3Status, InstanceKind};
-use crate::fmi_common::instance::{self, Masks, Names, Version, optional};
+use crate::fmi_common::instance::{self, Masks, Names, Version, Wording, optional};
 use crate::fmi_common::logging::Status;
 use crate::fmi_common::model_api::{FmuCore, ModelStructure};
 use crate::fmi_common::shell::same_time;
@@ -38,7 +37,6 @@ pub struct EventModeUsed(pub bool);
 
 impl Version for Fmi3 {
     type Status = Fmi3Status;
-    type Phase = Phase;
     type Sink = Callback;
     type Options = EventModeUsed;
 
@@ -69,6 +67,12 @@ impl Version for Fmi3 {
         get_values: allowed::GET_VALUES,
         set_values: allowed::SET_VALUES,
     };
+    const WORDING: Wording = Wording {
+        wrong_interface: "a function of {}, but this instance was created for {}",
+        token_mismatch: "instantiationToken {} given by the importer does not match the FMU's {}",
+        token_changed: "the instantiationToken is now {} instead of {}",
+        foreign_state: "the state belongs to instantiationToken {}, this instance has {}",
+    };
 
     /// The core's table with the independent variable `time`, and the instantiationToken of
     /// its description.
@@ -92,39 +96,6 @@ impl Version for Fmi3 {
             InstanceKind::CoSimulation if !event_mode.0 => StepMode,
             _ => EventMode,
         }
-    }
-
-    fn wrong_interface(of: InstanceKind, kind: InstanceKind) -> String {
-        format!(
-            "a function of {}, but this instance was created for {}",
-            of.name(),
-            kind.name()
-        )
-    }
-
-    fn token_mismatch(given: &str, token: &str) -> String {
-        format!("instantiationToken {given} given by the importer does not match the FMU's {token}")
-    }
-
-    fn token_changed(now: &str, before: &str) -> String {
-        format!("the instantiationToken is now {now} instead of {before}")
-    }
-
-    fn foreign_state(theirs: &str, ours: &str) -> String {
-        format!("the state belongs to instantiationToken {theirs}, this instance has {ours}")
-    }
-
-    fn to_bytes<M: FmuCore>(state: &Snapshot<M>) -> Vec<u8> {
-        state.to_bytes()
-    }
-
-    fn from_bytes<M: FmuCore>(
-        bytes: &[u8],
-        token: &str,
-        kind: InstanceKind,
-        core: &M,
-    ) -> Result<Snapshot<M>, String> {
-        Snapshot::from_bytes(bytes, token, kind, core)
     }
 }
 
@@ -359,10 +330,7 @@ impl<M: FmuCore> Instance<M> {
             let name = self.find(vr).map_or("", |v| v.name.as_str());
             return self.error(F, format_args!("continuousStates[{k}] ({name}) is NaN"));
         }
-        match self.core.set_continuous_states(x) {
-            Ok(()) => Status::Ok,
-            Err(msg) => self.error(F, msg),
-        }
+        self.core_call(F, |core| core.set_continuous_states(x))
     }
 
     /// `fmi3GetContinuousStates`, `fmi3GetContinuousStateDerivatives` and
@@ -464,12 +432,8 @@ impl<M: FmuCore> Instance<M> {
         if let Some(k) = seed.iter().position(|x| !x.is_finite()) {
             return self.error(F, format_args!("seed[{k}] = {:?} is not finite", seed[k]));
         }
-        match self
-            .core
-            .directional_derivative(unknowns, knowns, seed, sensitivity)
-        {
-            Ok(()) => Status::Ok,
-            Err(msg) => self.error(F, msg),
-        }
+        self.core_call(F, |core| {
+            core.directional_derivative(unknowns, knowns, seed, sensitivity)
+        })
     }
 }

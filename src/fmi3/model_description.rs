@@ -8,6 +8,7 @@ use sha2::{Digest, Sha256};
 
 use super::Fmi3;
 use super::logging::SHELL_CATEGORIES;
+use crate::fmi_common::model_api::InstanceKind;
 use crate::fmi_common::variables::{
     Causality, ModelInfo, Variability, Variable, check_variable_table,
 };
@@ -84,60 +85,46 @@ impl Dialect for Fmi3 {
         check_structure(vars, d.structure)
     }
 
-    /// `<ModelExchange>` (section 3.4), if the model offers it: no need for
-    /// `fmi3CompletedIntegratorStep`, no `fmi3EvaluateDiscreteStates` (no discrete states).
-    fn write_model_exchange(w: &mut XmlWriter, info: &ModelInfo) -> io::Result<()> {
-        w.create_element("ModelExchange")
-            .with_attribute(("modelIdentifier", info.model_identifier.as_str()))
-            .with_attributes(common_capabilities(info))
-            .with_attributes([
+    /// `<ModelExchange>` (section 3.4: no need for `fmi3CompletedIntegratorStep`, no
+    /// `fmi3EvaluateDiscreteStates`, no discrete states) and `<CoSimulation>` (section 4.4:
+    /// variable steps, no event mode of its own, no early return, no intermediate update, no
+    /// output derivatives), after the capability flags both share.
+    fn interface_attributes(kind: InstanceKind, info: &ModelInfo) -> Vec<(&'static str, &str)> {
+        let mut attributes = vec![("modelIdentifier", info.model_identifier.as_str())];
+        attributes.extend(common_capabilities(info));
+        attributes.extend_from_slice(match kind {
+            InstanceKind::ModelExchange => &[
                 ("needsCompletedIntegratorStep", "false"),
                 ("providesEvaluateDiscreteStates", "false"),
-            ])
-            .write_empty()?;
-        Ok(())
-    }
-
-    /// `<CoSimulation>` (section 4.4): variable steps, no event mode of its own, no early return,
-    /// no intermediate update, no output derivatives.
-    fn write_co_simulation(w: &mut XmlWriter, info: &ModelInfo) -> io::Result<()> {
-        w.create_element("CoSimulation")
-            .with_attribute(("modelIdentifier", info.model_identifier.as_str()))
-            .with_attributes(common_capabilities(info))
-            .with_attributes([
+            ][..],
+            InstanceKind::CoSimulation => &[
                 ("canHandleVariableCommunicationStepSize", "true"),
                 ("maxOutputDerivativeOrder", "0"),
                 ("hasEventMode", "false"),
                 ("providesIntermediateUpdate", "false"),
                 ("mightReturnEarlyFromDoStep", "false"),
                 ("canReturnEarlyAfterIntermediateUpdate", "false"),
-            ])
-            .write_empty()?;
-        Ok(())
+            ],
+        });
+        attributes
     }
 
-    /// `<ModelVariables>` (section 2.4.7): one `<Float64>` per variable. `initial` is written
-    /// whenever the rules allow it, as the declared or default value.
-    fn write_variables(w: &mut XmlWriter, vars: &[Variable]) -> io::Result<()> {
-        w.create_element("ModelVariables")
-            .write_inner_content(|w| {
-                for v in vars {
-                    let mut el = variable_element(w, "Float64", v);
-                    if let Some(unit) = &v.unit {
-                        el = el.with_attribute(("unit", unit.as_str()));
-                    }
-                    let start = v.start.map(xs_double);
-                    if let Some(start) = &start {
-                        el = el.with_attribute(("start", start.as_str()));
-                    }
-                    let state = v.derivative.map(|vr| vr.to_string());
-                    if let Some(state) = &state {
-                        el = el.with_attribute(("derivative", state.as_str()));
-                    }
-                    el.write_empty()?;
-                }
-                Ok(())
-            })?;
+    /// A `<Float64>` (section 2.4.7) with its unit, start and the state it is the derivative
+    /// of.
+    fn write_variable(w: &mut XmlWriter, _vars: &[Variable], v: &Variable) -> io::Result<()> {
+        let mut el = variable_element(w, "Float64", v);
+        if let Some(unit) = &v.unit {
+            el = el.with_attribute(("unit", unit.as_str()));
+        }
+        let start = v.start.map(xs_double);
+        if let Some(start) = &start {
+            el = el.with_attribute(("start", start.as_str()));
+        }
+        let state = v.derivative.map(|vr| vr.to_string());
+        if let Some(state) = &state {
+            el = el.with_attribute(("derivative", state.as_str()));
+        }
+        el.write_empty()?;
         Ok(())
     }
 

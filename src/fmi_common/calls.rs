@@ -14,14 +14,14 @@ use std::ffi::{c_char, c_void};
 use std::panic::{AssertUnwindSafe, catch_unwind};
 use std::ptr::null_mut;
 
-use super::fmu_state::Snapshot;
+use super::fmu_state::{Format, Snapshot};
 use super::instance::{Instance, Version};
 use super::logging::Status;
 use super::model_api::FmuCore;
 use super::shell::{in_slice, opt_str, out_slice, panic_message};
 
 /// The FMU state of an instance of `V` around `M`.
-type State<V, M> = Snapshot<M, <V as Version>::Phase>;
+type State<V, M> = Snapshot<M, <V as Format>::Phase>;
 
 /// Runs `f` on the instance behind `c`, catching panics. A NULL instance gives the error
 /// status without a log message, there being no logger to send it to.
@@ -89,39 +89,57 @@ pub unsafe fn set_debug_logging<V: Version, M: FmuCore>(
     }
 }
 
+/// A getter or setter (`func`) of `nvr` references `vr` and the values `values` (`None`
+/// where NULL although some are needed): `call` with both, or the NULL argument named.
+unsafe fn with_values<V: Version, M: FmuCore, T>(
+    c: *mut c_void,
+    func: &str,
+    (vr, nvr): (*const u32, usize),
+    values: Option<T>,
+    call: fn(&mut Instance<V, M>, &[u32], T) -> Status,
+) -> V::Status {
+    unsafe {
+        with_instance::<V, M>(c, func, |inst| match (in_slice(vr, nvr), values) {
+            (Some(vrs), Some(values)) => call(inst, vrs, values),
+            (None, _) => inst.null_argument(func, V::NAMES.value_references),
+            (_, None) => inst.null_argument(func, V::NAMES.values),
+        })
+    }
+}
+
 /// `fmi2GetReal` / `fmi3GetFloat64`: `nvr` references, `n_values` values.
 pub unsafe fn get_values<V: Version, M: FmuCore>(
     c: *mut c_void,
-    (vr, nvr): (*const u32, usize),
+    vr: (*const u32, usize),
     (values, n_values): (*mut f64, usize),
 ) -> V::Status {
-    let (func, n) = (V::NAMES.get_values, &V::NAMES);
+    let values = unsafe { out_slice(values, n_values) };
     unsafe {
-        with_instance::<V, M>(c, func, |inst| {
-            match (in_slice(vr, nvr), out_slice(values, n_values)) {
-                (Some(vrs), Some(values)) => inst.get_values(vrs, values),
-                (None, _) => inst.null_argument(func, n.value_references),
-                (_, None) => inst.null_argument(func, n.values),
-            }
-        })
+        with_values(
+            c,
+            V::NAMES.get_values,
+            vr,
+            values,
+            Instance::<V, M>::get_values,
+        )
     }
 }
 
 /// `fmi2SetReal` / `fmi3SetFloat64`: `nvr` references, `n_values` values.
 pub unsafe fn set_values<V: Version, M: FmuCore>(
     c: *mut c_void,
-    (vr, nvr): (*const u32, usize),
+    vr: (*const u32, usize),
     (values, n_values): (*const f64, usize),
 ) -> V::Status {
-    let (func, n) = (V::NAMES.set_values, &V::NAMES);
+    let values = unsafe { in_slice(values, n_values) };
     unsafe {
-        with_instance::<V, M>(c, func, |inst| {
-            match (in_slice(vr, nvr), in_slice(values, n_values)) {
-                (Some(vrs), Some(values)) => inst.set_values(vrs, values),
-                (None, _) => inst.null_argument(func, n.value_references),
-                (_, None) => inst.null_argument(func, n.values),
-            }
-        })
+        with_values(
+            c,
+            V::NAMES.set_values,
+            vr,
+            values,
+            Instance::<V, M>::set_values,
+        )
     }
 }
 

@@ -15,7 +15,7 @@
 use std::fmt::{self, Display};
 use std::path::{Path, PathBuf};
 
-use super::fmu_state::Snapshot;
+use super::fmu_state::{Format, Snapshot};
 use super::logging::{LogSink, Logger, Status};
 use super::model_api::{FmuCore, InstanceKind, ModelStructure};
 use super::state_machine::{Experiment, Mask, States, names};
@@ -47,6 +47,29 @@ pub struct Names {
     pub value_type: &'static str,
 }
 
+/// The messages a version words its own way; each `{}` takes the next value.
+pub struct Wording {
+    /// A function of the interface `{}` called on an instance of `{}`.
+    pub wrong_interface: &'static str,
+    /// The importer's token `{}` is not the FMU's `{}`.
+    pub token_mismatch: &'static str,
+    /// After a reset, the token is `{}` instead of `{}`.
+    pub token_changed: &'static str,
+    /// An FMU state of the instance with the token `{}` given to the one with `{}`.
+    pub foreign_state: &'static str,
+}
+
+/// `template` with each `{}` replaced by the next of `values`.
+fn fill(template: &str, values: [&str; 2]) -> String {
+    let mut parts = template.split("{}");
+    let mut out = parts.next().unwrap_or_default().to_string();
+    for (value, part) in values.into_iter().zip(parts) {
+        out.push_str(value);
+        out.push_str(part);
+    }
+    out
+}
+
 /// The states each shared call may be called in.
 pub struct Masks {
     pub exit_initialization_mode: Mask,
@@ -56,11 +79,9 @@ pub struct Masks {
 }
 
 /// What a version brings to the generic instance, beyond how it writes its description.
-pub trait Version: Dialect + Sized + 'static {
+pub trait Version: Dialect + Format<Phase: States + PartialEq> + Sized + 'static {
     /// The version's C status enumeration.
     type Status: Copy + From<Status>;
-    /// The states of the version's state machine.
-    type Phase: States + PartialEq;
     /// The importer's logging callback.
     type Sink: LogSink;
     /// What an instance holds beyond the shared state (FMI 3.0: `eventModeUsed`).
@@ -74,6 +95,8 @@ pub trait Version: Dialect + Sized + 'static {
     const NAMES: Names;
     const MASKS: Masks;
 
+    /// The state after `fmiXExitInitializationMode`.
+    fn after_initialization(kind: InstanceKind, options: Self::Options) -> Self::Phase;
     /// The instance's variable table and token (GUID, instantiationToken) for a core's
     /// `variables`.
     fn variables_and_token(
@@ -81,26 +104,7 @@ pub trait Version: Dialect + Sized + 'static {
         variables: Vec<Variable>,
         structure: &ModelStructure,
     ) -> Result<(Vec<Variable>, String), String>;
-    /// The state after `fmiXExitInitializationMode`.
-    fn after_initialization(kind: InstanceKind, options: Self::Options) -> Self::Phase;
-    /// The message of a function of interface `of` called on an instance of `kind`.
-    fn wrong_interface(of: InstanceKind, kind: InstanceKind) -> String;
-    /// The message of an importer's token `given` that is not the FMU's `token`.
-    fn token_mismatch(given: &str, token: &str) -> String;
-    /// The message of a reset that computed another token.
-    fn token_changed(now: &str, before: &str) -> String;
-    /// The message of an FMU state of the instance with `theirs` given to the one with `ours`.
-    fn foreign_state(theirs: &str, ours: &str) -> String;
-    /// An FMU state's serialized bytes.
-    fn to_bytes<M: FmuCore>(state: &Snapshot<M, Self::Phase>) -> Vec<u8>;
-    /// An FMU state from bytes of [`Version::to_bytes`], for the instance with `token`,
-    /// `kind` and `core`.
-    fn from_bytes<M: FmuCore>(
-        bytes: &[u8],
-        token: &str,
-        kind: InstanceKind,
-        core: &M,
-    ) -> Result<Snapshot<M, Self::Phase>, String>;
+    const WORDING: Wording;
 }
 
 /// One FMU instance of version `V`: the shell state around a core `M`.
@@ -178,7 +182,10 @@ impl<V: Version, M: FmuCore> Instance<V, M> {
             Err(e) => return fail(format!("cannot create the model: {e}")),
         };
         if built.token != request.token {
-            return fail(V::token_mismatch(request.token, &built.token));
+            return fail(fill(
+                V::WORDING.token_mismatch,
+                [request.token, &built.token],
+            ));
         }
         let categories = log_categories(&V::CATEGORIES, &M::model_info())
             .into_iter()
@@ -240,7 +247,10 @@ impl<V: Version, M: FmuCore> Instance<V, M> {
         if self.kind == kind {
             return Ok(());
         }
-        Err(self.error(func, V::wrong_interface(kind, self.kind)))
+        Err(self.error(
+            func,
+            fill(V::WORDING.wrong_interface, [kind.name(), self.kind.name()]),
+        ))
     }
 
     /// [`Self::require_interface`], then the state table.
@@ -358,7 +368,7 @@ impl<V: Version, M: FmuCore> Instance<V, M> {
         };
         if built.token != self.token {
             self.phase = V::ERROR;
-            let msg = V::token_changed(&built.token, &self.token);
+            let msg = fill(V::WORDING.token_changed, [&built.token, &self.token]);
             return self.error(func, format_args!("the resources changed: {msg}"));
         }
         self.core = built.core;
@@ -373,10 +383,17 @@ impl<V: Version, M: FmuCore> Instance<V, M> {
         values::find(&self.variables, vr)
     }
 
-    /// Checks that `n_values` values go with `n_refs` scalar references (FMI 3.0 section
-    /// 2.3.3: `nValues` counts the elements of all variables; every variable here is a
-    /// scalar; FMI 2.0 has one count for both).
-    fn check_sizes(&self, func: &str, n_refs: usize, n_values: usize) -> Result<(), Status> {
+    /// Checks that `func`, a getter or setter allowed in the states of `mask`, is called in
+    /// one of them with `n_values` values for `n_refs` scalar references (FMI 3.0 section
+    /// 2.3.3: `nValues` counts the elements of all variables; every variable here is a scalar;
+    /// FMI 2.0 has one count for both).
+    fn check_values(
+        &self,
+        func: &str,
+        mask: Mask,
+        (n_refs, n_values): (usize, usize),
+    ) -> Result<(), Status> {
+        self.require(func, mask)?;
         if n_refs == n_values {
             return Ok(());
         }
@@ -391,26 +408,20 @@ impl<V: Version, M: FmuCore> Instance<V, M> {
     /// `fmi2GetReal` / `fmi3GetFloat64`.
     pub fn get_values(&mut self, vrs: &[u32], values: &mut [f64]) -> Status {
         let func = V::NAMES.get_values;
-        if let Err(s) = self
-            .require(func, V::MASKS.get_values)
-            .and_then(|()| self.check_sizes(func, vrs.len(), values.len()))
-        {
+        let sizes = (vrs.len(), values.len());
+        if let Err(s) = self.check_values(func, V::MASKS.get_values, sizes) {
             return s;
         }
-        match values::get(&mut self.core, &self.variables, vrs, values) {
-            Ok(()) => Status::Ok,
-            Err(msg) => self.error(func, msg),
-        }
+        let result = values::get(&mut self.core, &self.variables, vrs, values);
+        self.reported(func, result)
     }
 
     /// `fmi2SetReal` / `fmi3SetFloat64`. All references are checked before any value is set;
     /// values are then set in order, and a value the core rejects stops there.
     pub fn set_values(&mut self, vrs: &[u32], values: &[f64]) -> Status {
         let func = V::NAMES.set_values;
-        if let Err(s) = self
-            .require(func, V::MASKS.set_values)
-            .and_then(|()| self.check_sizes(func, vrs.len(), values.len()))
-        {
+        let sizes = (vrs.len(), values.len());
+        if let Err(s) = self.check_values(func, V::MASKS.set_values, sizes) {
             return s;
         }
         let logger = &self.logger;
@@ -420,10 +431,8 @@ impl<V: Version, M: FmuCore> Instance<V, M> {
             }
         };
         let rule = (self.phase.set_rule(), self.phase.name());
-        match values::set(&mut self.core, &self.variables, rule, (vrs, values), trace) {
-            Ok(()) => Status::Ok,
-            Err(msg) => self.error(func, msg),
-        }
+        let result = values::set(&mut self.core, &self.variables, rule, (vrs, values), trace);
+        self.reported(func, result)
     }
 
     /// The getters and setters of the types (`type_name`, of function `func`) this FMU has no
@@ -450,16 +459,22 @@ impl<V: Version, M: FmuCore> Instance<V, M> {
         }
     }
 
+    /// The status of a call of `func` that can only fail with a message: an error then.
+    pub fn reported(&self, func: &str, result: Result<(), String>) -> Status {
+        match result {
+            Ok(()) => Status::Ok,
+            Err(msg) => self.error(func, msg),
+        }
+    }
+
     /// Runs a core call of `func` that can only fail with a message; an error then.
     pub fn core_call(
         &mut self,
         func: &str,
         f: impl FnOnce(&mut M) -> Result<(), String>,
     ) -> Status {
-        match f(&mut self.core) {
-            Ok(()) => Status::Ok,
-            Err(msg) => self.error(func, msg),
-        }
+        let result = f(&mut self.core);
+        self.reported(func, result)
     }
 
     /// The number of continuous states.
@@ -511,7 +526,8 @@ impl<V: Version, M: FmuCore> Instance<V, M> {
     pub fn restore(&mut self, state: &Snapshot<M, V::Phase>) -> Status {
         let func = V::NAMES.set_fmu_state;
         if state.token != self.token {
-            return self.error(func, V::foreign_state(&state.token, &self.token));
+            let msg = fill(V::WORDING.foreign_state, [&state.token, &self.token]);
+            return self.error(func, msg);
         }
         if state.kind != self.kind {
             return self.error(

@@ -13,7 +13,7 @@ use quick_xml::Writer;
 use quick_xml::events::{BytesDecl, Event};
 use quick_xml::writer::ElementWriter;
 
-use super::model_api::ModelStructure;
+use super::model_api::{InstanceKind, ModelStructure};
 use super::units::{self, BASE_UNIT_NAMES};
 use super::variables::{Causality, Initial, ModelInfo, Variable};
 
@@ -240,11 +240,11 @@ pub trait Dialect {
 
     /// Checks the description against the version's rules before it is written.
     fn check(d: Description) -> Result<(), String>;
-    /// `<ModelExchange>`, written if the model offers it.
-    fn write_model_exchange(w: &mut XmlWriter, info: &ModelInfo) -> io::Result<()>;
-    fn write_co_simulation(w: &mut XmlWriter, info: &ModelInfo) -> io::Result<()>;
-    /// `<ModelVariables>`.
-    fn write_variables(w: &mut XmlWriter, vars: &[Variable]) -> io::Result<()>;
+    /// The attributes of `<ModelExchange>` (written if the model offers it) or
+    /// `<CoSimulation>`, in order: the model identifier and the capability flags.
+    fn interface_attributes(kind: InstanceKind, info: &ModelInfo) -> Vec<(&'static str, &str)>;
+    /// The element of `v` in `<ModelVariables>` (of `vars`).
+    fn write_variable(w: &mut XmlWriter, vars: &[Variable], v: &Variable) -> io::Result<()>;
     fn write_model_structure(w: &mut XmlWriter, d: Description) -> io::Result<()>;
 }
 
@@ -270,14 +270,25 @@ fn write_document<D: Dialect>(w: &mut XmlWriter, d: Description, token: &str) ->
         .with_attributes(model_attributes(info))
         .with_attributes(D::ROOT_ATTRIBUTES.iter().copied())
         .write_inner_content(|w| {
+            let mut interfaces = vec![("CoSimulation", InstanceKind::CoSimulation)];
             if info.model_exchange {
-                D::write_model_exchange(w, info)?;
+                interfaces.insert(0, ("ModelExchange", InstanceKind::ModelExchange));
             }
-            D::write_co_simulation(w, info)?;
+            for (tag, kind) in interfaces {
+                w.create_element(tag)
+                    .with_attributes(D::interface_attributes(kind, info))
+                    .write_empty()?;
+            }
             write_unit_definitions(w, d.vars)?;
             write_log_categories(w, &log_categories(&D::CATEGORIES, info))?;
             write_default_experiment(w, info)?;
-            D::write_variables(w, d.vars)?;
+            w.create_element("ModelVariables")
+                .write_inner_content(|w| {
+                    for v in d.vars {
+                        D::write_variable(w, d.vars, v)?;
+                    }
+                    Ok(())
+                })?;
             D::write_model_structure(w, d)
         })?;
     Ok(())
