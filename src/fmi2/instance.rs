@@ -37,10 +37,6 @@ impl Version for Fmi2 {
     type Sink = Callbacks;
     type Options = ();
 
-    const INSTANTIATED: Phase = Instantiated;
-    const INITIALIZATION_MODE: Phase = InitializationMode;
-    const TERMINATED: Phase = Terminated;
-    const ERROR: Phase = Error;
     const NAMES: Names = Names {
         set_debug_logging: "fmi2SetDebugLogging",
         exit_initialization_mode: "fmi2ExitInitializationMode",

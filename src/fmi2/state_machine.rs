@@ -6,7 +6,6 @@
 //! set in a state is [`States::set_rule`].
 
 use crate::fmi_common::model_api::InstanceKind;
-use crate::fmi_common::state_machine::SetRule;
 pub use crate::fmi_common::state_machine::{Experiment, Mask, States, names};
 
 /// The states of the two state machines this FMU can be in.
@@ -61,6 +60,13 @@ impl States for Phase {
         Phase::ContinuousTimeMode,
     ];
 
+    const INSTANTIATED: Phase = Phase::Instantiated;
+    const INITIALIZATION_MODE: Phase = Phase::InitializationMode;
+    const TERMINATED: Phase = Phase::Terminated;
+    const ERROR: Phase = Phase::Error;
+    const INPUTS_AND_TUNABLE_PARAMETERS: Mask = Phase::StepComplete.bit() | Phase::EventMode.bit();
+    const CONTINUOUS_INPUTS: Mask = Phase::ContinuousTimeMode.bit();
+
     fn name(self) -> &'static str {
         match self {
             Phase::Instantiated => "instantiated",
@@ -71,20 +77,6 @@ impl States for Phase {
             Phase::Error => "error",
             Phase::EventMode => "eventMode",
             Phase::ContinuousTimeMode => "continuousTimeMode",
-        }
-    }
-
-    fn bit(self) -> Mask {
-        Phase::bit(self)
-    }
-
-    fn set_rule(self) -> SetRule {
-        match self {
-            Phase::Instantiated => SetRule::StartValues,
-            Phase::InitializationMode => SetRule::ExactStartValues,
-            Phase::StepComplete | Phase::EventMode => SetRule::InputsAndTunableParameters,
-            Phase::ContinuousTimeMode => SetRule::ContinuousInputs,
-            _ => SetRule::Nothing,
         }
     }
 }

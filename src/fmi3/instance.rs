@@ -40,10 +40,6 @@ impl Version for Fmi3 {
     type Sink = Callback;
     type Options = EventModeUsed;
 
-    const INSTANTIATED: Phase = Instantiated;
-    const INITIALIZATION_MODE: Phase = InitializationMode;
-    const TERMINATED: Phase = Terminated;
-    const ERROR: Phase = Error;
     const NAMES: Names = Names {
         set_debug_logging: "fmi3SetDebugLogging",
         exit_initialization_mode: "fmi3ExitInitializationMode",

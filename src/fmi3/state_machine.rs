@@ -6,7 +6,6 @@
 use serde::{Deserialize, Serialize};
 
 use super::types::InstanceKind;
-use crate::fmi_common::state_machine::SetRule;
 pub use crate::fmi_common::state_machine::{Experiment, Mask, States, names};
 
 /// The states this FMU can be in. Configuration, Reconfiguration, Clock Activation and
@@ -56,6 +55,13 @@ impl States for Phase {
         Phase::Error,
     ];
 
+    const INSTANTIATED: Phase = Phase::Instantiated;
+    const INITIALIZATION_MODE: Phase = Phase::InitializationMode;
+    const TERMINATED: Phase = Phase::Terminated;
+    const ERROR: Phase = Phase::Error;
+    const INPUTS_AND_TUNABLE_PARAMETERS: Mask = Phase::EventMode.bit() | Phase::StepMode.bit();
+    const CONTINUOUS_INPUTS: Mask = Phase::ContinuousTimeMode.bit();
+
     fn name(self) -> &'static str {
         match self {
             Phase::Instantiated => "Instantiated",
@@ -66,20 +72,6 @@ impl States for Phase {
             Phase::StepDiscarded => "Step Discarded",
             Phase::Terminated => "Terminated",
             Phase::Error => "error (after an internal error)",
-        }
-    }
-
-    fn bit(self) -> Mask {
-        Phase::bit(self)
-    }
-
-    fn set_rule(self) -> SetRule {
-        match self {
-            Phase::Instantiated => SetRule::StartValues,
-            Phase::InitializationMode => SetRule::ExactStartValues,
-            Phase::EventMode | Phase::StepMode => SetRule::InputsAndTunableParameters,
-            Phase::ContinuousTimeMode => SetRule::ContinuousInputs,
-            _ => SetRule::Nothing,
         }
     }
 }

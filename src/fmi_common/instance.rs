@@ -79,7 +79,7 @@ pub struct Masks {
 }
 
 /// What a version brings to the generic instance, beyond how it writes its description.
-pub trait Version: Dialect + Format<Phase: States + PartialEq> + Sized + 'static {
+pub trait Version: Dialect + Format<Phase: States> + Sized + 'static {
     /// The version's C status enumeration.
     type Status: Copy + From<Status>;
     /// The importer's logging callback.
@@ -87,11 +87,6 @@ pub trait Version: Dialect + Format<Phase: States + PartialEq> + Sized + 'static
     /// What an instance holds beyond the shared state (FMI 3.0: `eventModeUsed`).
     type Options: Copy;
 
-    const INSTANTIATED: Self::Phase;
-    const INITIALIZATION_MODE: Self::Phase;
-    const TERMINATED: Self::Phase;
-    /// Where a caught panic or a failed reset leaves an instance.
-    const ERROR: Self::Phase;
     const NAMES: Names;
     const MASKS: Masks;
 
@@ -198,7 +193,7 @@ impl<V: Version, M: FmuCore> Instance<V, M> {
             resource_dir,
             logger,
             categories,
-            phase: V::INSTANTIATED,
+            phase: V::Phase::INSTANTIATED,
             experiment: None,
             core: built.core,
             variables: built.variables,
@@ -320,7 +315,7 @@ impl<V: Version, M: FmuCore> Instance<V, M> {
         {
             Ok(()) => {
                 self.experiment = Some(e);
-                self.phase = V::INITIALIZATION_MODE;
+                self.phase = V::Phase::INITIALIZATION_MODE;
                 Status::Ok
             }
             Err(msg) => self.error(func, msg),
@@ -350,7 +345,7 @@ impl<V: Version, M: FmuCore> Instance<V, M> {
         if let Err(s) = self.require(func, V::MASKS.terminate) {
             return s;
         }
-        self.phase = V::TERMINATED;
+        self.phase = V::Phase::TERMINATED;
         Status::Ok
     }
 
@@ -362,19 +357,19 @@ impl<V: Version, M: FmuCore> Instance<V, M> {
         let built = match build::<V, M>(self.kind, self.resource_dir.as_deref()) {
             Ok(b) => b,
             Err(e) => {
-                self.phase = V::ERROR;
+                self.phase = V::Phase::ERROR;
                 return self.error(func, format_args!("cannot create the model again: {e}"));
             }
         };
         if built.token != self.token {
-            self.phase = V::ERROR;
+            self.phase = V::Phase::ERROR;
             let msg = fill(V::WORDING.token_changed, [&built.token, &self.token]);
             return self.error(func, format_args!("the resources changed: {msg}"));
         }
         self.core = built.core;
         self.variables = built.variables;
         self.experiment = None;
-        self.phase = V::INSTANTIATED;
+        self.phase = V::Phase::INSTANTIATED;
         Status::Ok
     }
 
@@ -498,7 +493,7 @@ impl<V: Version, M: FmuCore> Instance<V, M> {
     /// reset, setting an FMU state, freeing, the getters (for debugging) and the FMU-state
     /// functions are allowed.
     pub fn panicked(&mut self, func: &str, message: &str) -> Status {
-        self.phase = V::ERROR;
+        self.phase = V::Phase::ERROR;
         let n = &V::NAMES;
         self.error(func, format_args!("internal error (panic: {message}); the instance is now in the error state: call {}, {} or {}", n.reset, n.set_fmu_state, n.free_instance))
     }
