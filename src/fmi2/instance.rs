@@ -55,7 +55,6 @@ impl Version for Fmi2 {
         value_type: "",
     };
     const MASKS: Masks = Masks {
-        exit_initialization_mode: allowed::EXIT_INITIALIZATION_MODE,
         terminate: allowed::TERMINATE,
         get_values: allowed::GET_VALUES,
         set_values: allowed::SET_VALUES,

@@ -85,6 +85,9 @@ impl States for Phase {
 /// state, and so not checked: `fmi2SetDebugLogging`, `fmi2Reset`, `fmi2FreeInstance` and the
 /// FMU-state functions (`fmi2GetFMUstate` … `fmi2DeSerializeFMUstate`). Functions this FMU
 /// does not offer (input and output derivatives) fail in every state.
+///
+/// `fmi2ExitInitializationMode` is allowed in Initialization Mode only, in both versions: the generic
+/// instance checks it.
 pub mod allowed {
     use super::Mask;
     use super::Phase::*;
@@ -100,7 +103,6 @@ pub mod allowed {
 
     pub const SETUP_EXPERIMENT: Mask = INSTANTIATED;
     pub const ENTER_INITIALIZATION_MODE: Mask = INSTANTIATED;
-    pub const EXIT_INITIALIZATION_MODE: Mask = INITIALIZATION_MODE;
     pub const TERMINATE: Mask = STEP_COMPLETE | STEP_FAILED | EVENT_MODE | CONTINUOUS_TIME_MODE;
     /// `fmi2Get{Real,Integer,Boolean,String}`; in stepFailed and error for debugging only.
     pub const GET_VALUES: Mask = INITIALIZATION_MODE

@@ -58,7 +58,6 @@ impl Version for Fmi3 {
         value_type: "Float64",
     };
     const MASKS: Masks = Masks {
-        exit_initialization_mode: allowed::EXIT_INITIALIZATION_MODE,
         terminate: allowed::TERMINATE,
         get_values: allowed::GET_VALUES,
         set_values: allowed::SET_VALUES,

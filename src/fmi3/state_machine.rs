@@ -79,6 +79,9 @@ impl States for Phase {
 /// The states each function may be called in. Allowed in every state, and so not checked:
 /// `fmi3SetDebugLogging`, `fmi3Reset`, `fmi3FreeInstance` and the FMU-state functions.
 /// Functions of capabilities this FMU does not declare fail in every state.
+///
+/// `fmi3ExitInitializationMode` is allowed in Initialization Mode only, in both versions: the generic
+/// instance checks it.
 pub mod allowed {
     use super::Mask;
     use super::Phase::*;
@@ -93,7 +96,6 @@ pub mod allowed {
     const ERROR: Mask = Error.bit();
 
     pub const ENTER_INITIALIZATION_MODE: Mask = INSTANTIATED;
-    pub const EXIT_INITIALIZATION_MODE: Mask = INITIALIZATION_MODE;
     /// Model Exchange from Continuous-Time Mode; Co-Simulation from Step Mode when the
     /// importer asked for Event Mode (`eventModeUsed`).
     pub const ENTER_EVENT_MODE: Mask = CONTINUOUS_TIME_MODE | STEP_MODE;

@@ -70,9 +70,9 @@ fn fill(template: &str, values: [&str; 2]) -> String {
     out
 }
 
-/// The states each shared call may be called in.
+/// The states each shared call may be called in (`fmiXExitInitializationMode`: Initialization
+/// Mode in both versions).
 pub struct Masks {
-    pub exit_initialization_mode: Mask,
     pub terminate: Mask,
     pub get_values: Mask,
     pub set_values: Mask,
@@ -326,7 +326,7 @@ impl<V: Version, M: FmuCore> Instance<V, M> {
     pub fn exit_initialization_mode(&mut self) -> Status {
         let func = V::NAMES.exit_initialization_mode;
         self.trace(|| func.into());
-        if let Err(s) = self.require(func, V::MASKS.exit_initialization_mode) {
+        if let Err(s) = self.require(func, V::Phase::INITIALIZATION_MODE.bit()) {
             return s;
         }
         match self.core.exit_initialization() {
