@@ -29,6 +29,9 @@ use crate::fmi_common::variables::{Causality, ModelInfo, Variable, check_variabl
 
 use Phase::*;
 
+/// The interface of the Model Exchange calls.
+const ME: Option<InstanceKind> = Some(InstanceKind::ModelExchange);
+
 /// One FMI 2.0 instance around a core `M`.
 pub type Instance<M> = instance::Instance<Fmi2, M>;
 
@@ -388,13 +391,8 @@ impl<M: FmuCore> Instance<M> {
 
     /// `fmi2EnterEventMode` (section 3.2.2).
     pub fn enter_event_mode(&mut self) -> Status {
-        const F: &str = "fmi2EnterEventMode";
-        self.trace(|| F.into());
-        if let Err(s) = self.require_of(F, InstanceKind::ModelExchange, allowed::ENTER_EVENT_MODE) {
-            return s;
-        }
-        self.phase = EventMode;
-        Status::Ok
+        let mask = allowed::ENTER_EVENT_MODE;
+        self.move_to("fmi2EnterEventMode", ME, mask, EventMode)
     }
 
     /// `fmi2NewDiscreteStates` (section 3.2.2): the model has no discrete states and no
@@ -408,17 +406,11 @@ impl<M: FmuCore> Instance<M> {
 
     /// `fmi2EnterContinuousTimeMode` (section 3.2.2).
     pub fn enter_continuous_time_mode(&mut self) -> Status {
-        const F: &str = "fmi2EnterContinuousTimeMode";
-        self.trace(|| F.into());
-        if let Err(s) = self.require_of(
-            F,
-            InstanceKind::ModelExchange,
+        let (f, mask) = (
+            "fmi2EnterContinuousTimeMode",
             allowed::ENTER_CONTINUOUS_TIME_MODE,
-        ) {
-            return s;
-        }
-        self.phase = ContinuousTimeMode;
-        Status::Ok
+        );
+        self.move_to(f, ME, mask, ContinuousTimeMode)
     }
 
     /// `fmi2CompletedIntegratorStep` (section 3.2.2): no step event, no termination. Returns

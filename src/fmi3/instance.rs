@@ -196,13 +196,8 @@ impl<M: FmuCore> Instance<M> {
 
     /// `fmi3EnterStepMode` (section 4.2.2): from Event Mode, Co-Simulation only.
     pub fn enter_step_mode(&mut self) -> Status {
-        const F: &str = "fmi3EnterStepMode";
-        self.trace(|| F.into());
-        if let Err(s) = self.require_of(F, InstanceKind::CoSimulation, allowed::ENTER_STEP_MODE) {
-            return s;
-        }
-        self.phase = StepMode;
-        Status::Ok
+        let (cs, mask) = (Some(InstanceKind::CoSimulation), allowed::ENTER_STEP_MODE);
+        self.move_to("fmi3EnterStepMode", cs, mask, StepMode)
     }
 
     /// What `fmi3DoStep` returns beyond its status (section 4.2.2).
@@ -267,17 +262,16 @@ impl<M: FmuCore> Instance<M> {
 
     /// `fmi3EnterContinuousTimeMode` (section 3.2.2).
     pub fn enter_continuous_time_mode(&mut self) -> Status {
-        const F: &str = "fmi3EnterContinuousTimeMode";
-        self.trace(|| F.into());
-        if let Err(s) = self.require_of(
-            F,
-            InstanceKind::ModelExchange,
+        let (f, mask) = (
+            "fmi3EnterContinuousTimeMode",
             allowed::ENTER_CONTINUOUS_TIME_MODE,
-        ) {
-            return s;
-        }
-        self.phase = ContinuousTimeMode;
-        Status::Ok
+        );
+        self.move_to(
+            f,
+            Some(InstanceKind::ModelExchange),
+            mask,
+            ContinuousTimeMode,
+        )
     }
 
     /// `fmi3CompletedIntegratorStep` (section 3.2.2): no step events, no termination.

@@ -338,15 +338,31 @@ impl<V: Version, M: FmuCore> Instance<V, M> {
         }
     }
 
-    /// `fmiXTerminate`; a second call is an error.
-    pub fn terminate(&mut self) -> Status {
-        let func = V::NAMES.terminate;
+    /// A call `func` that only moves the state machine to `to`, from the states of `mask`, on
+    /// an instance of `interface` (if the function belongs to one).
+    pub fn move_to(
+        &mut self,
+        func: &str,
+        interface: Option<InstanceKind>,
+        mask: Mask,
+        to: V::Phase,
+    ) -> Status {
         self.trace(|| func.into());
-        if let Err(s) = self.require(func, V::MASKS.terminate) {
+        let checked = match interface {
+            Some(kind) => self.require_of(func, kind, mask),
+            None => self.require(func, mask),
+        };
+        if let Err(s) = checked {
             return s;
         }
-        self.phase = V::Phase::TERMINATED;
+        self.phase = to;
         Status::Ok
+    }
+
+    /// `fmiXTerminate`; a second call is an error.
+    pub fn terminate(&mut self) -> Status {
+        let (mask, to) = (V::MASKS.terminate, V::Phase::TERMINATED);
+        self.move_to(V::NAMES.terminate, None, mask, to)
     }
 
     /// `fmiXReset`: back to the instantiated state with the start values, by creating the
