@@ -15,13 +15,15 @@
 #![allow(clippy::missing_safety_doc)]
 
 use std::ffi::{CStr, c_char, c_void};
-use std::panic::{AssertUnwindSafe, catch_unwind};
+use std::panic::catch_unwind;
 use std::ptr::null_mut;
 
+use super::Fmi2;
 use super::instance::Instance;
-use super::logging::Logger;
+use super::logging::logger;
 use super::types::*;
 use crate::fmi_common::calls::with_instance;
+use crate::fmi_common::logging::Status;
 use crate::fmi_common::model_api::{FmuCore, InstanceKind};
 use crate::fmi_common::shell::{in_slice, opt_str, out_slice, panic_message};
 
@@ -45,8 +47,8 @@ pub unsafe fn instantiate<M: FmuCore>(
         )
     };
     let fail = |msg: &str| {
-        Logger::new(callbacks, name.as_deref().unwrap_or(""), false)
-            .log(Fmi2Status::Error, &format!("fmi2Instantiate: {msg}"));
+        logger(callbacks, name.as_deref().unwrap_or(""), false)
+            .log(Status::Error, &format!("fmi2Instantiate: {msg}"));
         null_mut()
     };
     let kind = match fmu_type {
@@ -62,7 +64,7 @@ pub unsafe fn instantiate<M: FmuCore>(
         return fail("instanceName or fmuGUID is NULL");
     };
     match catch_unwind(|| {
-        Instance::<M>::instantiate(
+        Instance::<M>::create(
             name,
             kind,
             guid,
@@ -80,38 +82,6 @@ pub unsafe fn instantiate<M: FmuCore>(
     }
 }
 
-pub unsafe fn free_instance<M: FmuCore>(c: fmi2Component) {
-    if !c.is_null() {
-        // SAFETY: `c` came from `instantiate::<M>` and is not used after this call.
-        let instance = unsafe { Box::from_raw(c.cast::<Instance<M>>()) };
-        let _ = catch_unwind(AssertUnwindSafe(move || drop(instance)));
-    }
-}
-
-pub unsafe fn set_debug_logging<M: FmuCore>(
-    c: fmi2Component,
-    on: fmi2Boolean,
-    n: usize,
-    categories: *const fmi2String,
-) -> Fmi2Status {
-    const F: &str = "fmi2SetDebugLogging";
-    unsafe {
-        with_instance::<Instance<M>>(c, F, |inst| {
-            let Some(pointers) = in_slice(categories, n) else {
-                return inst.null_argument(F, "categories");
-            };
-            let mut names = Vec::with_capacity(n);
-            for &p in pointers {
-                let Some(name) = opt_str(p) else {
-                    return inst.null_argument(F, "categories[i]");
-                };
-                names.push(name.into_owned());
-            }
-            inst.set_debug_logging(on != FMI2_FALSE, &names)
-        })
-    }
-}
-
 pub unsafe fn setup_experiment<M: FmuCore>(
     c: fmi2Component,
     tolerance_defined: fmi2Boolean,
@@ -123,99 +93,10 @@ pub unsafe fn setup_experiment<M: FmuCore>(
     let tolerance = (tolerance_defined != FMI2_FALSE).then_some(tolerance);
     let stop_time = (stop_time_defined != FMI2_FALSE).then_some(stop_time);
     unsafe {
-        with_instance::<Instance<M>>(c, "fmi2SetupExperiment", |inst| {
+        with_instance::<Fmi2, M>(c, "fmi2SetupExperiment", |inst| {
             inst.setup_experiment(tolerance, start_time, stop_time)
         })
     }
-}
-
-pub unsafe fn enter_initialization_mode<M: FmuCore>(c: fmi2Component) -> Fmi2Status {
-    unsafe {
-        with_instance::<Instance<M>>(c, "fmi2EnterInitializationMode", |inst| {
-            inst.enter_initialization_mode()
-        })
-    }
-}
-
-pub unsafe fn exit_initialization_mode<M: FmuCore>(c: fmi2Component) -> Fmi2Status {
-    unsafe {
-        with_instance::<Instance<M>>(c, "fmi2ExitInitializationMode", |inst| {
-            inst.exit_initialization_mode()
-        })
-    }
-}
-
-pub unsafe fn terminate<M: FmuCore>(c: fmi2Component) -> Fmi2Status {
-    unsafe { with_instance::<Instance<M>>(c, "fmi2Terminate", |inst| inst.terminate()) }
-}
-
-pub unsafe fn reset<M: FmuCore>(c: fmi2Component) -> Fmi2Status {
-    unsafe { with_instance::<Instance<M>>(c, "fmi2Reset", |inst| inst.reset()) }
-}
-
-pub unsafe fn get_real<M: FmuCore>(
-    c: fmi2Component,
-    vr: *const fmi2ValueReference,
-    nvr: usize,
-    value: *mut f64,
-) -> Fmi2Status {
-    const F: &str = "fmi2GetReal";
-    unsafe {
-        with_instance::<Instance<M>>(c, F, |inst| {
-            match (in_slice(vr, nvr), out_slice(value, nvr)) {
-                (Some(vrs), Some(values)) => inst.get_real(vrs, values),
-                (None, _) => inst.null_argument(F, "vr"),
-                (_, None) => inst.null_argument(F, "value"),
-            }
-        })
-    }
-}
-
-pub unsafe fn set_real<M: FmuCore>(
-    c: fmi2Component,
-    vr: *const fmi2ValueReference,
-    nvr: usize,
-    value: *const f64,
-) -> Fmi2Status {
-    const F: &str = "fmi2SetReal";
-    unsafe {
-        with_instance::<Instance<M>>(c, F, |inst| {
-            match (in_slice(vr, nvr), in_slice(value, nvr)) {
-                (Some(vrs), Some(values)) => inst.set_real(vrs, values),
-                (None, _) => inst.null_argument(F, "vr"),
-                (_, None) => inst.null_argument(F, "value"),
-            }
-        })
-    }
-}
-
-/// `fmi2Get/Set{Integer,Boolean,String}` (`func`, whose name ends in the type); `value` is the
-/// value array, of whichever type.
-pub unsafe fn no_variables<M: FmuCore>(
-    c: fmi2Component,
-    func: &'static str,
-    vr: *const fmi2ValueReference,
-    nvr: usize,
-    value: *const c_void,
-) -> Fmi2Status {
-    let setter = func.starts_with("fmi2Set");
-    let type_name = func.get("fmi2Get".len()..).unwrap_or(func);
-    unsafe {
-        with_instance::<Instance<M>>(c, func, |inst| match in_slice(vr, nvr) {
-            None => inst.null_argument(func, "vr"),
-            Some(_) if nvr > 0 && value.is_null() => inst.null_argument(func, "value"),
-            Some(vrs) => inst.no_variables_of_type(func, type_name, setter, vrs),
-        })
-    }
-}
-
-/// Functions of capabilities (`what`) this FMU does not offer.
-pub unsafe fn not_offered<M: FmuCore>(
-    c: fmi2Component,
-    func: &'static str,
-    what: &str,
-) -> Fmi2Status {
-    unsafe { with_instance::<Instance<M>>(c, func, |inst| inst.not_offered(func, what)) }
 }
 
 pub unsafe fn get_directional_derivative<M: FmuCore>(
@@ -229,7 +110,7 @@ pub unsafe fn get_directional_derivative<M: FmuCore>(
 ) -> Fmi2Status {
     const F: &str = "fmi2GetDirectionalDerivative";
     unsafe {
-        with_instance::<Instance<M>>(c, F, |inst| {
+        with_instance::<Fmi2, M>(c, F, |inst| {
             match (
                 in_slice(unknown, n_unknown),
                 in_slice(known, n_known),
@@ -248,17 +129,13 @@ pub unsafe fn get_directional_derivative<M: FmuCore>(
     }
 }
 
-pub unsafe fn enter_event_mode<M: FmuCore>(c: fmi2Component) -> Fmi2Status {
-    unsafe { with_instance::<Instance<M>>(c, "fmi2EnterEventMode", |inst| inst.enter_event_mode()) }
-}
-
 pub unsafe fn new_discrete_states<M: FmuCore>(
     c: fmi2Component,
     event_info: *mut fmi2EventInfo,
 ) -> Fmi2Status {
     const F: &str = "fmi2NewDiscreteStates";
     unsafe {
-        with_instance::<Instance<M>>(c, F, |inst| {
+        with_instance::<Fmi2, M>(c, F, |inst| {
             let Some(out) = event_info.as_mut() else {
                 return inst.null_argument(F, "fmi2eventInfo");
             };
@@ -276,18 +153,10 @@ pub unsafe fn new_discrete_states<M: FmuCore>(
                         next_event_time_defined: info.next_event_time.is_some().into(),
                         next_event_time: info.next_event_time.unwrap_or(0.0),
                     };
-                    Fmi2Status::Ok
+                    Status::Ok
                 }
                 Err(status) => status,
             }
-        })
-    }
-}
-
-pub unsafe fn enter_continuous_time_mode<M: FmuCore>(c: fmi2Component) -> Fmi2Status {
-    unsafe {
-        with_instance::<Instance<M>>(c, "fmi2EnterContinuousTimeMode", |inst| {
-            inst.enter_continuous_time_mode()
         })
     }
 }
@@ -299,12 +168,12 @@ pub unsafe fn completed_integrator_step<M: FmuCore>(
 ) -> Fmi2Status {
     const F: &str = "fmi2CompletedIntegratorStep";
     unsafe {
-        with_instance::<Instance<M>>(c, F, |inst| {
+        with_instance::<Fmi2, M>(c, F, |inst| {
             match (enter_event_mode.as_mut(), terminate_simulation.as_mut()) {
                 (Some(event), Some(terminate)) => match inst.completed_integrator_step() {
                     Ok((e, t)) => {
                         (*event, *terminate) = (e.into(), t.into());
-                        Fmi2Status::Ok
+                        Status::Ok
                     }
                     Err(status) => status,
                 },
@@ -316,7 +185,7 @@ pub unsafe fn completed_integrator_step<M: FmuCore>(
 }
 
 pub unsafe fn set_time<M: FmuCore>(c: fmi2Component, time: f64) -> Fmi2Status {
-    unsafe { with_instance::<Instance<M>>(c, "fmi2SetTime", |inst| inst.set_time(time)) }
+    unsafe { with_instance::<Fmi2, M>(c, "fmi2SetTime", |inst| inst.set_time(time)) }
 }
 
 pub unsafe fn set_continuous_states<M: FmuCore>(
@@ -326,7 +195,7 @@ pub unsafe fn set_continuous_states<M: FmuCore>(
 ) -> Fmi2Status {
     const F: &str = "fmi2SetContinuousStates";
     unsafe {
-        with_instance::<Instance<M>>(c, F, |inst| match in_slice(x, nx) {
+        with_instance::<Fmi2, M>(c, F, |inst| match in_slice(x, nx) {
             Some(x) => inst.set_continuous_states(x),
             None => inst.null_argument(F, "x"),
         })
@@ -341,10 +210,10 @@ pub unsafe fn get_state_vector<M: FmuCore>(
     argument: &'static str,
     out: *mut f64,
     nx: usize,
-    get: fn(&mut Instance<M>, &mut [f64]) -> Fmi2Status,
+    get: fn(&mut Instance<M>, &mut [f64]) -> Status,
 ) -> Fmi2Status {
     unsafe {
-        with_instance::<Instance<M>>(c, func, |inst| match out_slice(out, nx) {
+        with_instance::<Fmi2, M>(c, func, |inst| match out_slice(out, nx) {
             Some(out) => get(inst, out),
             None => inst.null_argument(func, argument),
         })
@@ -358,7 +227,7 @@ pub unsafe fn get_event_indicators<M: FmuCore>(
 ) -> Fmi2Status {
     const F: &str = "fmi2GetEventIndicators";
     unsafe {
-        with_instance::<Instance<M>>(c, F, |inst| match out_slice(indicators, ni) {
+        with_instance::<Fmi2, M>(c, F, |inst| match out_slice(indicators, ni) {
             Some(_) => inst.get_event_indicators(ni),
             None => inst.null_argument(F, "eventIndicators"),
         })
@@ -372,14 +241,10 @@ pub unsafe fn do_step<M: FmuCore>(
     no_set_fmu_state_prior: fmi2Boolean,
 ) -> Fmi2Status {
     unsafe {
-        with_instance::<Instance<M>>(c, "fmi2DoStep", |inst| {
+        with_instance::<Fmi2, M>(c, "fmi2DoStep", |inst| {
             inst.do_step(tc, h, no_set_fmu_state_prior != FMI2_FALSE)
         })
     }
-}
-
-pub unsafe fn cancel_step<M: FmuCore>(c: fmi2Component) -> Fmi2Status {
-    unsafe { with_instance::<Instance<M>>(c, "fmi2CancelStep", |inst| inst.cancel_step()) }
 }
 
 /// `fmi2GetStatus`, `fmi2GetIntegerStatus`, `fmi2GetStringStatus` (`func`): no value is ever
@@ -391,7 +256,7 @@ pub unsafe fn get_valueless_status<M: FmuCore>(
     value: *mut c_void,
 ) -> Fmi2Status {
     unsafe {
-        with_instance::<Instance<M>>(c, func, |inst| {
+        with_instance::<Fmi2, M>(c, func, |inst| {
             if value.is_null() {
                 return inst.null_argument(func, "value");
             }
@@ -407,7 +272,7 @@ pub unsafe fn get_real_status<M: FmuCore>(
 ) -> Fmi2Status {
     const F: &str = "fmi2GetRealStatus";
     unsafe {
-        with_instance::<Instance<M>>(c, F, |inst| match value.as_mut() {
+        with_instance::<Fmi2, M>(c, F, |inst| match value.as_mut() {
             Some(v) => inst.get_real_status(kind, v),
             None => inst.null_argument(F, "value"),
         })
@@ -421,11 +286,11 @@ pub unsafe fn get_boolean_status<M: FmuCore>(
 ) -> Fmi2Status {
     const F: &str = "fmi2GetBooleanStatus";
     unsafe {
-        with_instance::<Instance<M>>(c, F, |inst| match value.as_mut() {
+        with_instance::<Fmi2, M>(c, F, |inst| match value.as_mut() {
             Some(v) => {
                 let mut b = false;
                 let status = inst.get_boolean_status(kind, &mut b);
-                if status == Fmi2Status::Ok {
+                if status == Status::Ok {
                     *v = fmi2Boolean::from(b);
                 }
                 status
@@ -460,7 +325,10 @@ macro_rules! export_fmi2 {
 macro_rules! __fmi2_functions {
     ([$($attr:tt)*] $core:ty) => {
         use $crate::fmi2::exports as shell;
+        use $crate::fmi2::Fmi2;
+        use $crate::fmi2::instance::Instance;
         use $crate::fmi2::types::*;
+        use $crate::fmi_common::calls as common;
 
         // Inquire platform and version number of the header files (section 2.1.4)
 
@@ -483,7 +351,7 @@ macro_rules! __fmi2_functions {
             n_categories: usize,
             categories: *const fmi2String,
         ) -> fmi2Status {
-            unsafe { shell::set_debug_logging::<$core>(c, logging_on, n_categories, categories) }
+            unsafe { common::set_debug_logging::<Fmi2, $core>(c, logging_on != FMI2_FALSE, n_categories, categories) }
         }
 
         $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)]
@@ -503,7 +371,7 @@ macro_rules! __fmi2_functions {
 
         $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)]
         pub unsafe extern "C" fn fmi2FreeInstance(c: fmi2Component) {
-            unsafe { shell::free_instance::<$core>(c) }
+            unsafe { common::free_instance::<Fmi2, $core>(c) }
         }
 
         // Initialization, termination and reset (section 2.1.6)
@@ -524,22 +392,22 @@ macro_rules! __fmi2_functions {
 
         $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)]
         pub unsafe extern "C" fn fmi2EnterInitializationMode(c: fmi2Component) -> fmi2Status {
-            unsafe { shell::enter_initialization_mode::<$core>(c) }
+            unsafe { common::simple::<Fmi2, $core>(c, "fmi2EnterInitializationMode", Instance::enter_initialization_mode) }
         }
 
         $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)]
         pub unsafe extern "C" fn fmi2ExitInitializationMode(c: fmi2Component) -> fmi2Status {
-            unsafe { shell::exit_initialization_mode::<$core>(c) }
+            unsafe { common::simple::<Fmi2, $core>(c, "fmi2ExitInitializationMode", Instance::exit_initialization_mode) }
         }
 
         $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)]
         pub unsafe extern "C" fn fmi2Terminate(c: fmi2Component) -> fmi2Status {
-            unsafe { shell::terminate::<$core>(c) }
+            unsafe { common::simple::<Fmi2, $core>(c, "fmi2Terminate", Instance::terminate) }
         }
 
         $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)]
         pub unsafe extern "C" fn fmi2Reset(c: fmi2Component) -> fmi2Status {
-            unsafe { shell::reset::<$core>(c) }
+            unsafe { common::simple::<Fmi2, $core>(c, "fmi2Reset", Instance::reset) }
         }
 
         // Getting and setting variable values (section 2.1.7); Real variables only
@@ -551,7 +419,7 @@ macro_rules! __fmi2_functions {
             nvr: usize,
             value: *mut fmi2Real,
         ) -> fmi2Status {
-            unsafe { shell::get_real::<$core>(c, vr, nvr, value) }
+            unsafe { common::get_values::<Fmi2, $core>(c, (vr, nvr), (value, nvr)) }
         }
 
         $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)]
@@ -561,7 +429,7 @@ macro_rules! __fmi2_functions {
             nvr: usize,
             value: *mut fmi2Integer,
         ) -> fmi2Status {
-            unsafe { shell::no_variables::<$core>(c, "fmi2GetInteger", vr, nvr, value.cast()) }
+            unsafe { common::no_variables::<Fmi2, $core>(c, "fmi2GetInteger", (vr, nvr), value.cast()) }
         }
 
         $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)]
@@ -571,7 +439,7 @@ macro_rules! __fmi2_functions {
             nvr: usize,
             value: *mut fmi2Boolean,
         ) -> fmi2Status {
-            unsafe { shell::no_variables::<$core>(c, "fmi2GetBoolean", vr, nvr, value.cast()) }
+            unsafe { common::no_variables::<Fmi2, $core>(c, "fmi2GetBoolean", (vr, nvr), value.cast()) }
         }
 
         $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)]
@@ -581,7 +449,7 @@ macro_rules! __fmi2_functions {
             nvr: usize,
             value: *mut fmi2String,
         ) -> fmi2Status {
-            unsafe { shell::no_variables::<$core>(c, "fmi2GetString", vr, nvr, value.cast()) }
+            unsafe { common::no_variables::<Fmi2, $core>(c, "fmi2GetString", (vr, nvr), value.cast()) }
         }
 
         $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)]
@@ -591,7 +459,7 @@ macro_rules! __fmi2_functions {
             nvr: usize,
             value: *const fmi2Real,
         ) -> fmi2Status {
-            unsafe { shell::set_real::<$core>(c, vr, nvr, value) }
+            unsafe { common::set_values::<Fmi2, $core>(c, (vr, nvr), (value, nvr)) }
         }
 
         $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)]
@@ -601,7 +469,7 @@ macro_rules! __fmi2_functions {
             nvr: usize,
             value: *const fmi2Integer,
         ) -> fmi2Status {
-            unsafe { shell::no_variables::<$core>(c, "fmi2SetInteger", vr, nvr, value.cast()) }
+            unsafe { common::no_variables::<Fmi2, $core>(c, "fmi2SetInteger", (vr, nvr), value.cast()) }
         }
 
         $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)]
@@ -611,7 +479,7 @@ macro_rules! __fmi2_functions {
             nvr: usize,
             value: *const fmi2Boolean,
         ) -> fmi2Status {
-            unsafe { shell::no_variables::<$core>(c, "fmi2SetBoolean", vr, nvr, value.cast()) }
+            unsafe { common::no_variables::<Fmi2, $core>(c, "fmi2SetBoolean", (vr, nvr), value.cast()) }
         }
 
         $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)]
@@ -621,7 +489,7 @@ macro_rules! __fmi2_functions {
             nvr: usize,
             value: *const fmi2String,
         ) -> fmi2Status {
-            unsafe { shell::no_variables::<$core>(c, "fmi2SetString", vr, nvr, value.cast()) }
+            unsafe { common::no_variables::<Fmi2, $core>(c, "fmi2SetString", (vr, nvr), value.cast()) }
         }
 
         // FMU states (section 2.1.8)
@@ -631,7 +499,7 @@ macro_rules! __fmi2_functions {
             c: fmi2Component,
             state: *mut fmi2FMUstate,
         ) -> fmi2Status {
-            unsafe { $crate::fmi_common::calls::get_fmu_state::<$crate::fmi2::instance::Instance<$core>>(c, "fmi2GetFMUstate", state) }
+            unsafe { common::get_fmu_state::<Fmi2, $core>(c, "fmi2GetFMUstate", state) }
         }
 
         $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)]
@@ -639,7 +507,7 @@ macro_rules! __fmi2_functions {
             c: fmi2Component,
             state: fmi2FMUstate,
         ) -> fmi2Status {
-            unsafe { $crate::fmi_common::calls::set_fmu_state::<$crate::fmi2::instance::Instance<$core>>(c, "fmi2SetFMUstate", state) }
+            unsafe { common::set_fmu_state::<Fmi2, $core>(c, "fmi2SetFMUstate", state) }
         }
 
         $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)]
@@ -647,7 +515,7 @@ macro_rules! __fmi2_functions {
             c: fmi2Component,
             state: *mut fmi2FMUstate,
         ) -> fmi2Status {
-            unsafe { $crate::fmi_common::calls::free_fmu_state::<$crate::fmi2::instance::Instance<$core>>(c, "fmi2FreeFMUstate", state) }
+            unsafe { common::free_fmu_state::<Fmi2, $core>(c, "fmi2FreeFMUstate", state) }
         }
 
         $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)]
@@ -656,7 +524,7 @@ macro_rules! __fmi2_functions {
             state: fmi2FMUstate,
             size: *mut usize,
         ) -> fmi2Status {
-            unsafe { $crate::fmi_common::calls::serialized_fmu_state_size::<$crate::fmi2::instance::Instance<$core>>(c, "fmi2SerializedFMUstateSize", state, size) }
+            unsafe { common::serialized_fmu_state_size::<Fmi2, $core>(c, "fmi2SerializedFMUstateSize", state, size) }
         }
 
         $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)]
@@ -666,7 +534,7 @@ macro_rules! __fmi2_functions {
             bytes: *mut fmi2Byte,
             size: usize,
         ) -> fmi2Status {
-            unsafe { $crate::fmi_common::calls::serialize_fmu_state::<$crate::fmi2::instance::Instance<$core>>(c, "fmi2SerializeFMUstate", state, bytes.cast(), size) }
+            unsafe { common::serialize_fmu_state::<Fmi2, $core>(c, "fmi2SerializeFMUstate", state, bytes.cast(), size) }
         }
 
         $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)]
@@ -676,7 +544,7 @@ macro_rules! __fmi2_functions {
             size: usize,
             state: *mut fmi2FMUstate,
         ) -> fmi2Status {
-            unsafe { $crate::fmi_common::calls::deserialize_fmu_state::<$crate::fmi2::instance::Instance<$core>>(c, "fmi2DeSerializeFMUstate", bytes.cast(), size, state) }
+            unsafe { common::deserialize_fmu_state::<Fmi2, $core>(c, "fmi2DeSerializeFMUstate", bytes.cast(), size, state) }
         }
 
         // Directional derivatives (section 2.1.9)
@@ -708,7 +576,7 @@ macro_rules! __fmi2_functions {
 
         $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)]
         pub unsafe extern "C" fn fmi2EnterEventMode(c: fmi2Component) -> fmi2Status {
-            unsafe { shell::enter_event_mode::<$core>(c) }
+            unsafe { common::simple::<Fmi2, $core>(c, "fmi2EnterEventMode", Instance::enter_event_mode) }
         }
 
         $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)]
@@ -721,7 +589,7 @@ macro_rules! __fmi2_functions {
 
         $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)]
         pub unsafe extern "C" fn fmi2EnterContinuousTimeMode(c: fmi2Component) -> fmi2Status {
-            unsafe { shell::enter_continuous_time_mode::<$core>(c) }
+            unsafe { common::simple::<Fmi2, $core>(c, "fmi2EnterContinuousTimeMode", Instance::enter_continuous_time_mode) }
         }
 
         $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)]
@@ -828,7 +696,7 @@ macro_rules! __fmi2_functions {
             _value: *const fmi2Real,
         ) -> fmi2Status {
             let what = "canInterpolateInputs (input derivatives)";
-            unsafe { shell::not_offered::<$core>(c, "fmi2SetRealInputDerivatives", what) }
+            unsafe { common::not_offered::<Fmi2, $core>(c, "fmi2SetRealInputDerivatives", what) }
         }
 
         $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)]
@@ -840,7 +708,7 @@ macro_rules! __fmi2_functions {
             _value: *mut fmi2Real,
         ) -> fmi2Status {
             let what = "maxOutputDerivativeOrder > 0 (output derivatives)";
-            unsafe { shell::not_offered::<$core>(c, "fmi2GetRealOutputDerivatives", what) }
+            unsafe { common::not_offered::<Fmi2, $core>(c, "fmi2GetRealOutputDerivatives", what) }
         }
 
         $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)]
@@ -855,7 +723,7 @@ macro_rules! __fmi2_functions {
 
         $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)]
         pub unsafe extern "C" fn fmi2CancelStep(c: fmi2Component) -> fmi2Status {
-            unsafe { shell::cancel_step::<$core>(c) }
+            unsafe { common::simple::<Fmi2, $core>(c, "fmi2CancelStep", |inst| inst.cancel_step()) }
         }
 
         $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)]

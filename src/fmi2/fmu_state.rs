@@ -7,8 +7,9 @@
 //! stop and tolerance each as flag `u8` + `f64`), core bytes (`u64` length + bytes), the
 //! checksum.
 
+use super::Fmi2;
 use super::state_machine::{Experiment, Phase};
-use crate::fmi_common::fmu_state::{self, check_origin, seal, unseal};
+use crate::fmi_common::fmu_state::{self, Format, check_origin, seal, unseal};
 use crate::fmi_common::model_api::{FmuCore, InstanceKind};
 
 const MAGIC: &[u8; 8] = b"FMI2RSST";
@@ -22,18 +23,20 @@ fn put_opt(out: &mut Vec<u8>, x: Option<f64>) {
     out.extend_from_slice(&x.unwrap_or(0.0).to_le_bytes());
 }
 
-impl<M: FmuCore> Snapshot<M> {
+impl Format for Fmi2 {
+    type Phase = Phase;
+
     /// The serialized bytes.
-    pub fn to_bytes(&self) -> Vec<u8> {
-        let core = self.core.serialize_state();
-        let mut out = Vec::with_capacity(56 + self.token.len() + core.len());
+    fn to_bytes<M: FmuCore>(state: &Snapshot<M>) -> Vec<u8> {
+        let core = state.core.serialize_state();
+        let mut out = Vec::with_capacity(56 + state.token.len() + core.len());
         out.extend_from_slice(&FORMAT_VERSION.to_le_bytes());
-        out.extend_from_slice(&(self.token.len() as u32).to_le_bytes());
-        out.extend_from_slice(self.token.as_bytes());
-        out.push(u8::from(self.kind == InstanceKind::CoSimulation));
-        out.push(self.phase as u8);
-        out.push(u8::from(self.experiment.is_some()));
-        let e = self.experiment.unwrap_or_default();
+        out.extend_from_slice(&(state.token.len() as u32).to_le_bytes());
+        out.extend_from_slice(state.token.as_bytes());
+        out.push(u8::from(state.kind == InstanceKind::CoSimulation));
+        out.push(state.phase as u8);
+        out.push(u8::from(state.experiment.is_some()));
+        let e = state.experiment.unwrap_or_default();
         out.extend_from_slice(&e.start_time.to_le_bytes());
         put_opt(&mut out, e.stop_time);
         put_opt(&mut out, e.tolerance);
@@ -42,13 +45,13 @@ impl<M: FmuCore> Snapshot<M> {
         seal(MAGIC, &out)
     }
 
-    /// Parses bytes of [`Snapshot::to_bytes`] for the instance with `guid`, `kind` and `core`.
-    pub fn from_bytes(
+    /// Parses bytes of [`Format::to_bytes`] for the instance with `guid`, `kind` and `core`.
+    fn from_bytes<M: FmuCore>(
         bytes: &[u8],
         guid: &str,
         kind: InstanceKind,
         core: &M,
-    ) -> Result<Self, String> {
+    ) -> Result<Snapshot<M>, String> {
         let mut r = Reader {
             bytes: unseal(MAGIC, bytes)?,
         };

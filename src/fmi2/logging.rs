@@ -1,82 +1,51 @@
 //! Logging through the importer's `fmi2CallbackLogger` (FMI 2.0 standard, sections 2.1.5
-//! and 2.1.6 `fmi2SetDebugLogging`).
-//!
-//! Rules: messages go out as the printf format `"%s"` with the text as its one argument, so
-//! a `%` in the text is never interpreted; the category is never NULL; messages with status
-//! `fmi2OK` are debug logging and go out only when debug logging is on for their category;
-//! all other statuses go out whenever a logger exists.
+//! and 2.1.6 `fmi2SetDebugLogging`), as the sink of the shared
+//! [`Logger`](crate::fmi_common::logging::Logger): messages go out as the printf format
+//! `"%s"` with the text as its one argument, so a `%` in the text is never interpreted.
 
 use std::ffi::{CStr, CString};
 
 use super::types::{Fmi2Status, fmi2CallbackFunctions};
-use crate::fmi_common::shell::{DebugLogging, c_string};
-
-/// Category of debug (OK-level) messages tracing the calls into the FMU.
-const LOG_CALLS: &CStr = c"logCalls";
-const LOG_CALLS_NAME: &str = "logCalls";
-const LOG_WARNING: &CStr = c"logStatusWarning";
-const LOG_DISCARD: &CStr = c"logStatusDiscard";
-const LOG_ERROR: &CStr = c"logStatusError";
-const LOG_FATAL: &CStr = c"logStatusFatal";
+use crate::fmi_common::logging::{self, LOG_CALLS, LogSink, Status};
+use crate::fmi_common::shell::c_string;
 
 /// The categories the wrapper logs with, `(name, description)`, listed in
 /// `<LogCategories>` before the model's own (names from section 2.2.4).
 pub const WRAPPER_CATEGORIES: [(&str, &str); 5] = [
-    (LOG_CALLS_NAME, "Trace of the FMI function calls (debug)"),
+    (LOG_CALLS, "Trace of the FMI function calls (debug)"),
     ("logStatusWarning", "Messages with status fmi2Warning"),
     ("logStatusDiscard", "Messages with status fmi2Discard"),
     ("logStatusError", "Messages with status fmi2Error"),
     ("logStatusFatal", "Messages with status fmi2Fatal"),
 ];
 
-/// The instance's logger: the importer's callbacks and the debug-logging settings.
-pub struct Logger {
+/// The importer's callbacks and the instance name they are given.
+pub struct Callbacks {
     callbacks: fmi2CallbackFunctions,
     instance_name: CString,
-    debug: DebugLogging,
 }
 
-impl Logger {
-    pub fn new(callbacks: fmi2CallbackFunctions, instance_name: &str, debug_on: bool) -> Self {
-        Logger {
-            callbacks,
-            instance_name: c_string(instance_name),
-            debug: DebugLogging::new(debug_on),
-        }
+/// The logger of an FMI 2.0 instance.
+pub type Logger = logging::Logger<Callbacks>;
+
+/// A logger through `callbacks` for the instance `instance_name`.
+pub fn logger(callbacks: fmi2CallbackFunctions, instance_name: &str, debug_on: bool) -> Logger {
+    let sink = Callbacks {
+        callbacks,
+        instance_name: c_string(instance_name),
+    };
+    Logger::new(sink, debug_on)
+}
+
+impl LogSink for Callbacks {
+    fn connected(&self) -> bool {
+        self.callbacks.logger.is_some()
     }
 
-    /// `fmi2SetDebugLogging`: switches debug logging for the given categories (all when the
-    /// list is empty). Returns the first unknown category name as the error.
-    pub fn set_debug_logging(
-        &mut self,
-        on: bool,
-        categories: &[String],
-        known: &[String],
-    ) -> Result<(), String> {
-        self.debug.set(on, categories, known)
-    }
-
-    /// Whether debug logging is on; callers may skip building expensive debug messages.
-    pub fn debug_enabled(&self) -> bool {
-        self.callbacks.logger.is_some() && self.debug.enabled(LOG_CALLS_NAME)
-    }
-
-    /// Logs `message` with `status`, under the category of that status.
-    pub fn log(&self, status: Fmi2Status, message: &str) {
+    fn send(&self, status: Status, category: &CStr, message: &CStr) {
         let Some(logger) = self.callbacks.logger else {
             return;
         };
-        let category = match status {
-            Fmi2Status::Ok | Fmi2Status::Pending => LOG_CALLS,
-            Fmi2Status::Warning => LOG_WARNING,
-            Fmi2Status::Discard => LOG_DISCARD,
-            Fmi2Status::Error => LOG_ERROR,
-            Fmi2Status::Fatal => LOG_FATAL,
-        };
-        if status == Fmi2Status::Ok && !self.debug_enabled() {
-            return;
-        }
-        let text = c_string(message);
         // SAFETY: the importer promised a valid logger for the lifetime of the instance
         // (section 2.1.5); all pointers passed are valid NUL-terminated strings that outlive
         // the call, and the format "%s" consumes exactly the one string argument given.
@@ -84,10 +53,10 @@ impl Logger {
             logger(
                 self.callbacks.component_environment,
                 self.instance_name.as_ptr(),
-                status,
+                Fmi2Status::from(status),
                 category.as_ptr(),
                 c"%s".as_ptr(),
-                text.as_ptr(),
+                message.as_ptr(),
             );
         }
     }

@@ -13,5 +13,10 @@ pub mod state_machine;
 pub mod types;
 pub mod uri;
 
+/// FMI 2.0: the [`Version`](crate::fmi_common::instance::Version) of the generic instance
+/// ([`instance`]) and the [`Dialect`](crate::fmi_common::xml::Dialect) of the description
+/// ([`model_description`]).
+pub struct Fmi2;
+
 #[cfg(test)]
 mod tests;

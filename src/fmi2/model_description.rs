@@ -3,26 +3,16 @@
 
 use std::io;
 
-use quick_xml::Writer;
-use quick_xml::events::{BytesDecl, Event};
 use sha2::{Digest, Sha256};
 
+use super::Fmi2;
 use super::logging::WRAPPER_CATEGORIES;
-use crate::fmi_common::model_api::ModelStructure;
+use crate::fmi_common::model_api::{InstanceKind, ModelStructure};
 use crate::fmi_common::variables::{Causality, ModelInfo, Variable, check_variable_table};
 use crate::fmi_common::xml::{
-    XmlWriter, check_info, check_structure, flag, initial_unknowns, model_attributes,
-    write_default_experiment, write_log_categories, write_unit_definitions, xs_double,
+    Description, Dialect, XmlWriter, check_info, check_structure, flag, initial_unknowns,
+    variable_element, write_description, xs_double,
 };
-
-/// What `modelDescription.xml` is made of: the model-level data, the variable table and the
-/// model structure of a core.
-#[derive(Clone, Copy)]
-struct Description<'a> {
-    info: &'a ModelInfo,
-    vars: &'a [Variable],
-    structure: &'a ModelStructure,
-}
 
 /// The complete `modelDescription.xml`, with the GUID of [`guid_for`].
 pub fn model_description_xml(
@@ -35,7 +25,7 @@ pub fn model_description_xml(
         vars,
         structure,
     };
-    write_xml(d, &guid_for(info, vars, structure)?)
+    write_description::<Fmi2>(d, &guid_for(info, vars, structure)?)
 }
 
 /// The GUID (section 2.2.1): a UUID in braces made of the SHA-256 of the description
@@ -51,7 +41,7 @@ pub fn guid_for(
         vars,
         structure,
     };
-    let hash = Sha256::digest(write_xml(d, "")?.as_bytes());
+    let hash = Sha256::digest(write_description::<Fmi2>(d, "")?.as_bytes());
     let mut b = [0u8; 16];
     b.copy_from_slice(&hash[..16]);
     b[6] = (b[6] & 0x0f) | 0x80;
@@ -67,90 +57,162 @@ pub fn guid_for(
     ))
 }
 
-/// All log categories: the wrapper's, then the model's that are not among them.
-pub fn log_categories(info: &ModelInfo) -> Vec<(String, String)> {
-    crate::fmi_common::xml::log_categories(&WRAPPER_CATEGORIES, info)
-}
+impl Dialect for Fmi2 {
+    const FMI_VERSION: &'static str = "2.0";
+    const TOKEN: &'static str = "guid";
+    const ROOT_ATTRIBUTES: &'static [(&'static str, &'static str)] = &[
+        ("variableNamingConvention", "flat"),
+        ("numberOfEventIndicators", "0"),
+    ];
+    const CATEGORIES: [(&'static str, &'static str); 5] = WRAPPER_CATEGORIES;
 
-fn write_xml(d: Description, guid: &str) -> Result<String, String> {
-    check_info(d.info)?;
-    check_variable_table(d.vars)?;
-    check_structure(d.vars, d.structure)?;
-    let mut w = Writer::new_with_indent(Vec::new(), b' ', 2);
-    write_document(&mut w, d, guid).map_err(|e| format!("writing modelDescription.xml: {e}"))?;
-    String::from_utf8(w.into_inner()).map_err(|e| e.to_string())
-}
+    fn check(d: Description) -> Result<(), String> {
+        check_info(d.info)?;
+        check_variable_table(d.vars)?;
+        check_structure(d.vars, d.structure)
+    }
 
-fn write_document(w: &mut XmlWriter, d: Description, guid: &str) -> io::Result<()> {
-    let (info, vars) = (d.info, d.vars);
-    w.write_event(Event::Decl(BytesDecl::new("1.0", Some("UTF-8"), None)))?;
-    w.create_element("fmiModelDescription")
-        .with_attributes([
-            ("fmiVersion", "2.0"),
-            ("modelName", info.model_name.as_str()),
-            ("guid", guid),
-        ])
-        .with_attributes(model_attributes(info))
-        .with_attributes([
-            ("variableNamingConvention", "flat"),
-            ("numberOfEventIndicators", "0"),
-        ])
-        .write_inner_content(|w| {
-            if info.model_exchange {
-                write_model_exchange(w, info)?;
+    /// `<ModelExchange>` (section 3.3.1: the same binary and model identifier as
+    /// Co-Simulation) and `<CoSimulation>` (section 4.3.1) with their capability flags.
+    fn interface_attributes(kind: InstanceKind, info: &ModelInfo) -> Vec<(&'static str, &str)> {
+        let mut attributes = vec![
+            ("modelIdentifier", info.model_identifier.as_str()),
+            ("needsExecutionTool", "false"),
+        ];
+        attributes.extend_from_slice(match kind {
+            InstanceKind::ModelExchange => &[("completedIntegratorStepNotNeeded", "true")][..],
+            InstanceKind::CoSimulation => &[
+                ("canHandleVariableCommunicationStepSize", "true"),
+                ("canInterpolateInputs", "false"),
+                ("maxOutputDerivativeOrder", "0"),
+                ("canRunAsynchronuously", "false"),
+            ],
+        });
+        attributes.extend([
+            ("canBeInstantiatedOnlyOncePerProcess", "false"),
+            ("canNotUseMemoryManagementFunctions", "true"),
+            ("canGetAndSetFMUstate", "true"),
+            ("canSerializeFMUstate", "true"),
+            (
+                "providesDirectionalDerivative",
+                flag(info.directional_derivatives),
+            ),
+        ]);
+        attributes
+    }
+
+    /// A `<ScalarVariable>` (section 2.2.7) with its `<Real>`; a state derivative names its
+    /// state's index in `derivative`.
+    fn write_variable(w: &mut XmlWriter, vars: &[Variable], v: &Variable) -> io::Result<()> {
+        let start = v.start.map(xs_double);
+        let derivative = v.derivative.map(|state| index_of(vars, state));
+        variable_element(w, "ScalarVariable", v).write_inner_content(|w| {
+            let mut real_el = w.create_element("Real");
+            if let Some(unit) = &v.unit {
+                real_el = real_el.with_attribute(("unit", unit.as_str()));
             }
-            write_co_simulation(w, info)?;
-            write_unit_definitions(w, vars)?;
-            write_log_categories(w, &log_categories(info))?;
-            write_default_experiment(w, info)?;
-            write_variables(w, vars)?;
-            write_model_structure(w, d)
+            if let Some(state) = &derivative {
+                real_el = real_el.with_attribute(("derivative", state.as_str()));
+            }
+            if let Some(start) = &start {
+                real_el = real_el.with_attribute(("start", start.as_str()));
+            }
+            real_el.write_empty()?;
+            Ok(())
         })?;
-    Ok(())
-}
+        Ok(())
+    }
 
-/// `<ModelExchange>` with the capability flags (section 3.3.1): the same binary and model
-/// identifier as Co-Simulation.
-fn write_model_exchange(w: &mut XmlWriter, info: &ModelInfo) -> io::Result<()> {
-    w.create_element("ModelExchange")
-        .with_attributes([
-            ("modelIdentifier", info.model_identifier.as_str()),
-            ("needsExecutionTool", "false"),
-            ("completedIntegratorStepNotNeeded", "true"),
-            ("canBeInstantiatedOnlyOncePerProcess", "false"),
-            ("canNotUseMemoryManagementFunctions", "true"),
-            ("canGetAndSetFMUstate", "true"),
-            ("canSerializeFMUstate", "true"),
-            (
-                "providesDirectionalDerivative",
-                flag(info.directional_derivatives),
-            ),
-        ])
-        .write_empty()?;
-    Ok(())
-}
-
-/// `<CoSimulation>` with the capability flags (section 4.3.1).
-fn write_co_simulation(w: &mut XmlWriter, info: &ModelInfo) -> io::Result<()> {
-    w.create_element("CoSimulation")
-        .with_attributes([
-            ("modelIdentifier", info.model_identifier.as_str()),
-            ("needsExecutionTool", "false"),
-            ("canHandleVariableCommunicationStepSize", "true"),
-            ("canInterpolateInputs", "false"),
-            ("maxOutputDerivativeOrder", "0"),
-            ("canRunAsynchronuously", "false"),
-            ("canBeInstantiatedOnlyOncePerProcess", "false"),
-            ("canNotUseMemoryManagementFunctions", "true"),
-            ("canGetAndSetFMUstate", "true"),
-            ("canSerializeFMUstate", "true"),
-            (
-                "providesDirectionalDerivative",
-                flag(info.directional_derivatives),
-            ),
-        ])
-        .write_empty()?;
-    Ok(())
+    /// `<ModelStructure>` (section 2.2.8), with 1-based ScalarVariable indices.
+    ///
+    /// * `<Outputs>`: every output, in index order, with the states (and inputs) it depends on
+    ///   from the core's [`ModelStructure`].
+    /// * `<Derivatives>`: every state derivative, in the order of the state vector, with the
+    ///   states and inputs it depends on.
+    /// * `<InitialUnknowns>`: exactly the list section 2.2.8 prescribes — outputs with initial
+    ///   approx or calculated, calculated parameters, and the continuous states and state
+    ///   derivatives with initial approx or calculated — in index order. Their values in
+    ///   Initialization Mode are computed from the parameters with initial exact (the Knowns),
+    ///   so `dependencies=""` ("depends on no Known") would be false; the attribute is omitted,
+    ///   which the standard defines as "depends on all Knowns" — always correct, without the
+    ///   generic layer having to know the physics.
+    fn write_model_structure(w: &mut XmlWriter, d: Description) -> io::Result<()> {
+        let vars = d.vars;
+        let list = |vrs: &[u32]| -> String {
+            let mut indices: Vec<usize> = vrs.iter().map(|&vr| index(vars, vr)).collect();
+            indices.sort_unstable();
+            let text: Vec<String> = indices.iter().map(usize::to_string).collect();
+            text.join(" ")
+        };
+        let outputs: Vec<(String, Option<String>)> = vars
+            .iter()
+            .filter(|v| v.causality == Causality::Output)
+            .map(|v| {
+                let deps = d
+                    .structure
+                    .outputs
+                    .iter()
+                    .find(|o| o.output == v.value_reference);
+                (
+                    index_of(vars, v.value_reference),
+                    deps.map(|o| list(&o.dependencies)),
+                )
+            })
+            .collect();
+        let derivatives: Vec<(String, String)> = d
+            .structure
+            .derivatives
+            .iter()
+            .map(|s| (index_of(vars, s.derivative), list(&s.dependencies)))
+            .collect();
+        let initial_unknowns: Vec<String> = initial_unknowns(vars, d.structure)
+            .into_iter()
+            .map(|(i, _)| (i + 1).to_string())
+            .collect();
+        w.create_element("ModelStructure")
+            .write_inner_content(|w| {
+                if !outputs.is_empty() {
+                    w.create_element("Outputs").write_inner_content(|w| {
+                        for (index, deps) in &outputs {
+                            let mut el = w
+                                .create_element("Unknown")
+                                .with_attribute(("index", index.as_str()));
+                            if let Some(deps) = deps {
+                                el = el.with_attribute(("dependencies", deps.as_str()));
+                            }
+                            el.write_empty()?;
+                        }
+                        Ok(())
+                    })?;
+                }
+                if !derivatives.is_empty() {
+                    w.create_element("Derivatives").write_inner_content(|w| {
+                        for (index, deps) in &derivatives {
+                            w.create_element("Unknown")
+                                .with_attributes([
+                                    ("index", index.as_str()),
+                                    ("dependencies", deps.as_str()),
+                                ])
+                                .write_empty()?;
+                        }
+                        Ok(())
+                    })?;
+                }
+                if !initial_unknowns.is_empty() {
+                    w.create_element("InitialUnknowns")
+                        .write_inner_content(|w| {
+                            for index in &initial_unknowns {
+                                w.create_element("Unknown")
+                                    .with_attribute(("index", index.as_str()))
+                                    .write_empty()?;
+                            }
+                            Ok(())
+                        })?;
+                }
+                Ok(())
+            })?;
+        Ok(())
+    }
 }
 
 /// The 1-based index of the variable with value reference `vr` in `<ModelVariables>`.
@@ -164,138 +226,4 @@ fn index(vars: &[Variable], vr: u32) -> usize {
 
 fn index_of(vars: &[Variable], vr: u32) -> String {
     index(vars, vr).to_string()
-}
-
-/// `<ModelVariables>` (section 2.2.7). `initial` is written whenever the table allows it,
-/// as the declared or default value, so readers need not know the defaults; a state
-/// derivative names its state's index in `derivative`.
-fn write_variables(w: &mut XmlWriter, vars: &[Variable]) -> io::Result<()> {
-    w.create_element("ModelVariables")
-        .write_inner_content(|w| {
-            for v in vars {
-                let vr = v.value_reference.to_string();
-                let mut sv = w
-                    .create_element("ScalarVariable")
-                    .with_attributes([("name", v.name.as_str()), ("valueReference", &vr)]);
-                if !v.description.is_empty() {
-                    sv = sv.with_attribute(("description", v.description.as_str()));
-                }
-                sv = sv.with_attributes([
-                    ("causality", v.causality.as_str()),
-                    ("variability", v.variability.as_str()),
-                ]);
-                if let Some(initial) = v.effective_initial() {
-                    sv = sv.with_attribute(("initial", initial.as_str()));
-                }
-                let start = v.start.map(xs_double);
-                let derivative = v.derivative.map(|state| index_of(vars, state));
-                sv.write_inner_content(|w| {
-                    let mut real_el = w.create_element("Real");
-                    if let Some(unit) = &v.unit {
-                        real_el = real_el.with_attribute(("unit", unit.as_str()));
-                    }
-                    if let Some(state) = &derivative {
-                        real_el = real_el.with_attribute(("derivative", state.as_str()));
-                    }
-                    if let Some(start) = &start {
-                        real_el = real_el.with_attribute(("start", start.as_str()));
-                    }
-                    real_el.write_empty()?;
-                    Ok(())
-                })?;
-            }
-            Ok(())
-        })?;
-    Ok(())
-}
-
-/// `<ModelStructure>` (section 2.2.8), with 1-based ScalarVariable indices.
-///
-/// * `<Outputs>`: every output, in index order, with the states (and inputs) it depends on
-///   from the core's [`ModelStructure`].
-/// * `<Derivatives>`: every state derivative, in the order of the state vector, with the
-///   states and inputs it depends on.
-/// * `<InitialUnknowns>`: exactly the list section 2.2.8 prescribes — outputs with initial
-///   approx or calculated, calculated parameters, and the continuous states and state
-///   derivatives with initial approx or calculated — in index order. Their values in
-///   Initialization Mode are computed from the parameters with initial exact (the Knowns),
-///   so `dependencies=""` ("depends on no Known") would be false; the attribute is omitted,
-///   which the standard defines as "depends on all Knowns" — always correct, without the
-///   generic layer having to know the physics.
-fn write_model_structure(w: &mut XmlWriter, d: Description) -> io::Result<()> {
-    let vars = d.vars;
-    let list = |vrs: &[u32]| -> String {
-        let mut indices: Vec<usize> = vrs.iter().map(|&vr| index(vars, vr)).collect();
-        indices.sort_unstable();
-        let text: Vec<String> = indices.iter().map(usize::to_string).collect();
-        text.join(" ")
-    };
-    let outputs: Vec<(String, Option<String>)> = vars
-        .iter()
-        .filter(|v| v.causality == Causality::Output)
-        .map(|v| {
-            let deps = d
-                .structure
-                .outputs
-                .iter()
-                .find(|o| o.output == v.value_reference);
-            (
-                index_of(vars, v.value_reference),
-                deps.map(|o| list(&o.dependencies)),
-            )
-        })
-        .collect();
-    let derivatives: Vec<(String, String)> = d
-        .structure
-        .derivatives
-        .iter()
-        .map(|s| (index_of(vars, s.derivative), list(&s.dependencies)))
-        .collect();
-    let initial_unknowns: Vec<String> = initial_unknowns(vars, d.structure)
-        .into_iter()
-        .map(|(i, _)| (i + 1).to_string())
-        .collect();
-    w.create_element("ModelStructure")
-        .write_inner_content(|w| {
-            if !outputs.is_empty() {
-                w.create_element("Outputs").write_inner_content(|w| {
-                    for (index, deps) in &outputs {
-                        let mut el = w
-                            .create_element("Unknown")
-                            .with_attribute(("index", index.as_str()));
-                        if let Some(deps) = deps {
-                            el = el.with_attribute(("dependencies", deps.as_str()));
-                        }
-                        el.write_empty()?;
-                    }
-                    Ok(())
-                })?;
-            }
-            if !derivatives.is_empty() {
-                w.create_element("Derivatives").write_inner_content(|w| {
-                    for (index, deps) in &derivatives {
-                        w.create_element("Unknown")
-                            .with_attributes([
-                                ("index", index.as_str()),
-                                ("dependencies", deps.as_str()),
-                            ])
-                            .write_empty()?;
-                    }
-                    Ok(())
-                })?;
-            }
-            if !initial_unknowns.is_empty() {
-                w.create_element("InitialUnknowns")
-                    .write_inner_content(|w| {
-                        for index in &initial_unknowns {
-                            w.create_element("Unknown")
-                                .with_attribute(("index", index.as_str()))
-                                .write_empty()?;
-                        }
-                        Ok(())
-                    })?;
-            }
-            Ok(())
-        })?;
-    Ok(())
 }

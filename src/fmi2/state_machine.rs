@@ -6,7 +6,6 @@
 //! set in a state is [`States::set_rule`].
 
 use crate::fmi_common::model_api::InstanceKind;
-use crate::fmi_common::state_machine::SetRule;
 pub use crate::fmi_common::state_machine::{Experiment, Mask, States, names};
 
 /// The states of the two state machines this FMU can be in.
@@ -61,6 +60,13 @@ impl States for Phase {
         Phase::ContinuousTimeMode,
     ];
 
+    const INSTANTIATED: Phase = Phase::Instantiated;
+    const INITIALIZATION_MODE: Phase = Phase::InitializationMode;
+    const TERMINATED: Phase = Phase::Terminated;
+    const ERROR: Phase = Phase::Error;
+    const INPUTS_AND_TUNABLE_PARAMETERS: Mask = Phase::StepComplete.bit() | Phase::EventMode.bit();
+    const CONTINUOUS_INPUTS: Mask = Phase::ContinuousTimeMode.bit();
+
     fn name(self) -> &'static str {
         match self {
             Phase::Instantiated => "instantiated",
@@ -73,26 +79,15 @@ impl States for Phase {
             Phase::ContinuousTimeMode => "continuousTimeMode",
         }
     }
-
-    fn bit(self) -> Mask {
-        Phase::bit(self)
-    }
-
-    fn set_rule(self) -> SetRule {
-        match self {
-            Phase::Instantiated => SetRule::StartValues,
-            Phase::InitializationMode => SetRule::ExactStartValues,
-            Phase::StepComplete | Phase::EventMode => SetRule::InputsAndTunableParameters,
-            Phase::ContinuousTimeMode => SetRule::ContinuousInputs,
-            _ => SetRule::Nothing,
-        }
-    }
 }
 
 /// The states each function may be called in (sections 3.2.3 and 4.2.4). Allowed in every
 /// state, and so not checked: `fmi2SetDebugLogging`, `fmi2Reset`, `fmi2FreeInstance` and the
 /// FMU-state functions (`fmi2GetFMUstate` … `fmi2DeSerializeFMUstate`). Functions this FMU
 /// does not offer (input and output derivatives) fail in every state.
+///
+/// `fmi2ExitInitializationMode` is allowed in Initialization Mode only, in both versions: the generic
+/// instance checks it.
 pub mod allowed {
     use super::Mask;
     use super::Phase::*;
@@ -108,7 +103,6 @@ pub mod allowed {
 
     pub const SETUP_EXPERIMENT: Mask = INSTANTIATED;
     pub const ENTER_INITIALIZATION_MODE: Mask = INSTANTIATED;
-    pub const EXIT_INITIALIZATION_MODE: Mask = INITIALIZATION_MODE;
     pub const TERMINATE: Mask = STEP_COMPLETE | STEP_FAILED | EVENT_MODE | CONTINUOUS_TIME_MODE;
     /// `fmi2Get{Real,Integer,Boolean,String}`; in stepFailed and error for debugging only.
     pub const GET_VALUES: Mask = INITIALIZATION_MODE

@@ -8,6 +8,8 @@
 
 use std::ffi::{c_char, c_int, c_void};
 
+use crate::fmi_common::logging::Status;
+
 /// Opaque pointer to an FMU instance (`void*`).
 pub type fmi2Component = *mut c_void;
 /// Opaque pointer the importer passes in and gets back unchanged in callbacks.
@@ -45,6 +47,18 @@ pub enum Fmi2Status {
 
 /// The C name of the status enumeration.
 pub type fmi2Status = Fmi2Status;
+
+impl From<Status> for Fmi2Status {
+    fn from(status: Status) -> Self {
+        match status {
+            Status::Ok => Fmi2Status::Ok,
+            Status::Warning => Fmi2Status::Warning,
+            Status::Discard => Fmi2Status::Discard,
+            Status::Error => Fmi2Status::Error,
+            Status::Fatal => Fmi2Status::Fatal,
+        }
+    }
+}
 
 /// `fmi2Type` (section 2.1.5): which interface `fmi2Instantiate` is asked for.
 pub type fmi2Type = c_int;

@@ -14,15 +14,16 @@
 //! two threads at once.
 #![allow(clippy::missing_safety_doc)]
 
-use std::ffi::c_void;
 use std::panic::{AssertUnwindSafe, catch_unwind};
 use std::ptr::null_mut;
 
+use super::Fmi3;
 use super::instance::{Instance, Request};
-use super::logging::Logger;
+use super::logging::logger;
 use super::state_machine::Experiment;
 use super::types::*;
 use crate::fmi_common::calls::with_instance;
+use crate::fmi_common::logging::Status;
 use crate::fmi_common::model_api::FmuCore;
 use crate::fmi_common::shell::{in_slice, opt_str, out_slice, panic_message};
 
@@ -41,10 +42,10 @@ pub struct CRequest {
 pub unsafe fn instantiate<M: FmuCore>(r: CRequest) -> fmi3Instance {
     let (name, token, resources) =
         unsafe { (opt_str(r.name), opt_str(r.token), opt_str(r.resource_path)) };
-    let logger = || Logger::new(r.log_message, r.environment, r.logging_on != FMI3_FALSE);
+    let logger = || logger(r.log_message, r.environment, r.logging_on != FMI3_FALSE);
     let (Some(name), Some(token)) = (name.as_deref(), token.as_deref()) else {
         logger().log(
-            Fmi3Status::Error,
+            Status::Error,
             "fmi3Instantiate: instanceName or instantiationToken is NULL",
         );
         return null_mut();
@@ -57,7 +58,7 @@ pub unsafe fn instantiate<M: FmuCore>(r: CRequest) -> fmi3Instance {
         event_mode_used: r.event_mode_used != FMI3_FALSE,
     };
     match catch_unwind(AssertUnwindSafe(|| {
-        Instance::<M>::instantiate(request, logger())
+        Instance::<M>::create(request, logger())
     })) {
         Ok(Some(instance)) => Box::into_raw(Box::new(instance)).cast(),
         Ok(None) => null_mut(),
@@ -66,7 +67,7 @@ pub unsafe fn instantiate<M: FmuCore>(r: CRequest) -> fmi3Instance {
                 "fmi3Instantiate: internal error (panic: {})",
                 panic_message(&*payload)
             );
-            logger().log(Fmi3Status::Error, &msg);
+            logger().log(Status::Error, &msg);
             null_mut()
         }
     }
@@ -81,44 +82,12 @@ pub unsafe fn instantiate_not_offered(
     log_message: fmi3LogMessageCallback,
 ) -> fmi3Instance {
     let _ = catch_unwind(|| {
-        Logger::new(log_message, environment, false).log(
-            Fmi3Status::Error,
+        logger(log_message, environment, false).log(
+            Status::Error,
             &format!("{func}: {what} is not offered by this FMU (see modelDescription.xml)"),
         )
     });
     null_mut()
-}
-
-pub unsafe fn free_instance<M: FmuCore>(c: fmi3Instance) {
-    if !c.is_null() {
-        // SAFETY: `c` came from `instantiate::<M>` and is not used after this call.
-        let instance = unsafe { Box::from_raw(c.cast::<Instance<M>>()) };
-        let _ = catch_unwind(AssertUnwindSafe(move || drop(instance)));
-    }
-}
-
-pub unsafe fn set_debug_logging<M: FmuCore>(
-    c: fmi3Instance,
-    on: fmi3Boolean,
-    n: usize,
-    categories: *const fmi3String,
-) -> Fmi3Status {
-    const F: &str = "fmi3SetDebugLogging";
-    unsafe {
-        with_instance::<Instance<M>>(c, F, |inst| {
-            let Some(pointers) = in_slice(categories, n) else {
-                return inst.null_argument(F, "categories");
-            };
-            let mut names = Vec::with_capacity(n);
-            for &p in pointers {
-                let Some(name) = opt_str(p) else {
-                    return inst.null_argument(F, "categories[i]");
-                };
-                names.push(name.into_owned());
-            }
-            inst.set_debug_logging(on != FMI3_FALSE, &names)
-        })
-    }
 }
 
 pub unsafe fn enter_initialization_mode<M: FmuCore>(
@@ -135,19 +104,10 @@ pub unsafe fn enter_initialization_mode<M: FmuCore>(
         tolerance: (tolerance_defined != FMI3_FALSE).then_some(tolerance),
     };
     unsafe {
-        with_instance::<Instance<M>>(c, "fmi3EnterInitializationMode", |inst| {
+        with_instance::<Fmi3, M>(c, "fmi3EnterInitializationMode", |inst| {
             inst.enter_initialization_mode(experiment)
         })
     }
-}
-
-/// The calls without arguments: `call` is the [`Instance`] method of `func`.
-pub unsafe fn simple<M: FmuCore>(
-    c: fmi3Instance,
-    func: &'static str,
-    call: fn(&mut Instance<M>) -> Fmi3Status,
-) -> Fmi3Status {
-    unsafe { with_instance::<Instance<M>>(c, func, call) }
 }
 
 /// Writes `value` to each output flag that is not NULL; a NULL one is an error.
@@ -156,7 +116,7 @@ unsafe fn set_flags<M: FmuCore>(
     func: &str,
     flags: &[(&str, *mut fmi3Boolean)],
     value: fmi3Boolean,
-) -> Result<(), Fmi3Status> {
+) -> Result<(), Status> {
     if let Some((name, _)) = flags.iter().find(|(_, p)| p.is_null()) {
         return Err(inst.null_argument(func, name));
     }
@@ -178,7 +138,7 @@ pub unsafe fn update_discrete_states<M: FmuCore>(
 ) -> Fmi3Status {
     const F: &str = "fmi3UpdateDiscreteStates";
     unsafe {
-        with_instance::<Instance<M>>(c, F, |inst| {
+        with_instance::<Fmi3, M>(c, F, |inst| {
             if next_event_time.is_null() {
                 return inst.null_argument(F, "nextEventTime");
             }
@@ -190,7 +150,7 @@ pub unsafe fn update_discrete_states<M: FmuCore>(
                 ("nextEventTimeDefined", next_event_time_defined),
             ];
             let status = inst.update_discrete_states();
-            if status == Fmi3Status::Ok
+            if status == Status::Ok
                 && let Err(s) = set_flags(inst, F, &flags, FMI3_FALSE)
             {
                 return s;
@@ -198,73 +158,6 @@ pub unsafe fn update_discrete_states<M: FmuCore>(
             status
         })
     }
-}
-
-pub unsafe fn get_float64<M: FmuCore>(
-    c: fmi3Instance,
-    vr: *const fmi3ValueReference,
-    nvr: usize,
-    values: *mut f64,
-    n_values: usize,
-) -> Fmi3Status {
-    const F: &str = "fmi3GetFloat64";
-    unsafe {
-        with_instance::<Instance<M>>(c, F, |inst| {
-            match (in_slice(vr, nvr), out_slice(values, n_values)) {
-                (Some(vrs), Some(values)) => inst.get_float64(vrs, values),
-                (None, _) => inst.null_argument(F, "valueReferences"),
-                (_, None) => inst.null_argument(F, "values"),
-            }
-        })
-    }
-}
-
-pub unsafe fn set_float64<M: FmuCore>(
-    c: fmi3Instance,
-    vr: *const fmi3ValueReference,
-    nvr: usize,
-    values: *const f64,
-    n_values: usize,
-) -> Fmi3Status {
-    const F: &str = "fmi3SetFloat64";
-    unsafe {
-        with_instance::<Instance<M>>(c, F, |inst| {
-            match (in_slice(vr, nvr), in_slice(values, n_values)) {
-                (Some(vrs), Some(values)) => inst.set_float64(vrs, values),
-                (None, _) => inst.null_argument(F, "valueReferences"),
-                (_, None) => inst.null_argument(F, "values"),
-            }
-        })
-    }
-}
-
-/// `fmi3Get/Set{Float32,Int8,…,Binary,Clock}` (`func`, whose name ends in the type); `values`
-/// is the value array, of whichever type.
-pub unsafe fn no_variables<M: FmuCore>(
-    c: fmi3Instance,
-    func: &'static str,
-    vr: *const fmi3ValueReference,
-    nvr: usize,
-    values: *const c_void,
-) -> Fmi3Status {
-    let setter = func.starts_with("fmi3Set");
-    let type_name = func.get("fmi3Get".len()..).unwrap_or(func);
-    unsafe {
-        with_instance::<Instance<M>>(c, func, |inst| match in_slice(vr, nvr) {
-            None => inst.null_argument(func, "valueReferences"),
-            Some(_) if nvr > 0 && values.is_null() => inst.null_argument(func, "values"),
-            Some(vrs) => inst.no_variables_of_type(func, type_name, setter, vrs),
-        })
-    }
-}
-
-/// Functions of interfaces or capabilities (`what`) this FMU does not offer.
-pub unsafe fn not_offered<M: FmuCore>(
-    c: fmi3Instance,
-    func: &'static str,
-    what: &str,
-) -> Fmi3Status {
-    unsafe { with_instance::<Instance<M>>(c, func, |inst| inst.not_offered(func, what)) }
 }
 
 #[allow(clippy::too_many_arguments)]
@@ -279,7 +172,7 @@ pub unsafe fn do_step<M: FmuCore>(
 ) -> Fmi3Status {
     const F: &str = "fmi3DoStep";
     unsafe {
-        with_instance::<Instance<M>>(c, F, |inst| {
+        with_instance::<Fmi3, M>(c, F, |inst| {
             let flags = [
                 ("eventHandlingNeeded", event_handling_needed),
                 ("terminateSimulation", terminate_simulation),
@@ -305,7 +198,7 @@ pub unsafe fn completed_integrator_step<M: FmuCore>(
 ) -> Fmi3Status {
     const F: &str = "fmi3CompletedIntegratorStep";
     unsafe {
-        with_instance::<Instance<M>>(c, F, |inst| {
+        with_instance::<Fmi3, M>(c, F, |inst| {
             let flags = [
                 ("enterEventMode", enter_event_mode),
                 ("terminateSimulation", terminate_simulation),
@@ -314,7 +207,7 @@ pub unsafe fn completed_integrator_step<M: FmuCore>(
                 return inst.null_argument(F, name);
             }
             let status = inst.completed_integrator_step();
-            if status == Fmi3Status::Ok
+            if status == Status::Ok
                 && let Err(s) = set_flags(inst, F, &flags, FMI3_FALSE)
             {
                 return s;
@@ -325,7 +218,7 @@ pub unsafe fn completed_integrator_step<M: FmuCore>(
 }
 
 pub unsafe fn set_time<M: FmuCore>(c: fmi3Instance, time: f64) -> Fmi3Status {
-    unsafe { with_instance::<Instance<M>>(c, "fmi3SetTime", |inst| inst.set_time(time)) }
+    unsafe { with_instance::<Fmi3, M>(c, "fmi3SetTime", |inst| inst.set_time(time)) }
 }
 
 pub unsafe fn set_continuous_states<M: FmuCore>(
@@ -335,7 +228,7 @@ pub unsafe fn set_continuous_states<M: FmuCore>(
 ) -> Fmi3Status {
     const F: &str = "fmi3SetContinuousStates";
     unsafe {
-        with_instance::<Instance<M>>(c, F, |inst| match in_slice(x, nx) {
+        with_instance::<Fmi3, M>(c, F, |inst| match in_slice(x, nx) {
             Some(x) => inst.set_continuous_states(x),
             None => inst.null_argument(F, "continuousStates"),
         })
@@ -352,7 +245,7 @@ pub unsafe fn state_vector<M: FmuCore>(
     call: fn(&mut M, &mut [f64]) -> Result<(), String>,
 ) -> Fmi3Status {
     unsafe {
-        with_instance::<Instance<M>>(c, func, |inst| match out_slice(out, n) {
+        with_instance::<Fmi3, M>(c, func, |inst| match out_slice(out, n) {
             Some(out) => inst.state_vector(func, out, call),
             None => inst.null_argument(func, "the output array"),
         })
@@ -366,7 +259,7 @@ pub unsafe fn get_event_indicators<M: FmuCore>(
 ) -> Fmi3Status {
     const F: &str = "fmi3GetEventIndicators";
     unsafe {
-        with_instance::<Instance<M>>(c, F, |inst| match out_slice(z, nz) {
+        with_instance::<Fmi3, M>(c, F, |inst| match out_slice(z, nz) {
             Some(_) => inst.event_indicators(nz),
             None => inst.null_argument(F, "eventIndicators"),
         })
@@ -382,14 +275,14 @@ pub unsafe fn get_number_of<M: FmuCore>(
     count: fn(&Instance<M>) -> usize,
 ) -> Fmi3Status {
     unsafe {
-        with_instance::<Instance<M>>(c, func, |inst| {
+        with_instance::<Fmi3, M>(c, func, |inst| {
             if n.is_null() {
                 return inst.null_argument(func, "the output argument");
             }
             match inst.number_of(func, count(inst)) {
                 Ok(value) => {
                     *n = value;
-                    Fmi3Status::Ok
+                    Status::Ok
                 }
                 Err(s) => s,
             }
@@ -411,7 +304,7 @@ pub unsafe fn get_directional_derivative<M: FmuCore>(
 ) -> Fmi3Status {
     const F: &str = "fmi3GetDirectionalDerivative";
     unsafe {
-        with_instance::<Instance<M>>(c, F, |inst| {
+        with_instance::<Fmi3, M>(c, F, |inst| {
             let (Some(u), Some(k)) = (in_slice(unknowns, n_unknowns), in_slice(knowns, n_knowns))
             else {
                 return inst.null_argument(F, "unknowns or knowns");

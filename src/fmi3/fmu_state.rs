@@ -7,9 +7,10 @@
 
 use serde::{Deserialize, Serialize};
 
+use super::Fmi3;
 use super::state_machine::{Experiment, Phase};
 use super::types::InstanceKind;
-use crate::fmi_common::fmu_state::{self, check_origin, seal, unseal};
+use crate::fmi_common::fmu_state::{self, Format, check_origin, seal, unseal};
 use crate::fmi_common::model_api::FmuCore;
 
 const MAGIC: &[u8; 8] = b"FMI3HSST";
@@ -29,29 +30,31 @@ struct Record {
     core: Vec<u8>,
 }
 
-impl<M: FmuCore> Snapshot<M> {
+impl Format for Fmi3 {
+    type Phase = Phase;
+
     /// The serialized bytes.
-    pub fn to_bytes(&self) -> Vec<u8> {
+    fn to_bytes<M: FmuCore>(state: &Snapshot<M>) -> Vec<u8> {
         let record = Record {
             version: FORMAT_VERSION,
-            token: self.token.clone(),
-            model_exchange: self.kind == InstanceKind::ModelExchange,
-            phase: self.phase,
-            experiment: self.experiment,
-            core: self.core.serialize_state(),
+            token: state.token.clone(),
+            model_exchange: state.kind == InstanceKind::ModelExchange,
+            phase: state.phase,
+            experiment: state.experiment,
+            core: state.core.serialize_state(),
         };
         let bytes = postcard::to_stdvec(&record).expect("serializing to memory cannot fail");
         seal(MAGIC, &bytes)
     }
 
-    /// Parses bytes of [`Snapshot::to_bytes`] for the instance with `token`, `interface` and
+    /// Parses bytes of [`Format::to_bytes`] for the instance with `token`, `interface` and
     /// `core`.
-    pub fn from_bytes(
+    fn from_bytes<M: FmuCore>(
         bytes: &[u8],
         token: &str,
         interface: InstanceKind,
         core: &M,
-    ) -> Result<Self, String> {
+    ) -> Result<Snapshot<M>, String> {
         let record: Record = postcard::from_bytes(unseal(MAGIC, bytes)?)
             .map_err(|e| format!("the serialized FMU state is malformed: {e}"))?;
         let state_interface = if record.model_exchange {

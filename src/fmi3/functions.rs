@@ -21,7 +21,9 @@ macro_rules! export_fmi3 {
 macro_rules! __fmi3_functions {
     ([$($attr:tt)*] $core:ty) => {
         use $crate::fmi3::exports as shell;
+        use $crate::fmi3::Fmi3;
         use $crate::fmi3::instance::Instance;
+        use $crate::fmi_common::calls as common;
         use $crate::fmi_common::model_api::FmuCore as _;
         use $crate::fmi3::types::*;
 
@@ -39,7 +41,7 @@ macro_rules! __fmi3_functions {
             n_categories: usize,
             categories: *const fmi3String,
         ) -> fmi3Status {
-            unsafe { shell::set_debug_logging::<$core>(c, logging_on, n_categories, categories) }
+            unsafe { common::set_debug_logging::<Fmi3, $core>(c, logging_on != FMI3_FALSE, n_categories, categories) }
         }
 
         // Creation and destruction of instances (section 2.3.1)
@@ -116,7 +118,7 @@ macro_rules! __fmi3_functions {
 
         $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)]
         pub unsafe extern "C" fn fmi3FreeInstance(c: fmi3Instance) {
-            unsafe { shell::free_instance::<$core>(c) }
+            unsafe { common::free_instance::<Fmi3, $core>(c) }
         }
 
         // Initialization, events, termination and reset (sections 2.3.2 to 2.3.5)
@@ -138,22 +140,22 @@ macro_rules! __fmi3_functions {
         $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)]
         pub unsafe extern "C" fn fmi3ExitInitializationMode(c: fmi3Instance) -> fmi3Status {
             let f = "fmi3ExitInitializationMode";
-            unsafe { shell::simple::<$core>(c, f, Instance::exit_initialization_mode) }
+            unsafe { common::simple::<Fmi3, $core>(c, f, Instance::exit_initialization_mode) }
         }
 
         $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)]
         pub unsafe extern "C" fn fmi3EnterEventMode(c: fmi3Instance) -> fmi3Status {
-            unsafe { shell::simple::<$core>(c, "fmi3EnterEventMode", Instance::enter_event_mode) }
+            unsafe { common::simple::<Fmi3, $core>(c, "fmi3EnterEventMode", Instance::enter_event_mode) }
         }
 
         $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)]
         pub unsafe extern "C" fn fmi3Terminate(c: fmi3Instance) -> fmi3Status {
-            unsafe { shell::simple::<$core>(c, "fmi3Terminate", Instance::terminate) }
+            unsafe { common::simple::<Fmi3, $core>(c, "fmi3Terminate", Instance::terminate) }
         }
 
         $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)]
         pub unsafe extern "C" fn fmi3Reset(c: fmi3Instance) -> fmi3Status {
-            unsafe { shell::simple::<$core>(c, "fmi3Reset", Instance::reset) }
+            unsafe { common::simple::<Fmi3, $core>(c, "fmi3Reset", Instance::reset) }
         }
 
         // Getting and setting variable values (section 2.3.3); Float64 variables only
@@ -166,7 +168,7 @@ macro_rules! __fmi3_functions {
             values: *mut fmi3Float64,
             n_values: usize,
         ) -> fmi3Status {
-            unsafe { shell::get_float64::<$core>(c, vr, nvr, values, n_values) }
+            unsafe { common::get_values::<Fmi3, $core>(c, (vr, nvr), (values, n_values)) }
         }
 
         $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)]
@@ -177,7 +179,7 @@ macro_rules! __fmi3_functions {
             values: *const fmi3Float64,
             n_values: usize,
         ) -> fmi3Status {
-            unsafe { shell::set_float64::<$core>(c, vr, nvr, values, n_values) }
+            unsafe { common::set_values::<Fmi3, $core>(c, (vr, nvr), (values, n_values)) }
         }
 
         $crate::__fmi3_no_variables!([$($attr)*] $core, fmi3GetFloat32, fmi3SetFloat32, fmi3Float32);
@@ -201,7 +203,7 @@ macro_rules! __fmi3_functions {
             values: *mut fmi3Binary,
             _n_values: usize,
         ) -> fmi3Status {
-            unsafe { shell::no_variables::<$core>(c, "fmi3GetBinary", vr, nvr, values.cast()) }
+            unsafe { common::no_variables::<Fmi3, $core>(c, "fmi3GetBinary", (vr, nvr), values.cast()) }
         }
 
         $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)]
@@ -213,7 +215,7 @@ macro_rules! __fmi3_functions {
             values: *const fmi3Binary,
             _n_values: usize,
         ) -> fmi3Status {
-            unsafe { shell::no_variables::<$core>(c, "fmi3SetBinary", vr, nvr, values.cast()) }
+            unsafe { common::no_variables::<Fmi3, $core>(c, "fmi3SetBinary", (vr, nvr), values.cast()) }
         }
 
         $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)]
@@ -223,7 +225,7 @@ macro_rules! __fmi3_functions {
             nvr: usize,
             values: *mut fmi3Clock,
         ) -> fmi3Status {
-            unsafe { shell::no_variables::<$core>(c, "fmi3GetClock", vr, nvr, values.cast()) }
+            unsafe { common::no_variables::<Fmi3, $core>(c, "fmi3GetClock", (vr, nvr), values.cast()) }
         }
 
         $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)]
@@ -233,7 +235,7 @@ macro_rules! __fmi3_functions {
             nvr: usize,
             values: *const fmi3Clock,
         ) -> fmi3Status {
-            unsafe { shell::no_variables::<$core>(c, "fmi3SetClock", vr, nvr, values.cast()) }
+            unsafe { common::no_variables::<Fmi3, $core>(c, "fmi3SetClock", (vr, nvr), values.cast()) }
         }
 
         // Variable dependency information (section 2.3.7): not offered
@@ -249,17 +251,17 @@ macro_rules! __fmi3_functions {
 
         $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)]
         pub unsafe extern "C" fn fmi3GetFMUState(c: fmi3Instance, state: *mut fmi3FMUState) -> fmi3Status {
-            unsafe { $crate::fmi_common::calls::get_fmu_state::<$crate::fmi3::instance::Instance<$core>>(c, "fmi3GetFMUState", state) }
+            unsafe { common::get_fmu_state::<Fmi3, $core>(c, "fmi3GetFMUState", state) }
         }
 
         $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)]
         pub unsafe extern "C" fn fmi3SetFMUState(c: fmi3Instance, state: fmi3FMUState) -> fmi3Status {
-            unsafe { $crate::fmi_common::calls::set_fmu_state::<$crate::fmi3::instance::Instance<$core>>(c, "fmi3SetFMUState", state) }
+            unsafe { common::set_fmu_state::<Fmi3, $core>(c, "fmi3SetFMUState", state) }
         }
 
         $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)]
         pub unsafe extern "C" fn fmi3FreeFMUState(c: fmi3Instance, state: *mut fmi3FMUState) -> fmi3Status {
-            unsafe { $crate::fmi_common::calls::free_fmu_state::<$crate::fmi3::instance::Instance<$core>>(c, "fmi3FreeFMUState", state) }
+            unsafe { common::free_fmu_state::<Fmi3, $core>(c, "fmi3FreeFMUState", state) }
         }
 
         $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)]
@@ -268,7 +270,7 @@ macro_rules! __fmi3_functions {
             state: fmi3FMUState,
             size: *mut usize,
         ) -> fmi3Status {
-            unsafe { $crate::fmi_common::calls::serialized_fmu_state_size::<$crate::fmi3::instance::Instance<$core>>(c, "fmi3SerializedFMUStateSize", state, size) }
+            unsafe { common::serialized_fmu_state_size::<Fmi3, $core>(c, "fmi3SerializedFMUStateSize", state, size) }
         }
 
         $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)]
@@ -278,7 +280,7 @@ macro_rules! __fmi3_functions {
             bytes: *mut fmi3Byte,
             size: usize,
         ) -> fmi3Status {
-            unsafe { $crate::fmi_common::calls::serialize_fmu_state::<$crate::fmi3::instance::Instance<$core>>(c, "fmi3SerializeFMUState", state, bytes.cast(), size) }
+            unsafe { common::serialize_fmu_state::<Fmi3, $core>(c, "fmi3SerializeFMUState", state, bytes.cast(), size) }
         }
 
         $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)]
@@ -288,7 +290,7 @@ macro_rules! __fmi3_functions {
             size: usize,
             state: *mut fmi3FMUState,
         ) -> fmi3Status {
-            unsafe { $crate::fmi_common::calls::deserialize_fmu_state::<$crate::fmi3::instance::Instance<$core>>(c, "fmi3DeserializeFMUState", bytes.cast(), size, state) }
+            unsafe { common::deserialize_fmu_state::<Fmi3, $core>(c, "fmi3DeserializeFMUState", bytes.cast(), size, state) }
         }
 
         // Partial derivatives (section 2.3.8)
@@ -375,7 +377,7 @@ macro_rules! __fmi3_functions {
 
         $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)]
         pub unsafe extern "C" fn fmi3EnterStepMode(c: fmi3Instance) -> fmi3Status {
-            unsafe { shell::simple::<$core>(c, "fmi3EnterStepMode", Instance::enter_step_mode) }
+            unsafe { common::simple::<Fmi3, $core>(c, "fmi3EnterStepMode", Instance::enter_step_mode) }
         }
 
         $crate::__fmi3_not_offered!([$($attr)*] $core, fmi3GetOutputDerivatives, "maxOutputDerivativeOrder > 0 (output derivatives)",
@@ -421,7 +423,7 @@ macro_rules! __fmi3_model_exchange {
         $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)]
         pub unsafe extern "C" fn fmi3EnterContinuousTimeMode(c: fmi3Instance) -> fmi3Status {
             let f = "fmi3EnterContinuousTimeMode";
-            unsafe { shell::simple::<$core>(c, f, Instance::enter_continuous_time_mode) }
+            unsafe { common::simple::<Fmi3, $core>(c, f, Instance::enter_continuous_time_mode) }
         }
 
         $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)]
@@ -520,7 +522,7 @@ macro_rules! __fmi3_no_variables {
             values: *mut $t,
             _n_values: usize,
         ) -> fmi3Status {
-            unsafe { shell::no_variables::<$core>(c, stringify!($get), vr, nvr, values.cast()) }
+            unsafe { common::no_variables::<Fmi3, $core>(c, stringify!($get), (vr, nvr), values.cast()) }
         }
 
         $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)]
@@ -531,7 +533,7 @@ macro_rules! __fmi3_no_variables {
             values: *const $t,
             _n_values: usize,
         ) -> fmi3Status {
-            unsafe { shell::no_variables::<$core>(c, stringify!($set), vr, nvr, values.cast()) }
+            unsafe { common::no_variables::<Fmi3, $core>(c, stringify!($set), (vr, nvr), values.cast()) }
         }
     };
 }
@@ -543,7 +545,7 @@ macro_rules! __fmi3_not_offered {
     ([$($attr:tt)*] $core:ty, $name:ident, $what:expr, ($($arg:ident: $t:ty),*)) => {
         $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)]
         pub unsafe extern "C" fn $name(c: fmi3Instance, $($arg: $t),*) -> fmi3Status {
-            unsafe { shell::not_offered::<$core>(c, stringify!($name), $what) }
+            unsafe { common::not_offered::<Fmi3, $core>(c, stringify!($name), $what) }
         }
     };
 }

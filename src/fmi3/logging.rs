@@ -1,16 +1,12 @@
 //! Logging through the importer's `fmi3LogMessageCallback` (FMI 3.0 standard, sections 2.3.1
-//! and 2.4.5, `fmi3SetDebugLogging`).
-//!
-//! Rules: the message is a plain string (FMI 3.0 has no printf format), the category is never
-//! NULL; messages with status `fmi3OK` are debug logging and go out only when debug logging is
-//! on for their category; all other statuses go out whenever a callback exists.
+//! and 2.4.5, `fmi3SetDebugLogging`), as the sink of the shared
+//! [`Logger`](crate::fmi_common::logging::Logger): the message is a plain string (FMI 3.0 has
+//! no printf format).
 
 use std::ffi::CStr;
 
 use super::types::{Fmi3Status, fmi3InstanceEnvironment, fmi3LogMessageCallback};
-use crate::fmi_common::shell::{DebugLogging, c_string};
-
-const LOG_CALLS: &str = "logCalls";
+use crate::fmi_common::logging::{self, LOG_CALLS, LogSink, Status};
 
 /// The categories the shell logs with, `(name, description)`, listed in `<LogCategories>`
 /// before the model's own; the status names are those the standard suggests (section 2.4.5).
@@ -22,70 +18,47 @@ pub const SHELL_CATEGORIES: [(&str, &str); 5] = [
     ("logStatusFatal", "Calls that returned fmi3Fatal"),
 ];
 
-/// The category of a message of `status`.
-fn category(status: Fmi3Status) -> &'static CStr {
-    match status {
-        Fmi3Status::Ok => c"logCalls",
-        Fmi3Status::Warning => c"logStatusWarning",
-        Fmi3Status::Discard => c"logStatusDiscard",
-        Fmi3Status::Error => c"logStatusError",
-        Fmi3Status::Fatal => c"logStatusFatal",
-    }
-}
-
-/// The instance's logger: the importer's callback and the debug-logging settings.
-pub struct Logger {
+/// The importer's callback and the environment it is given back.
+pub struct Callback {
     callback: fmi3LogMessageCallback,
     environment: fmi3InstanceEnvironment,
-    debug: DebugLogging,
 }
 
-impl Logger {
-    pub fn new(
-        callback: fmi3LogMessageCallback,
-        environment: fmi3InstanceEnvironment,
-        debug_on: bool,
-    ) -> Self {
-        Logger {
+/// The logger of an FMI 3.0 instance.
+pub type Logger = logging::Logger<Callback>;
+
+/// A logger through `callback`, which gets `environment` back.
+pub fn logger(
+    callback: fmi3LogMessageCallback,
+    environment: fmi3InstanceEnvironment,
+    debug_on: bool,
+) -> Logger {
+    Logger::new(
+        Callback {
             callback,
             environment,
-            debug: DebugLogging::new(debug_on),
-        }
+        },
+        debug_on,
+    )
+}
+
+impl LogSink for Callback {
+    fn connected(&self) -> bool {
+        self.callback.is_some()
     }
 
-    /// `fmi3SetDebugLogging`: switches debug logging for the given categories (all when the
-    /// list is empty). Returns the first unknown category name as the error.
-    pub fn set_debug_logging(
-        &mut self,
-        on: bool,
-        categories: &[String],
-        known: &[String],
-    ) -> Result<(), String> {
-        self.debug.set(on, categories, known)
-    }
-
-    /// Whether call traces go out; callers skip building them otherwise.
-    pub fn debug_enabled(&self) -> bool {
-        self.callback.is_some() && self.debug.enabled(LOG_CALLS)
-    }
-
-    /// Logs `message` with `status`, under the category of that status.
-    pub fn log(&self, status: Fmi3Status, message: &str) {
+    fn send(&self, status: Status, category: &CStr, message: &CStr) {
         let Some(callback) = self.callback else {
             return;
         };
-        if status == Fmi3Status::Ok && !self.debug_enabled() {
-            return;
-        }
-        let text = c_string(message);
         // SAFETY: the importer promised a callback valid for the instance's lifetime
         // (section 2.3.1); both strings are NUL-terminated and outlive the call.
         unsafe {
             callback(
                 self.environment,
-                status,
-                category(status).as_ptr(),
-                text.as_ptr(),
+                Fmi3Status::from(status),
+                category.as_ptr(),
+                message.as_ptr(),
             );
         }
     }

@@ -14,5 +14,10 @@ pub mod model_description;
 pub mod state_machine;
 pub mod types;
 
+/// FMI 3.0: the [`Version`](crate::fmi_common::instance::Version) of the generic instance
+/// ([`instance`]) and the [`Dialect`](crate::fmi_common::xml::Dialect) of the description
+/// ([`model_description`]).
+pub struct Fmi3;
+
 #[cfg(test)]
 mod tests;

@@ -6,7 +6,6 @@
 use serde::{Deserialize, Serialize};
 
 use super::types::InstanceKind;
-use crate::fmi_common::state_machine::SetRule;
 pub use crate::fmi_common::state_machine::{Experiment, Mask, States, names};
 
 /// The states this FMU can be in. Configuration, Reconfiguration, Clock Activation and
@@ -56,6 +55,13 @@ impl States for Phase {
         Phase::Error,
     ];
 
+    const INSTANTIATED: Phase = Phase::Instantiated;
+    const INITIALIZATION_MODE: Phase = Phase::InitializationMode;
+    const TERMINATED: Phase = Phase::Terminated;
+    const ERROR: Phase = Phase::Error;
+    const INPUTS_AND_TUNABLE_PARAMETERS: Mask = Phase::EventMode.bit() | Phase::StepMode.bit();
+    const CONTINUOUS_INPUTS: Mask = Phase::ContinuousTimeMode.bit();
+
     fn name(self) -> &'static str {
         match self {
             Phase::Instantiated => "Instantiated",
@@ -68,25 +74,14 @@ impl States for Phase {
             Phase::Error => "error (after an internal error)",
         }
     }
-
-    fn bit(self) -> Mask {
-        Phase::bit(self)
-    }
-
-    fn set_rule(self) -> SetRule {
-        match self {
-            Phase::Instantiated => SetRule::StartValues,
-            Phase::InitializationMode => SetRule::ExactStartValues,
-            Phase::EventMode | Phase::StepMode => SetRule::InputsAndTunableParameters,
-            Phase::ContinuousTimeMode => SetRule::ContinuousInputs,
-            _ => SetRule::Nothing,
-        }
-    }
 }
 
 /// The states each function may be called in. Allowed in every state, and so not checked:
 /// `fmi3SetDebugLogging`, `fmi3Reset`, `fmi3FreeInstance` and the FMU-state functions.
 /// Functions of capabilities this FMU does not declare fail in every state.
+///
+/// `fmi3ExitInitializationMode` is allowed in Initialization Mode only, in both versions: the generic
+/// instance checks it.
 pub mod allowed {
     use super::Mask;
     use super::Phase::*;
@@ -101,7 +96,6 @@ pub mod allowed {
     const ERROR: Mask = Error.bit();
 
     pub const ENTER_INITIALIZATION_MODE: Mask = INSTANTIATED;
-    pub const EXIT_INITIALIZATION_MODE: Mask = INITIALIZATION_MODE;
     /// Model Exchange from Continuous-Time Mode; Co-Simulation from Step Mode when the
     /// importer asked for Event Mode (`eventModeUsed`).
     pub const ENTER_EVENT_MODE: Mask = CONTINUOUS_TIME_MODE | STEP_MODE;

@@ -8,6 +8,8 @@
 
 use std::ffi::{c_char, c_void};
 
+use crate::fmi_common::logging::Status;
+
 pub use crate::fmi_common::model_api::InstanceKind;
 
 /// Opaque pointer to an FMU instance.
@@ -55,6 +57,18 @@ pub enum Fmi3Status {
 
 /// The C name of the status enumeration.
 pub type fmi3Status = Fmi3Status;
+
+impl From<Status> for Fmi3Status {
+    fn from(status: Status) -> Self {
+        match status {
+            Status::Ok => Fmi3Status::Ok,
+            Status::Warning => Fmi3Status::Warning,
+            Status::Discard => Fmi3Status::Discard,
+            Status::Error => Fmi3Status::Error,
+            Status::Fatal => Fmi3Status::Fatal,
+        }
+    }
+}
 
 /// `fmi3DependencyKind` (section 2.2.10), for the signature of `fmi3GetVariableDependencies`.
 pub type fmi3DependencyKind = std::ffi::c_int;

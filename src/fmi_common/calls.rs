@@ -1,203 +1,306 @@
-//! The bodies of the C functions that FMI 2.0 and 3.0 define alike, generic over a version's
-//! instance ([`ShellInstance`]): running a call on an instance behind its C pointer with panics
-//! caught, and the six FMU-state functions (get, set, free, size, serialize, deserialize:
+//! The bodies of the C functions that FMI 2.0 and 3.0 define alike, generic over the version
+//! `V` and the core `M` of an [`Instance`]: running a call on an instance behind its C pointer
+//! with panics caught, freeing it, and the six FMU-state functions (get, set, free, size, serialize, deserialize:
 //! FMI 2.0 section 2.1.8, FMI 3.0 section 2.3.6). Each version's `extern "C"` functions pass
 //! their own name, pointers and status type.
 //!
 //! Safety of all functions here: the caller is an importer of the version and keeps the
-//! standard's pointer and calling-sequence rules: `c` is NULL or an instance of type `I` made
+//! standard's pointer and calling-sequence rules: `c` is NULL or an `Instance<V, M>` made
 //! by this FMU and not yet freed, FMU states come from this FMU, arrays hold the given number
 //! of elements, and one instance is not used by two threads at once.
 #![allow(clippy::missing_safety_doc)]
 
-use std::ffi::c_void;
-use std::fmt;
+use std::ffi::{c_char, c_void};
 use std::panic::{AssertUnwindSafe, catch_unwind};
 use std::ptr::null_mut;
 
-use super::shell::{in_slice, out_slice, panic_message};
+use super::fmu_state::{Format, Snapshot};
+use super::instance::{Instance, Version};
+use super::logging::Status;
+use super::model_api::FmuCore;
+use super::shell::{in_slice, opt_str, out_slice, panic_message};
 
-/// What the shared bodies need of a version's instance.
-pub trait ShellInstance {
-    /// The version's status enumeration.
-    type Status: Copy;
-    /// The version's FMU state.
-    type Snapshot;
-    const OK: Self::Status;
-    const ERROR: Self::Status;
-    const FATAL: Self::Status;
-    /// The name of an FMU-state argument in the version's headers.
-    const FMU_STATE: &'static str;
-    /// The function that tells the size of a serialized FMU state.
-    const SIZE_FUNCTION: &'static str;
-
-    /// Logs an error of `func` and gives the error status.
-    fn fail(&self, func: &str, msg: fmt::Arguments) -> Self::Status;
-    /// Logs a caught panic of `func` and puts the instance into the error state.
-    fn panicked(&mut self, func: &str, message: &str) -> Self::Status;
-    /// The instance's FMU state now.
-    fn snapshot(&self) -> Self::Snapshot;
-    /// Goes back to `state`.
-    fn restore(&mut self, state: &Self::Snapshot) -> Self::Status;
-    /// A state's serialized bytes.
-    fn serialize(state: &Self::Snapshot) -> Vec<u8>;
-    /// A state from serialized bytes, or the logged error's status.
-    fn deserialize(&self, bytes: &[u8]) -> Result<Self::Snapshot, Self::Status>;
-}
+/// The FMU state of an instance of `V` around `M`.
+type State<V, M> = Snapshot<M, <V as Format>::Phase>;
 
 /// Runs `f` on the instance behind `c`, catching panics. A NULL instance gives the error
 /// status without a log message, there being no logger to send it to.
-pub unsafe fn with_instance<I: ShellInstance>(
+pub unsafe fn with_instance<V: Version, M: FmuCore>(
     c: *mut c_void,
     func: &str,
-    f: impl FnOnce(&mut I) -> I::Status,
-) -> I::Status {
+    f: impl FnOnce(&mut Instance<V, M>) -> Status,
+) -> V::Status {
     if c.is_null() {
-        return I::ERROR;
+        return Status::Error.into();
     }
-    // SAFETY: `c` is an instance of type `I` (caller contract) used by one thread.
-    let inst = unsafe { &mut *c.cast::<I>() };
-    match catch_unwind(AssertUnwindSafe(|| f(&mut *inst))) {
+    // SAFETY: `c` is an `Instance<V, M>` (caller contract) used by one thread.
+    let inst = unsafe { &mut *c.cast::<Instance<V, M>>() };
+    let status = match catch_unwind(AssertUnwindSafe(|| f(&mut *inst))) {
         Ok(status) => status,
         Err(payload) => {
             let message = panic_message(&*payload);
-            catch_unwind(AssertUnwindSafe(|| inst.panicked(func, &message))).unwrap_or(I::FATAL)
+            catch_unwind(AssertUnwindSafe(|| inst.panicked(func, &message)))
+                .unwrap_or(Status::Fatal)
         }
+    };
+    status.into()
+}
+
+/// `fmi2FreeInstance` / `fmi3FreeInstance`: a NULL instance is ignored.
+pub unsafe fn free_instance<V: Version, M: FmuCore>(c: *mut c_void) {
+    if !c.is_null() {
+        // SAFETY: `c` is an `Instance<V, M>` (caller contract), not used after this call.
+        let instance = unsafe { Box::from_raw(c.cast::<Instance<V, M>>()) };
+        let _ = catch_unwind(AssertUnwindSafe(move || drop(instance)));
     }
 }
 
-fn null_argument<I: ShellInstance>(inst: &I, func: &str, argument: &str) -> I::Status {
-    inst.fail(func, format_args!("argument {argument} is NULL"))
+/// The calls of one instance method without arguments (`call`, of function `func`).
+pub unsafe fn simple<V: Version, M: FmuCore>(
+    c: *mut c_void,
+    func: &str,
+    call: fn(&mut Instance<V, M>) -> Status,
+) -> V::Status {
+    unsafe { with_instance::<V, M>(c, func, call) }
+}
+
+/// `fmi2SetDebugLogging` / `fmi3SetDebugLogging` with the `n` category names `categories`.
+pub unsafe fn set_debug_logging<V: Version, M: FmuCore>(
+    c: *mut c_void,
+    on: bool,
+    n: usize,
+    categories: *const *const c_char,
+) -> V::Status {
+    let func = V::NAMES.set_debug_logging;
+    unsafe {
+        with_instance::<V, M>(c, func, |inst| {
+            let Some(pointers) = in_slice(categories, n) else {
+                return inst.null_argument(func, "categories");
+            };
+            let mut names = Vec::with_capacity(n);
+            for &p in pointers {
+                let Some(name) = opt_str(p) else {
+                    return inst.null_argument(func, "categories[i]");
+                };
+                names.push(name.into_owned());
+            }
+            inst.set_debug_logging(on, &names)
+        })
+    }
+}
+
+/// A getter or setter (`func`) of `nvr` references `vr` and the values `values` (`None`
+/// where NULL although some are needed): `call` with both, or the NULL argument named.
+unsafe fn with_values<V: Version, M: FmuCore, T>(
+    c: *mut c_void,
+    func: &str,
+    (vr, nvr): (*const u32, usize),
+    values: Option<T>,
+    call: fn(&mut Instance<V, M>, &[u32], T) -> Status,
+) -> V::Status {
+    unsafe {
+        with_instance::<V, M>(c, func, |inst| match (in_slice(vr, nvr), values) {
+            (Some(vrs), Some(values)) => call(inst, vrs, values),
+            (None, _) => inst.null_argument(func, V::NAMES.value_references),
+            (_, None) => inst.null_argument(func, V::NAMES.values),
+        })
+    }
+}
+
+/// `fmi2GetReal` / `fmi3GetFloat64`: `nvr` references, `n_values` values.
+pub unsafe fn get_values<V: Version, M: FmuCore>(
+    c: *mut c_void,
+    vr: (*const u32, usize),
+    (values, n_values): (*mut f64, usize),
+) -> V::Status {
+    let values = unsafe { out_slice(values, n_values) };
+    unsafe {
+        with_values(
+            c,
+            V::NAMES.get_values,
+            vr,
+            values,
+            Instance::<V, M>::get_values,
+        )
+    }
+}
+
+/// `fmi2SetReal` / `fmi3SetFloat64`: `nvr` references, `n_values` values.
+pub unsafe fn set_values<V: Version, M: FmuCore>(
+    c: *mut c_void,
+    vr: (*const u32, usize),
+    (values, n_values): (*const f64, usize),
+) -> V::Status {
+    let values = unsafe { in_slice(values, n_values) };
+    unsafe {
+        with_values(
+            c,
+            V::NAMES.set_values,
+            vr,
+            values,
+            Instance::<V, M>::set_values,
+        )
+    }
+}
+
+/// The getters and setters of the types this FMU has no variables of (`func`, named
+/// `fmiXGet<type>` / `fmiXSet<type>`); `values` is the value array, of whichever type.
+pub unsafe fn no_variables<V: Version, M: FmuCore>(
+    c: *mut c_void,
+    func: &str,
+    (vr, nvr): (*const u32, usize),
+    values: *const c_void,
+) -> V::Status {
+    const PREFIX: usize = "fmiXGet".len();
+    let setter = func.get(PREFIX - 3..PREFIX) == Some("Set");
+    let type_name = func.get(PREFIX..).unwrap_or(func);
+    let n = &V::NAMES;
+    unsafe {
+        with_instance::<V, M>(c, func, |inst| match in_slice(vr, nvr) {
+            None => inst.null_argument(func, n.value_references),
+            Some(_) if nvr > 0 && values.is_null() => inst.null_argument(func, n.values),
+            Some(vrs) => inst.no_variables_of_type(func, type_name, setter, vrs),
+        })
+    }
+}
+
+/// Functions of interfaces or capabilities (`what`) this FMU does not offer.
+pub unsafe fn not_offered<V: Version, M: FmuCore>(
+    c: *mut c_void,
+    func: &str,
+    what: &str,
+) -> V::Status {
+    unsafe { with_instance::<V, M>(c, func, |inst| inst.not_offered(func, what)) }
 }
 
 /// `fmi2GetFMUstate` / `fmi3GetFMUState`: a new state, or the one in `*state` overwritten.
-pub unsafe fn get_fmu_state<I: ShellInstance>(
+pub unsafe fn get_fmu_state<V: Version, M: FmuCore>(
     c: *mut c_void,
     func: &str,
     state: *mut *mut c_void,
-) -> I::Status {
+) -> V::Status {
     unsafe {
-        with_instance::<I>(c, func, |inst| {
+        with_instance::<V, M>(c, func, |inst| {
             if state.is_null() {
-                return null_argument(inst, func, I::FMU_STATE);
+                return inst.null_argument(func, V::NAMES.fmu_state);
             }
             let snapshot = inst.snapshot();
             if (*state).is_null() {
                 *state = Box::into_raw(Box::new(snapshot)).cast();
             } else {
                 // a non-NULL *FMUstate is a state of this FMU to be reused
-                *(*state).cast::<I::Snapshot>() = snapshot;
+                *(*state).cast::<State<V, M>>() = snapshot;
             }
-            I::OK
+            Status::Ok
         })
     }
 }
 
 /// `fmi2SetFMUstate` / `fmi3SetFMUState`.
-pub unsafe fn set_fmu_state<I: ShellInstance>(
+pub unsafe fn set_fmu_state<V: Version, M: FmuCore>(
     c: *mut c_void,
     func: &str,
     state: *mut c_void,
-) -> I::Status {
+) -> V::Status {
     unsafe {
-        with_instance::<I>(c, func, |inst| match state.cast::<I::Snapshot>().as_ref() {
+        with_instance::<V, M>(c, func, |inst| match state.cast::<State<V, M>>().as_ref() {
             Some(snapshot) => inst.restore(snapshot),
-            None => null_argument(inst, func, I::FMU_STATE),
+            None => inst.null_argument(func, V::NAMES.fmu_state),
         })
     }
 }
 
 /// `fmi2FreeFMUstate` / `fmi3FreeFMUState`: a NULL pointer is ignored.
-pub unsafe fn free_fmu_state<I: ShellInstance>(
+pub unsafe fn free_fmu_state<V: Version, M: FmuCore>(
     c: *mut c_void,
     func: &str,
     state: *mut *mut c_void,
-) -> I::Status {
+) -> V::Status {
     unsafe {
-        with_instance::<I>(c, func, |_| {
+        with_instance::<V, M>(c, func, |_| {
             if !state.is_null() && !(*state).is_null() {
-                drop(Box::from_raw((*state).cast::<I::Snapshot>()));
+                drop(Box::from_raw((*state).cast::<State<V, M>>()));
                 *state = null_mut();
             }
-            I::OK
+            Status::Ok
         })
     }
 }
 
 /// `fmi2SerializedFMUstateSize` / `fmi3SerializedFMUStateSize`.
-pub unsafe fn serialized_fmu_state_size<I: ShellInstance>(
+pub unsafe fn serialized_fmu_state_size<V: Version, M: FmuCore>(
     c: *mut c_void,
     func: &str,
     state: *mut c_void,
     size: *mut usize,
-) -> I::Status {
+) -> V::Status {
     unsafe {
-        with_instance::<I>(c, func, |inst| {
-            match (state.cast::<I::Snapshot>().as_ref(), size.is_null()) {
+        with_instance::<V, M>(c, func, |inst| {
+            match (state.cast::<State<V, M>>().as_ref(), size.is_null()) {
                 (Some(snapshot), false) => {
-                    *size = I::serialize(snapshot).len();
-                    I::OK
+                    *size = V::to_bytes(snapshot).len();
+                    Status::Ok
                 }
-                (None, _) => null_argument(inst, func, I::FMU_STATE),
-                (_, true) => null_argument(inst, func, "size"),
+                (None, _) => inst.null_argument(func, V::NAMES.fmu_state),
+                (_, true) => inst.null_argument(func, "size"),
             }
         })
     }
 }
 
 /// `fmi2SerializeFMUstate` / `fmi3SerializeFMUState`, into a buffer of `size` bytes.
-pub unsafe fn serialize_fmu_state<I: ShellInstance>(
+pub unsafe fn serialize_fmu_state<V: Version, M: FmuCore>(
     c: *mut c_void,
     func: &str,
     state: *mut c_void,
     bytes: *mut u8,
     size: usize,
-) -> I::Status {
+) -> V::Status {
     unsafe {
-        with_instance::<I>(c, func, |inst| {
-            let Some(snapshot) = state.cast::<I::Snapshot>().as_ref() else {
-                return null_argument(inst, func, I::FMU_STATE);
+        with_instance::<V, M>(c, func, |inst| {
+            let Some(snapshot) = state.cast::<State<V, M>>().as_ref() else {
+                return inst.null_argument(func, V::NAMES.fmu_state);
             };
-            let data = I::serialize(snapshot);
+            let data = V::to_bytes(snapshot);
             if size < data.len() {
                 let needs = data.len();
-                return inst.fail(
+                return inst.error(
                     func,
                     format_args!(
                         "buffer of {size} bytes is too small, the state needs {needs} ({})",
-                        I::SIZE_FUNCTION
+                        V::NAMES.serialized_size
                     ),
                 );
             }
             let Some(out) = out_slice(bytes, data.len()) else {
-                return null_argument(inst, func, "serializedState");
+                return inst.null_argument(func, "serializedState");
             };
             out.copy_from_slice(&data);
-            I::OK
+            Status::Ok
         })
     }
 }
 
 /// `fmi2DeSerializeFMUstate` / `fmi3DeserializeFMUState`: a new state from `size` bytes.
-pub unsafe fn deserialize_fmu_state<I: ShellInstance>(
+pub unsafe fn deserialize_fmu_state<V: Version, M: FmuCore>(
     c: *mut c_void,
     func: &str,
     bytes: *const u8,
     size: usize,
     state: *mut *mut c_void,
-) -> I::Status {
+) -> V::Status {
     unsafe {
-        with_instance::<I>(c, func, |inst| {
+        with_instance::<V, M>(c, func, |inst| {
             let Some(data) = in_slice(bytes, size) else {
-                return null_argument(inst, func, "serializedState");
+                return inst.null_argument(func, "serializedState");
             };
             if state.is_null() {
-                return null_argument(inst, func, I::FMU_STATE);
+                return inst.null_argument(func, V::NAMES.fmu_state);
             }
             match inst.deserialize(data) {
                 Ok(snapshot) => {
                     *state = Box::into_raw(Box::new(snapshot)).cast();
-                    I::OK
+                    Status::Ok
                 }
                 Err(status) => status,
             }

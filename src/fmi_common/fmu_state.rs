@@ -7,8 +7,27 @@
 
 use sha2::{Digest, Sha256};
 
-use super::model_api::InstanceKind;
+use super::model_api::{FmuCore, InstanceKind};
 use super::state_machine::Experiment;
+
+/// A version's FMU states: the states of its state machine and the record of its serialized
+/// bytes between the magic and the checksum.
+pub trait Format {
+    /// The states of the version's state machine.
+    type Phase: Copy;
+
+    /// An FMU state's serialized bytes.
+    fn to_bytes<M: FmuCore>(state: &Snapshot<M, Self::Phase>) -> Vec<u8>;
+
+    /// An FMU state from bytes of [`Format::to_bytes`], for the instance with `token`, `kind`
+    /// and `core`.
+    fn from_bytes<M: FmuCore>(
+        bytes: &[u8],
+        token: &str,
+        kind: InstanceKind,
+        core: &M,
+    ) -> Result<Snapshot<M, Self::Phase>, String>;
+}
 
 /// The length of the checksum at the end of the bytes.
 const CHECKSUM_LEN: usize = 8;

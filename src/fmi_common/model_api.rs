@@ -56,7 +56,7 @@ pub struct ModelStructure {
     pub outputs: Vec<OutputDependency>,
 }
 
-/// One simulation model as seen by the FMI wrapper ([`crate::fmi2::instance::Instance`]).
+/// One simulation model as seen by the generic FMI instance ([`super::instance::Instance`]).
 ///
 /// Contract, beyond the method docs:
 /// * An output depends on what [`ModelStructure::outputs`] lists for it (states, inputs), a

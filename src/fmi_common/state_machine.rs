@@ -13,15 +13,30 @@ use super::variables::{Causality, Initial, Variability, Variable};
 pub type Mask = u8;
 
 /// The states of one version's state machine: at most eight, in the standard's order.
-pub trait States: Copy + 'static {
+pub trait States: Copy + PartialEq + 'static {
     /// Every state, in the order of the standard (a state's bit is its position).
     const ALL: &'static [Self];
+    /// The states both versions have: before initialization, during it, after termination,
+    /// and where a caught panic or a failed reset leaves an instance.
+    const INSTANTIATED: Self;
+    const INITIALIZATION_MODE: Self;
+    const TERMINATED: Self;
+    const ERROR: Self;
+    /// The states after initialization where the setters may set inputs and tunable
+    /// parameters, and those where they may set continuous inputs only.
+    const INPUTS_AND_TUNABLE_PARAMETERS: Mask;
+    const CONTINUOUS_INPUTS: Mask;
 
     /// The state's name in the standard.
     fn name(self) -> &'static str;
 
-    /// The state's bit in a [`Mask`].
-    fn bit(self) -> Mask;
+    /// The state's bit in a [`Mask`]: its position in [`States::ALL`].
+    fn bit(self) -> Mask {
+        Self::ALL
+            .iter()
+            .position(|&s| s == self)
+            .map_or(0, |i| 1 << i)
+    }
 
     /// Whether the state is in `mask`.
     fn is_in(self, mask: Mask) -> bool {
@@ -29,7 +44,19 @@ pub trait States: Copy + 'static {
     }
 
     /// Which variables the setters may set in this state.
-    fn set_rule(self) -> SetRule;
+    fn set_rule(self) -> SetRule {
+        if self == Self::INSTANTIATED {
+            SetRule::StartValues
+        } else if self == Self::INITIALIZATION_MODE {
+            SetRule::ExactStartValues
+        } else if self.is_in(Self::INPUTS_AND_TUNABLE_PARAMETERS) {
+            SetRule::InputsAndTunableParameters
+        } else if self.is_in(Self::CONTINUOUS_INPUTS) {
+            SetRule::ContinuousInputs
+        } else {
+            SetRule::Nothing
+        }
+    }
 }
 
 /// The names of the states in `mask`, in the order of the standard, for messages.

@@ -1,15 +1,19 @@
 //! What FMI 2.0 and 3.0 write alike in `modelDescription.xml`, and the checks before: numbers
 //! as `xs:double`, the model's optional attributes, `<UnitDefinitions>` (FMI 2.0 section 2.2.2,
 //! FMI 3.0 section 2.4.3: the same `<Unit><BaseUnit/></Unit>` elements), `<LogCategories>`,
-//! `<DefaultExperiment>` and which variables are initial unknowns. Each version writes its own
-//! dialect around them (element names, references by index or by value reference).
+//! `<DefaultExperiment>` and which variables are initial unknowns, the attributes a variable's
+//! element starts with, and the document order ([`write_description`]). Each version writes
+//! its own dialect around them ([`Dialect`]: capability elements, element names, references
+//! by index or by value reference).
 
 use std::collections::BTreeSet;
 use std::io;
 
 use quick_xml::Writer;
+use quick_xml::events::{BytesDecl, Event};
+use quick_xml::writer::ElementWriter;
 
-use super::model_api::ModelStructure;
+use super::model_api::{InstanceKind, ModelStructure};
 use super::units::{self, BASE_UNIT_NAMES};
 use super::variables::{Causality, Initial, ModelInfo, Variable};
 
@@ -211,6 +215,108 @@ pub fn write_unit_definitions(w: &mut XmlWriter, vars: &[Variable]) -> io::Resul
             Ok(())
         })
         .map(drop)
+}
+
+/// What a description is written from: the model-level data, the variable table (FMI 3.0:
+/// with `time`) and the model structure of a core.
+#[derive(Clone, Copy)]
+pub struct Description<'a> {
+    pub info: &'a ModelInfo,
+    pub vars: &'a [Variable],
+    pub structure: &'a ModelStructure,
+}
+
+/// What a version writes its own way in `modelDescription.xml`; [`write_description`] puts
+/// it in the document order both versions share.
+pub trait Dialect {
+    /// `fmiVersion`.
+    const FMI_VERSION: &'static str;
+    /// The attribute of the token (`guid`, `instantiationToken`).
+    const TOKEN: &'static str;
+    /// The root's attributes after the model's own.
+    const ROOT_ATTRIBUTES: &'static [(&'static str, &'static str)];
+    /// The shell's log categories, `(name, description)`, listed before the model's own.
+    const CATEGORIES: [(&'static str, &'static str); 5];
+
+    /// Checks the description against the version's rules before it is written.
+    fn check(d: Description) -> Result<(), String>;
+    /// The attributes of `<ModelExchange>` (written if the model offers it) or
+    /// `<CoSimulation>`, in order: the model identifier and the capability flags.
+    fn interface_attributes(kind: InstanceKind, info: &ModelInfo) -> Vec<(&'static str, &str)>;
+    /// The element of `v` in `<ModelVariables>` (of `vars`).
+    fn write_variable(w: &mut XmlWriter, vars: &[Variable], v: &Variable) -> io::Result<()>;
+    fn write_model_structure(w: &mut XmlWriter, d: Description) -> io::Result<()>;
+}
+
+/// The description `d` with `token`, after the version's checks.
+pub fn write_description<D: Dialect>(d: Description, token: &str) -> Result<String, String> {
+    D::check(d)?;
+    let mut w = Writer::new_with_indent(Vec::new(), b' ', 2);
+    write_document::<D>(&mut w, d, token)
+        .map_err(|e| format!("writing modelDescription.xml: {e}"))?;
+    String::from_utf8(w.into_inner()).map_err(|e| e.to_string())
+}
+
+/// The document order of both versions (FMI 2.0 section 2.2, FMI 3.0 section 2.4).
+fn write_document<D: Dialect>(w: &mut XmlWriter, d: Description, token: &str) -> io::Result<()> {
+    let info = d.info;
+    w.write_event(Event::Decl(BytesDecl::new("1.0", Some("UTF-8"), None)))?;
+    w.create_element("fmiModelDescription")
+        .with_attributes([
+            ("fmiVersion", D::FMI_VERSION),
+            ("modelName", info.model_name.as_str()),
+            (D::TOKEN, token),
+        ])
+        .with_attributes(model_attributes(info))
+        .with_attributes(D::ROOT_ATTRIBUTES.iter().copied())
+        .write_inner_content(|w| {
+            let mut interfaces = vec![("CoSimulation", InstanceKind::CoSimulation)];
+            if info.model_exchange {
+                interfaces.insert(0, ("ModelExchange", InstanceKind::ModelExchange));
+            }
+            for (tag, kind) in interfaces {
+                w.create_element(tag)
+                    .with_attributes(D::interface_attributes(kind, info))
+                    .write_empty()?;
+            }
+            write_unit_definitions(w, d.vars)?;
+            write_log_categories(w, &log_categories(&D::CATEGORIES, info))?;
+            write_default_experiment(w, info)?;
+            w.create_element("ModelVariables")
+                .write_inner_content(|w| {
+                    for v in d.vars {
+                        D::write_variable(w, d.vars, v)?;
+                    }
+                    Ok(())
+                })?;
+            D::write_model_structure(w, d)
+        })?;
+    Ok(())
+}
+
+/// The start of a variable's element `tag` (`ScalarVariable`, `Float64`): the attributes
+/// both versions write alike, from the name to `initial` (whenever the rules allow it, as the
+/// declared or default value, so readers need not know the defaults).
+pub fn variable_element<'a>(
+    w: &'a mut XmlWriter,
+    tag: &'a str,
+    v: &Variable,
+) -> ElementWriter<'a, Vec<u8>> {
+    let vr = v.value_reference.to_string();
+    let mut el = w
+        .create_element(tag)
+        .with_attributes([("name", v.name.as_str()), ("valueReference", &vr)]);
+    if !v.description.is_empty() {
+        el = el.with_attribute(("description", v.description.as_str()));
+    }
+    el = el.with_attributes([
+        ("causality", v.causality.as_str()),
+        ("variability", v.variability.as_str()),
+    ]);
+    if let Some(initial) = v.effective_initial() {
+        el = el.with_attribute(("initial", initial.as_str()));
+    }
+    el
 }
 
 #[cfg(test)]
