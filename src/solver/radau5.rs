@@ -191,6 +191,9 @@ pub struct Radau5 {
     /// holds the state before the jump's transient, so Newton's starting values extrapolate
     /// only through its three stages.
     poly_jumped: bool,
+    /// f0 is the last Newton iteration's f at the third stage of a step that landed on a
+    /// requested time, not yet f(t, y): a restart or the next step evaluates it.
+    f0_pending: bool,
 }
 
 /// What [`Radau5::last_step`] shows of the last accepted step [t_old, t_old + h].
@@ -259,6 +262,7 @@ impl Radau5 {
             jump: vec![0.0; n],
             jump_known: false,
             poly_jumped: false,
+            f0_pending: false,
         }
     }
 
@@ -314,6 +318,7 @@ impl Radau5 {
             *f0 = *f;
         }
         // after init() there is no f before the jump to measure it against
+        self.f0_pending = false;
         self.jump_known = self.have_poly;
         self.after_jump = true;
         self.faccon = 1.0;
@@ -371,6 +376,15 @@ impl Radau5 {
 
     /// Takes one accepted step, never past `t_end`.
     pub fn step<S: OdeSystem>(&mut self, sys: &S, t_end: f64) -> Result<(), SolverError> {
+        if self.f0_pending {
+            sys.rhs(self.t, &self.y, &mut self.f0)
+                .map_err(|e| SolverError::Rhs {
+                    t: self.t,
+                    message: e.0,
+                })?;
+            self.stats.rhs_evals += 1;
+            self.f0_pending = false;
+        }
         let h_entry = self.h.min(self.h_max);
         let mut h = h_entry;
         let mut last = false;
@@ -397,9 +411,12 @@ impl Radau5 {
                 self.jac_current = true;
                 self.lu_h = f64::NAN;
             }
-            // (a step cut to land on t_end differs from the factored h by rounding only;
-            // lu_h is NaN when there are no factors)
-            let factored = (h - self.lu_h).abs() <= 1e-12 * h;
+            // a step cut to land on t_end differs from the factored h by the rounding of
+            // t_end − t, a few ulps of t: 1.8e-12 of a 1 ms step at t = 10 s, where a bound
+            // relative to h alone refactored every other held step (lu_h is NaN when there are
+            // no factors)
+            let rounding = 4.0 * f64::EPSILON * t_end.abs().max(self.t.abs());
+            let factored = (h - self.lu_h).abs() <= 1e-12 * h + rounding;
             if !factored && let Err(lu::Singular(col)) = self.decompose(h) {
                 h *= 0.5;
                 self.reject = true;
@@ -440,12 +457,20 @@ impl Radau5 {
             let mut quot = (fourth_root(err) / fac).clamp(FACR, FACL);
             let mut h_new = h / quot;
             if err < 1.0 {
-                // the new end point must be evaluable before the step is committed
                 for i in 0..self.n {
                     self.work[i] = self.y[i] + self.z[2 * self.n + i];
                 }
                 let t_new = if last { t_end } else { self.t + h };
-                if let Err(e) = sys.rhs(t_new, &self.work, &mut self.err_vec) {
+                if last {
+                    // a requested time, where an input jump usually follows and its restart
+                    // evaluates f anyway: meanwhile f there is the one the last Newton iteration
+                    // evaluated at its third stage (within the Newton tolerance of y + Z3), and
+                    // without a restart the next step evaluates it (`f0_pending`)
+                    self.err_vec
+                        .copy_from_slice(&self.stage_f[2 * self.n..3 * self.n]);
+                    self.f0_pending = true;
+                } else if let Err(e) = sys.rhs(t_new, &self.work, &mut self.err_vec) {
+                    // the new end point must be evaluable before the step is committed
                     h *= 0.5;
                     self.reject = true;
                     last = false;
@@ -458,8 +483,9 @@ impl Radau5 {
                         });
                     }
                     continue;
+                } else {
+                    self.stats.rhs_evals += 1;
                 }
-                self.stats.rhs_evals += 1;
                 if self.stats.accepted > 0 && !self.first {
                     let fac_gus = ((self.h_acc / h) * fourth_root(err * err / self.err_acc) / SAFE)
                         .clamp(FACR, FACL);
