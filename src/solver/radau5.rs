@@ -11,7 +11,7 @@ use nalgebra::Complex;
 use serde::{Deserialize, Serialize};
 
 use super::lu::{self, BlockLu};
-use super::{OdeSystem, SolverError, Stats, Tolerances};
+use super::{OdeSystem, RhsError, SolverError, Stats, Tolerances};
 
 const SQRT6: f64 = 2.449_489_742_783_178;
 /// Collocation nodes c1, c2 (c3 = 1).
@@ -115,6 +115,11 @@ fn eigenvalues() -> (f64, f64, f64) {
 /// x^(1/4) by two square roots (one instruction each, where `powf` is a call of a few hundred).
 fn fourth_root(x: f64) -> f64 {
     x.sqrt().sqrt()
+}
+
+/// The system's failure to evaluate at time `t`, as the solver reports it.
+fn at(t: f64) -> impl FnOnce(RhsError) -> SolverError {
+    move |e| SolverError::Rhs { t, message: e.0 }
 }
 
 /// The three stage parts [0, n), [n, 2n) and [2n, 3n) of a stage vector.
@@ -305,10 +310,7 @@ impl Radau5 {
     /// the jump of f ([`Radau5::predict_jump`]).
     pub fn restart<S: OdeSystem>(&mut self, sys: &S) -> Result<(), SolverError> {
         sys.rhs(self.t, &self.y, &mut self.work)
-            .map_err(|e| SolverError::Rhs {
-                t: self.t,
-                message: e.0,
-            })?;
+            .map_err(at(self.t))?;
         self.stats.rhs_evals += 1;
         if !self.after_jump {
             self.jump.fill(0.0);
@@ -377,11 +379,7 @@ impl Radau5 {
     /// Takes one accepted step, never past `t_end`.
     pub fn step<S: OdeSystem>(&mut self, sys: &S, t_end: f64) -> Result<(), SolverError> {
         if self.f0_pending {
-            sys.rhs(self.t, &self.y, &mut self.f0)
-                .map_err(|e| SolverError::Rhs {
-                    t: self.t,
-                    message: e.0,
-                })?;
+            sys.rhs(self.t, &self.y, &mut self.f0).map_err(at(self.t))?;
             self.stats.rhs_evals += 1;
             self.f0_pending = false;
         }
@@ -402,10 +400,7 @@ impl Radau5 {
             }
             if self.need_jac {
                 sys.jacobian(self.t, &self.y, &mut self.jac)
-                    .map_err(|e| SolverError::Rhs {
-                        t: self.t,
-                        message: e.0,
-                    })?;
+                    .map_err(at(self.t))?;
                 self.stats.jac_evals += 1;
                 self.need_jac = false;
                 self.jac_current = true;
