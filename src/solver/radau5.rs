@@ -112,6 +112,12 @@ fn eigenvalues() -> (f64, f64, f64) {
     (gamma, alpha / cno, beta / cno)
 }
 
+/// m v for the 3 × 3 transformations T and T⁻¹ of the stage vectors.
+#[inline(always)]
+fn mul3(m: &[[f64; 3]; 3], v: [f64; 3]) -> [f64; 3] {
+    m.map(|r| r[0] * v[0] + r[1] * v[1] + r[2] * v[2])
+}
+
 /// x^(1/4) by two square roots (one instruction each, where `powf` is a call of a few hundred).
 fn fourth_root(x: f64) -> f64 {
     x.sqrt().sqrt()
@@ -189,9 +195,9 @@ pub struct Radau5 {
     /// The system jumped at the current point: filter the next error estimate twice.
     after_jump: bool,
     /// How much f jumped at the current point, f(t, y) after minus before (the sum over the
-    /// restarts since the last accepted step), and whether it is known (not after `init`).
+    /// restarts since the last accepted step; unknown before the first step, where no f before
+    /// the jump was evaluated at this state).
     jump: Vec<f64>,
-    jump_known: bool,
     /// The last accepted step began at a jump: its polynomial's node at the step's start
     /// holds the state before the jump's transient, so Newton's starting values extrapolate
     /// only through its three stages.
@@ -265,7 +271,6 @@ impl Radau5 {
             stats: Stats::default(),
             after_jump: false,
             jump: vec![0.0; n],
-            jump_known: false,
             poly_jumped: false,
             f0_pending: false,
         }
@@ -319,9 +324,7 @@ impl Radau5 {
             *j += f - *f0;
             *f0 = *f;
         }
-        // after init() there is no f before the jump to measure it against
         self.f0_pending = false;
-        self.jump_known = self.have_poly;
         self.after_jump = true;
         self.faccon = 1.0;
         Ok(())
@@ -426,7 +429,8 @@ impl Radau5 {
                 continue;
             }
             self.starting_values(h);
-            if self.after_jump && self.jump_known {
+            // (before the first step there is no jump measured: see `jump`)
+            if self.after_jump && self.have_poly {
                 self.predict_jump();
             }
             let newt = match self.newton(sys, h) {
@@ -564,8 +568,8 @@ impl Radau5 {
                 zi[k] = cq[k] * (a1 + (cq[k] - C2M1) * (a2 + (cq[k] - C1M1) * a3));
                 self.z[k * n + i] = zi[k];
             }
-            for (k, ti) in TI.iter().enumerate() {
-                self.w[k * n + i] = ti[0] * zi[0] + ti[1] * zi[1] + ti[2] * zi[2];
+            for (k, wk) in mul3(&TI, zi).into_iter().enumerate() {
+                self.w[k * n + i] = wk;
             }
         }
     }
@@ -595,9 +599,10 @@ impl Radau5 {
             w1[i] += d[0];
             w2[i] += d[1];
             w3[i] += d[2];
-            z1[i] += T[0][0] * d[0] + T[0][1] * d[1] + T[0][2] * d[2];
-            z2[i] += T[1][0] * d[0] + T[1][1] * d[1] + T[1][2] * d[2];
-            z3[i] += T[2][0] * d[0] + T[2][1] * d[1] + T[2][2] * d[2];
+            let dz = mul3(&T, d);
+            z1[i] += dz[0];
+            z2[i] += dz[1];
+            z3[i] += dz[2];
         }
     }
 
@@ -633,7 +638,7 @@ impl Radau5 {
             let (z1, rhs2) = (&mut self.z[..n], &mut self.rhs2[..n]);
             for i in 0..n {
                 let f = [f1[i], f2[i], f3[i]];
-                let a = [0, 1, 2].map(|k| TI[k][0] * f[0] + TI[k][1] * f[1] + TI[k][2] * f[2]);
+                let a = mul3(&TI, f);
                 z1[i] = a[0] - fac1 * w1[i];
                 rhs2[i] = Complex::new(
                     a[1] - alphn * w2[i] + betan * w3[i],
@@ -685,10 +690,7 @@ impl Radau5 {
             let [w1, w2, w3] = stages(&self.w, n);
             let [z1, z2, z3] = stages_mut(&mut self.z, n);
             for i in 0..n {
-                let w = [w1[i], w2[i], w3[i]];
-                z1[i] = T[0][0] * w[0] + T[0][1] * w[1] + T[0][2] * w[2];
-                z2[i] = T[1][0] * w[0] + T[1][1] * w[1] + T[1][2] * w[2];
-                z3[i] = T[2][0] * w[0] + T[2][1] * w[1] + T[2][2] * w[2];
+                [z1[i], z2[i], z3[i]] = mul3(&T, [w1[i], w2[i], w3[i]]);
             }
             if self.faccon * dyno <= self.fnewt {
                 return Newton::Converged(newt);
