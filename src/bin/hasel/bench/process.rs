@@ -4,14 +4,14 @@
 
 use std::path::Path;
 use std::process::Command;
-use std::time::{Duration, Instant};
+use std::time::Duration;
 
 use hasel_fmu::io::file::FileError;
 use hasel_fmu::io::trajectory;
 use hasel_fmu::model::{Params, Platform};
 use hasel_fmu::simulation::{DEFAULT_RTOL, Input, Simulator};
 
-use super::timing::best;
+use super::timing::{best, best_after};
 use crate::error::Error;
 
 /// The command: 10 s of the paper's sine at 1 ms outputs.
@@ -27,27 +27,19 @@ const SIMULATE: [&str; 7] = [
 
 /// Best wall time of `repeat` runs of this executable with `args`, each after `before` (not
 /// timed).
-fn process(repeat: usize, args: &[&str], mut before: impl FnMut()) -> Result<Duration, Error> {
+fn process(repeat: usize, args: &[&str], before: impl FnMut()) -> Result<Duration, Error> {
     let exe = std::env::current_exe().map_err(Error::CurrentExe)?;
-    let mut failure = None;
-    let mut fastest = Duration::MAX;
-    for _ in 0..repeat.max(1) {
-        before();
-        let start = Instant::now();
-        match Command::new(&exe).args(args).output() {
-            Ok(o) if o.status.success() => {}
-            Ok(o) => failure = Some(String::from_utf8_lossy(&o.stderr).into_owned()),
-            Err(e) => failure = Some(e.to_string()),
-        }
-        fastest = fastest.min(start.elapsed());
-    }
-    match failure {
-        Some(problem) => Err(Error::Benchmark {
+    best_after(repeat, before, || {
+        let problem = match Command::new(&exe).args(args).output() {
+            Ok(o) if o.status.success() => return Ok(()),
+            Ok(o) => String::from_utf8_lossy(&o.stderr).into_owned(),
+            Err(e) => e.to_string(),
+        };
+        Err(Error::Benchmark {
             command: format!("hasel {}", args.join(" ")),
             problem,
-        }),
-        None => Ok(fastest),
-    }
+        })
+    })
 }
 
 pub fn run(repeat: usize) -> Result<(), Error> {
@@ -83,16 +75,15 @@ fn measure(repeat: usize, csv: &Path) -> Result<(), Error> {
         samples
     });
     let write = |fresh: bool| -> Result<Duration, Error> {
-        let mut fastest = Duration::MAX;
-        for _ in 0..repeat.max(1) {
-            if fresh {
-                remove();
-            }
-            let start = Instant::now();
-            trajectory::write(csv, &samples)?;
-            fastest = fastest.min(start.elapsed());
-        }
-        Ok(fastest)
+        best_after(
+            repeat,
+            || {
+                if fresh {
+                    remove();
+                }
+            },
+            || trajectory::write(csv, &samples).map_err(Error::from),
+        )
     };
     let (writing, replacing) = (write(true)?, write(false)?);
     let ms = |d: Duration| d.as_secs_f64() * 1e3;

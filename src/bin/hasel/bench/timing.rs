@@ -14,3 +14,20 @@ pub fn best<T>(repeat: usize, mut f: impl FnMut() -> T) -> (Duration, T) {
     }
     (fastest, out.expect("at least one repetition"))
 }
+
+/// The fastest wall time of `repeat` runs of `f` (at least one), each after `before`, which is
+/// not timed; the first error ends the runs.
+pub fn best_after<E>(
+    repeat: usize,
+    mut before: impl FnMut(),
+    mut f: impl FnMut() -> Result<(), E>,
+) -> Result<Duration, E> {
+    let mut fastest = Duration::MAX;
+    for _ in 0..repeat.max(1) {
+        before();
+        let start = Instant::now();
+        f()?;
+        fastest = fastest.min(start.elapsed());
+    }
+    Ok(fastest)
+}
