@@ -1,7 +1,9 @@
 //! Co-simulation throughput of the packed FMUs through a Rust importer (the `fmi` crate), FMI
 //! 2.0 and FMI 3.0 side by side: 10 s of the paper's excitation at 1 ms communication steps,
-//! inputs set before every step and outputs read after it. Prints the best of 5 runs of each
-//! against the 60 ms target, and the time of one step against issue #14's 2.4 µs. Then FMI 2.0
+//! inputs set before every step and outputs read after it. Prints the best of 5 runs of each,
+//! instantiation with initialization timed apart from the step loop (the `fmi` crate loads the
+//! library anew for every instance, so its set-up repeats once-per-process work): both
+//! together against the 60 ms target, one step against issue #14's 2.4 µs. Then FMI 2.0
 //! Model Exchange at a state in motion: the cost of one fmi2GetDerivatives and of the full
 //! Jacobian ∂ẋ/∂x by fmi2GetDirectionalDerivative (one call per column) beside the same Jacobian
 //! by central differences of fmi2GetDerivatives.
@@ -39,33 +41,48 @@ fn value_refs<const N: usize>(names: [&str; N]) -> [u32; N] {
     })
 }
 
-/// Best of 5 runs of `run`, which returns the last outputs.
-fn best_of_5(mut run: impl FnMut() -> [f64; 6]) -> (Duration, [f64; 6]) {
-    let mut best = Duration::MAX;
-    let mut last = [0.0; 6];
-    for _ in 0..5 {
-        let start = Instant::now();
-        last = run();
-        best = best.min(start.elapsed());
-    }
-    (best, last)
+/// The times of one run: instantiation with initialization, then the steps.
+#[derive(Clone, Copy)]
+struct Run {
+    setup: Duration,
+    steps: Duration,
+    last: [f64; 6],
 }
 
-fn fmi2_run(import: &Fmi2Import, input: &Input) -> [f64; 6] {
+/// Best of 5 runs of `run`: the shortest set-up and the shortest step loop (separately, as
+/// they are timed separately).
+fn best_of_5(mut run: impl FnMut() -> Run) -> Run {
+    let mut best = run();
+    for _ in 1..5 {
+        let r = run();
+        best = Run {
+            setup: best.setup.min(r.setup),
+            steps: best.steps.min(r.steps),
+            last: r.last,
+        };
+    }
+    best
+}
+
+fn fmi2_run(import: &Fmi2Import, input: &Input) -> Run {
     let (u, y) = (value_refs(["U1", "U2", "U3"]), outputs());
     let mut last = [0.0; 6];
+    let start = Instant::now();
     let mut inst = import
         .instantiate_cs("bench", false, false)
         .expect("fmi2Instantiate");
     initialize(&mut inst, 0.0);
+    let setup = start.elapsed();
+    let start = Instant::now();
     for k in 0..STEPS {
         let t = k as f64 * DT;
         inst.set_real(&u, &input.value(t)).expect("fmi2SetReal");
         inst.do_step(t, DT, true).expect("fmi2DoStep");
         inst.get_real(&y, &mut last).expect("fmi2GetReal");
     }
+    let steps = start.elapsed();
     Common::terminate(&mut inst).expect("fmi2Terminate");
-    last
+    Run { setup, steps, last }
 }
 
 /// Sets up an instance of either interface at `start` and takes it through initialization.
@@ -155,12 +172,13 @@ fn fmi3_library(path: &str) -> (Fmi3Binding, CString) {
     (binding, token)
 }
 
-fn fmi3_run(lib: &Fmi3Binding, token: &CStr, input: &Input) -> [f64; 6] {
+fn fmi3_run(lib: &Fmi3Binding, token: &CStr, input: &Input) -> Run {
     let (u, y) = (value_refs(["U1", "U2", "U3"]), outputs());
     let mut last = [0.0; 6];
     let ok = |status, call: &str| assert_eq!(status, 0, "{call}");
     // SAFETY: the calls follow the FMI 3.0 sequence with arrays of the sizes given
     unsafe {
+        let start = Instant::now();
         let c = lib.fmi3InstantiateCoSimulation(
             c"bench".as_ptr(),
             token.as_ptr(),
@@ -182,6 +200,8 @@ fn fmi3_run(lib: &Fmi3Binding, token: &CStr, input: &Input) -> [f64; 6] {
             lib.fmi3ExitInitializationMode(c),
             "fmi3ExitInitializationMode",
         );
+        let setup = start.elapsed();
+        let start = Instant::now();
         let (mut event, mut terminate, mut early, mut reached) = (false, false, false, 0.0);
         for k in 0..STEPS {
             let t = k as f64 * DT;
@@ -206,23 +226,26 @@ fn fmi3_run(lib: &Fmi3Binding, token: &CStr, input: &Input) -> [f64; 6] {
                 "fmi3GetFloat64",
             );
         }
+        let steps = start.elapsed();
         ok(lib.fmi3Terminate(c), "fmi3Terminate");
         lib.fmi3FreeInstance(c);
+        Run { setup, steps, last }
     }
-    last
 }
 
 fn outputs() -> [u32; 6] {
     value_refs(["h1", "h2", "h3", "tip_x", "tip_y", "tip_z"])
 }
 
-fn report(path: &str, version: &str, calls: &str, (best, last): (Duration, [f64; 6])) {
-    let ms = best.as_secs_f64() * 1e3;
-    let step_us = ms * 1e3 / STEPS as f64;
+fn report(path: &str, version: &str, calls: &str, run: Run) {
+    let ms = |d: Duration| d.as_secs_f64() * 1e3;
+    let (setup_ms, steps_ms) = (ms(run.setup), ms(run.steps));
+    let step_us = steps_ms * 1e3 / STEPS as f64;
     let met = |ok: bool| if ok { "met" } else { "MISSED" };
+    let last = run.last;
     println!(
-        "{path}: {version}, 10 s at 1 ms steps ({STEPS} x {calls}) through the fmi crate: {ms:.1} ms, best of 5 (target <= 60 ms: {}); {step_us:.2} us a step (issue #14: <= 2.4 us: {})",
-        met(ms <= 60.0),
+        "{path}: {version}, 10 s at 1 ms steps ({STEPS} x {calls}) through the fmi crate, best of 5: instantiation and initialization {setup_ms:.2} ms, the steps {steps_ms:.1} ms (together: target <= 60 ms: {}); {step_us:.2} us a step (issue #14: <= 2.4 us: {})",
+        met(setup_ms + steps_ms <= 60.0),
         met(step_us <= 2.4)
     );
     println!(

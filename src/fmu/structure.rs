@@ -90,8 +90,9 @@ fn build() -> ModelStructure {
     let mut output_deps: [BTreeSet<u32>; 6] = Default::default();
     for params in configurations() {
         let m = Platform::new(params).expect("the configurations are valid");
+        // the entries' positions do not depend on the state: any state in the domain will do
         let x = m
-            .rest_state()
+            .uncoupled_rest_state()
             .expect("the configurations have a rest state");
         // value reference of each position of the model's state vector
         let vrs: Vec<u32> = (0..3)

@@ -324,7 +324,7 @@ impl Platform {
     /// actuator until the coupling settles.
     pub fn rest_state(&self) -> Result<Vec<f64>, ModelError> {
         let refs = self.refs();
-        let mut rest = self.each(|_, a| a.rest_state())?;
+        let mut rest = self.uncoupled_rest_blocks()?;
         for _ in 0..50 {
             let before = rest.map(|r| r[actuator::THETA]);
             for i in 0..3 {
@@ -346,10 +346,28 @@ impl Platform {
                 break;
             }
         }
-        Ok(rest
+        Ok(self.with_effects_at_rest(&rest))
+    }
+
+    /// Where [`Platform::rest_state`] starts: each actuator at its own U = 0 equilibrium, as if
+    /// the effects put no static load on it, and the effects' states at rest. A state inside
+    /// the model's domain for a tenth of the work, enough where the state's value does not
+    /// matter (the positions of the Jacobian's entries, `fmu::structure`).
+    pub fn uncoupled_rest_state(&self) -> Result<Vec<f64>, ModelError> {
+        Ok(self.with_effects_at_rest(&self.uncoupled_rest_blocks()?))
+    }
+
+    fn uncoupled_rest_blocks(&self) -> Result<[[f64; actuator::N]; 3], ModelError> {
+        self.each(|_, a| a.rest_state())
+    }
+
+    /// The state vector of the actuators' states `blocks`, each followed by its effect states
+    /// at rest.
+    fn with_effects_at_rest(&self, blocks: &[[f64; actuator::N]; 3]) -> Vec<f64> {
+        blocks
             .iter()
             .flat_map(|r| r.iter().copied().chain(self.terms.rest(r[actuator::THETA])))
-            .collect())
+            .collect()
     }
 
     /// Actuator heights h_i = ½ Lv sin θ_i [m].
