@@ -120,6 +120,11 @@ pub fn to_json(d: &Diagnosis) -> Value {
             "effects_before": r.effects_before.iter().map(|e| e.name()).collect::<Vec<_>>(),
             "added": r.added.map(|e| e.name()),
             "added_form": r.added_form.map(|f| f.name),
+            "provisional": r.provisional.map(|p| json!({
+                "effect": p.form.effect.name(),
+                "form": p.form.name,
+                "kept": p.kept,
+            })),
             "candidates": r.candidates.iter().map(candidate_json).collect::<Vec<_>>(),
             "revisits": r.revisits.iter().map(|v| {
                 let mut j = json!({
@@ -447,6 +452,22 @@ pub fn write(dir: &Path, d: &Diagnosis) -> Result<(), FileError> {
                 (None, _) => "Nothing added in this round.".into(),
             }
         );
+        if let Some(p) = r.provisional {
+            let _ = writeln!(
+                md,
+                "No effect closes {:.0} % of the held-out gap: `{}` in the form `{}`, which closes at least {:.0} %, was added provisionally, to be kept only if the effects after it bring every held-out fit to within {} point(s) of its noise floor: {}.\n",
+                100.0 * super::GAP_CLOSED,
+                p.form.effect.name(),
+                p.form.name,
+                100.0 * super::PARTIAL_GAP,
+                super::FIT_TOLERANCE,
+                if p.kept {
+                    "kept"
+                } else {
+                    "they did not, and it was dropped"
+                }
+            );
+        }
         for v in &r.revisits {
             let _ = writeln!(
                 md,
