@@ -449,6 +449,7 @@ pub fn write(dir: &Path, d: &Diagnosis) -> Result<(), FileError> {
                     f.free.join(", ")
                 ),
                 (Some(e), _) => format!("Added: `{}`, {}.", e.name(), e.form()),
+                (None, _) if !r.revisits.is_empty() => "Nothing added in this round: its best candidate, failing only by leaving a held-out fit beyond the tolerance of its noise floor, was tried tentatively with the earlier effects revisited beside it (below), and none of them was replaced.".into(),
                 (None, _) => "Nothing added in this round.".into(),
             }
         );
