@@ -50,6 +50,12 @@ pub const NOISE_FLOOR_EXCESS: f64 = 0.05;
 /// a further effect is looked for only beyond it (the library's term is rarely the data's
 /// exact form, and what it leaves is not a second mechanism).
 pub const FIT_TOLERANCE: f64 = 1.0;
+/// Share of the held-out gap to the noise floor a first effect must close to be added
+/// provisionally when none closes [`GAP_CLOSED`]: the larger of two causes of equal size closes
+/// 1 − 1/√2 ≈ 0.29 of the gap in fit points (fits fall with the residual's RMS, which adds in
+/// squares), a little less when the first is fitted beside the unexplained second
+/// (src/diagnose/diagnose.md, "Two mechanisms at once").
+pub const PARTIAL_GAP: f64 = 0.25;
 
 /// A family's runner-up form is refitted beside its best when the screening gives it at least
 /// this share of the best form's worth (src/diagnose/diagnose.md, "Families of forms").
@@ -144,6 +150,12 @@ pub struct Refit {
     pub interval_excludes_neutral: bool,
     /// Why it failed, if it did.
     pub failed: Vec<String>,
+    /// It fails only by closing less than [`GAP_CLOSED`] of the held-out gap, and closes at
+    /// least [`PARTIAL_GAP`]: a first effect that may be added provisionally.
+    pub partial: bool,
+    /// A later effect that fails only by leaving a held-out fit beyond [`FIT_TOLERANCE`] of
+    /// its noise floor: it is added if revisiting the earlier effects beside it closes the rest.
+    pub short_of_floor: bool,
 }
 
 impl Refit {
@@ -162,6 +174,18 @@ pub struct Round {
     pub added_form: Option<&'static Form>,
     /// After a later effect was added: earlier effects tried against their rounds' runners-up.
     pub revisits: Vec<Revisit>,
+    /// A first effect added provisionally, closing only part of the held-out gap.
+    pub provisional: Option<Provisional>,
+}
+
+/// A first effect added although it closes only [`PARTIAL_GAP`] of the held-out gap, not
+/// [`GAP_CLOSED`]: kept only if the effects added after it bring every held-out fit to within
+/// [`FIT_TOLERANCE`] of its noise floor (src/diagnose/diagnose.md, "Two mechanisms at once").
+#[derive(Clone, Copy, Debug)]
+pub struct Provisional {
+    pub form: &'static Form,
+    /// Whether the later effects closed the rest; if not, it was dropped.
+    pub kept: bool,
 }
 
 /// An earlier effect tried against the best other candidate that passed in its round, once a
@@ -561,18 +585,46 @@ pub fn diagnose(
             ),
             t0.elapsed().as_secs_f64(),
         ));
-        let evidence: Vec<Option<Evidence>> = candidates
-            .iter()
-            .map(|c| {
-                c.refit.as_ref().map(|r| Evidence {
-                    delta_bic: r.delta_bic,
-                    fit_gain: r.fit_gain,
-                    passes: r.passes(),
+        let evidence = |passes: fn(&Refit) -> bool| -> Vec<Option<Evidence>> {
+            candidates
+                .iter()
+                .map(|c| {
+                    c.refit.as_ref().map(|r| Evidence {
+                        delta_bic: r.delta_bic,
+                        fit_gain: r.fit_gain,
+                        passes: passes(r),
+                    })
                 })
-            })
-            .collect();
+                .collect()
+        };
+        let mut decision = decide(&evidence(Refit::passes));
+        let mut provisional = None;
+        // no first effect closes half the gap: one that closes a clear part of it may be one of
+        // two causes; it is added provisionally, the one with the best BIC
+        if decision == Decision::Nothing
+            && effects.is_empty()
+            && let Decision::Add(k) | Decision::Tie(k, _) = decide(&evidence(|r| r.partial))
+        {
+            decision = Decision::Add(k);
+            provisional = Some(Provisional {
+                form: candidates[k].form,
+                kept: true,
+            });
+        }
+        // a later candidate that passes all but closing the rest of the gap may be held back by
+        // a stand-in chosen earlier for its share: it is tried with the earlier effects revisited
+        // beside it, and kept only when a revisit swaps one (src/diagnose/diagnose.md, "Two
+        // mechanisms at once")
+        let mut tentative = None;
+        if decision == Decision::Nothing
+            && !effects.is_empty()
+            && let Decision::Add(k) | Decision::Tie(k, _) = decide(&evidence(|r| r.short_of_floor))
+        {
+            decision = Decision::Add(k);
+            tentative = Some(current.clone());
+        }
         let round_effects = effects.clone();
-        let added = match decide(&evidence) {
+        let mut added = match decision {
             Decision::Nothing => {
                 if effects.is_empty() {
                     verdict = Some(Verdict::Unexplained);
@@ -604,7 +656,7 @@ pub fn diagnose(
                 Some(best.effect)
             }
         };
-        let added_form = added.and(forms.last().copied());
+        let mut added_form = added.and(forms.last().copied());
         let t0 = Instant::now();
         let revisits = if added.is_some() && effects.len() > 1 {
             let o = id_opts(Vec::new());
@@ -620,6 +672,13 @@ pub fn diagnose(
         } else {
             Vec::new()
         };
+        if let Some(before) = tentative.filter(|_| revisits.iter().all(|v| !v.swapped)) {
+            forms.pop();
+            effects.pop();
+            current = before;
+            added = None;
+            added_form = None;
+        }
         if !revisits.is_empty() {
             effects = forms.iter().map(|f| f.effect).collect();
             timing.push((
@@ -633,10 +692,28 @@ pub fn diagnose(
             candidates,
             added,
             revisits,
+            provisional,
         });
         if added.is_none() {
             break;
         }
+    }
+    // a provisional first effect stays only if, with what was added after it, every held-out
+    // fit is within the tolerance of its noise floor; otherwise the answer is as without it
+    let alone = effects.len() == 1 && verdict.is_none();
+    if let Some(first) = rounds.first_mut().filter(|r| r.provisional.is_some())
+        && alone
+        && worst_gap_to_floor(held_or_estimation(estimation, held), &current) > FIT_TOLERANCE
+    {
+        first.added = None;
+        first.added_form = None;
+        if let Some(p) = first.provisional.as_mut() {
+            p.kept = false;
+        }
+        effects.clear();
+        forms.clear();
+        current = base.clone();
+        verdict = Some(Verdict::Unexplained);
     }
     let verdict = verdict.unwrap_or(if effects.is_empty() {
         Verdict::None
@@ -855,13 +932,14 @@ fn judge(
     let (fit_gain, gap_closed) = held_out_gain(held_or_estimation(estimation, held), before, &id);
     let (interval, excludes) = magnitude_interval(form, &id, estimation);
     let mut failed = Vec::new();
+    let short_of_gap = gap_closed < GAP_CLOSED;
     if delta_bic > -BIC_MARGIN {
         failed.push(format!(
             "BIC drops by {:.1}, less than {BIC_MARGIN}",
             -delta_bic
         ));
     }
-    if gap_closed < GAP_CLOSED {
+    if short_of_gap {
         failed.push(format!(
             "closes {:.0} % of the held-out gap to the noise floor, less than {:.0} %",
             100.0 * gap_closed,
@@ -879,11 +957,14 @@ fn judge(
     // one cause at a time: a further effect must close what the first left on the held-out
     // data, not only shave the estimation's BIC (src/diagnose/diagnose.md, "The decision rule")
     let left = worst_gap_to_floor(held_or_estimation(estimation, held), &id);
-    if !forms.is_empty() && left > FIT_TOLERANCE {
+    let short_of_floor = !forms.is_empty() && left > FIT_TOLERANCE;
+    if short_of_floor {
         failed.push(format!(
             "leaves a held-out fit {left:.2} points below the noise floor: a further effect must close the gap to within {FIT_TOLERANCE}"
         ));
     }
+    let partial = short_of_gap && failed.len() == 1 && gap_closed >= PARTIAL_GAP;
+    let short_of_floor = short_of_floor && failed.len() == 1;
     Refit {
         id,
         delta_bic,
@@ -892,6 +973,8 @@ fn judge(
         interval,
         interval_excludes_neutral: excludes,
         failed,
+        partial,
+        short_of_floor,
     }
 }
 
@@ -908,7 +991,6 @@ fn magnitude_interval(
             .find(|e| e.name == name)
             .and_then(|e| e.ci95.map(|(lo, hi)| (name.to_string(), lo, hi)))
     };
-    let magnitude = form.free[0];
     match form.effect {
         Effect::Saturation => {
             let u_peak = analysis::peak_command(&estimation[0]);
@@ -927,17 +1009,33 @@ fn magnitude_interval(
             (best, ok)
         }
         _ => {
-            let c = ci(magnitude);
             // in log coordinates the interval is positive; its relative width must exclude 0
             // in linear terms: value / (1.96 se) > 1
-            let ok = id
-                .estimates
+            let excludes = |name: &str| {
+                id.estimates
+                    .iter()
+                    .find(|e| e.name == name)
+                    .and_then(|e| e.std_error.map(|se| e.value > 1.96 * se.abs()))
+                    .unwrap_or(false)
+            };
+            let magnitudes = magnitudes(form);
+            let shown = magnitudes
                 .iter()
-                .find(|e| e.name == magnitude)
-                .and_then(|e| e.std_error.map(|se| e.value > 1.96 * se.abs()))
-                .unwrap_or(false);
-            (c, ok)
+                .find(|n| excludes(n))
+                .unwrap_or(&magnitudes[0]);
+            (ci(shown), excludes(shown))
         }
+    }
+}
+
+/// The parameters that switch a form on: its first, or each of interchangeable ones (the two
+/// stages of a second-order amplifier, the two creep branches), of which one is enough; the
+/// fit may leave either of them near 0 (src/diagnose/diagnose.md, "The decision rule").
+fn magnitudes(form: &Form) -> &'static [&'static str] {
+    match (form.effect, form.name) {
+        (Effect::AmplifierLag, "second_order") => &["tau_a", "tau_a2"],
+        (Effect::Creep, "two_times") => &["k_v", "k_v2"],
+        _ => &form.free[..1],
     }
 }
 

@@ -120,6 +120,11 @@ pub fn to_json(d: &Diagnosis) -> Value {
             "effects_before": r.effects_before.iter().map(|e| e.name()).collect::<Vec<_>>(),
             "added": r.added.map(|e| e.name()),
             "added_form": r.added_form.map(|f| f.name),
+            "provisional": r.provisional.map(|p| json!({
+                "effect": p.form.effect.name(),
+                "form": p.form.name,
+                "kept": p.kept,
+            })),
             "candidates": r.candidates.iter().map(candidate_json).collect::<Vec<_>>(),
             "revisits": r.revisits.iter().map(|v| {
                 let mut j = json!({
@@ -444,9 +449,26 @@ pub fn write(dir: &Path, d: &Diagnosis) -> Result<(), FileError> {
                     f.free.join(", ")
                 ),
                 (Some(e), _) => format!("Added: `{}`, {}.", e.name(), e.form()),
+                (None, _) if !r.revisits.is_empty() => "Nothing added in this round: its best candidate, failing only by leaving a held-out fit beyond the tolerance of its noise floor, was tried tentatively with the earlier effects revisited beside it (below), and none of them was replaced.".into(),
                 (None, _) => "Nothing added in this round.".into(),
             }
         );
+        if let Some(p) = r.provisional {
+            let _ = writeln!(
+                md,
+                "No effect closes {:.0} % of the held-out gap: `{}` in the form `{}`, which closes at least {:.0} %, was added provisionally, to be kept only if the effects after it bring every held-out fit to within {} point(s) of its noise floor: {}.\n",
+                100.0 * super::GAP_CLOSED,
+                p.form.effect.name(),
+                p.form.name,
+                100.0 * super::PARTIAL_GAP,
+                super::FIT_TOLERANCE,
+                if p.kept {
+                    "kept"
+                } else {
+                    "they did not, and it was dropped"
+                }
+            );
+        }
         for v in &r.revisits {
             let _ = writeln!(
                 md,
