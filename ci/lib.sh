@@ -73,6 +73,14 @@ seed_target_dir() {
     fi
 }
 
+# One shared library of the FMUs, against glibc 2.17 (so it loads on older hosts), at opt-level
+# 2 rather than the release profile's 3: a co-simulation step runs about 40 KB of code, more than
+# the 32 KB first-level instruction cache, and the smaller code of opt-level 2 made the step
+# through the C API 2-5 % faster here in both FMI versions (README, "The solver").
+zigbuild_fmu_lib() {
+    CARGO_PROFILE_RELEASE_OPT_LEVEL=2 cargo zigbuild --release --lib --target "$FMU_TARGET.2.17" "$@"
+}
+
 # Builds the FMUs' shared libraries against glibc 2.17 (so they load on older hosts): the
 # platform's for FMI 2.0 and 3.0 and the inverse FMU's, the CLI, and packs fmu/HaselPlatform.fmu,
 # fmu/HaselPlatform-fmi3.fmu and fmu/HaselInverse.fmu.
@@ -80,18 +88,16 @@ build_fmu() {
     ensure_venv
     ensure_zigbuild
     step "build the FMU library against glibc 2.17 (cargo zigbuild)"
-    cargo zigbuild --release --lib --target "$FMU_TARGET.2.17"
+    zigbuild_fmu_lib
     step "build the FMI 3.0 library against glibc 2.17 (cargo zigbuild --features fmi3)"
     seed_target_dir "$FMU3_TARGET_DIR"
-    cargo zigbuild --release --lib --target "$FMU_TARGET.2.17" --features fmi3 \
-        --target-dir "$FMU3_TARGET_DIR"
+    zigbuild_fmu_lib --features fmi3 --target-dir "$FMU3_TARGET_DIR"
     step "build the hasel command"
     cargo build --release --bin hasel
     step "pack fmu/HaselPlatform.fmu and fmu/HaselPlatform-fmi3.fmu"
     ./target/release/hasel fmu --lib "$FMU_LIB" --lib-fmi3 "$FMU3_LIB"
     step "build the inverse FMU's library (feature inverse-fmu) and pack fmu/HaselInverse.fmu"
     seed_target_dir "$INVERSE_TARGET_DIR"
-    cargo zigbuild --release --lib --features inverse-fmu --target "$FMU_TARGET.2.17" \
-        --target-dir "$INVERSE_TARGET_DIR"
+    zigbuild_fmu_lib --features inverse-fmu --target-dir "$INVERSE_TARGET_DIR"
     ./target/release/hasel fmu --model inverse --lib "$INVERSE_LIB"
 }
