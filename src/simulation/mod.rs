@@ -141,6 +141,20 @@ pub struct Sample {
     pub tip: [f64; 3],
 }
 
+impl Sample {
+    /// The outputs of `model` at state `x`, time `t` and input `u`: the heights once, and the
+    /// tip from them (model.md, "Kinematics").
+    pub fn of(model: &Platform, t: f64, u: [f64; 3], x: &[f64]) -> Sample {
+        let y = model.outputs(x);
+        Sample {
+            t,
+            u,
+            h: [y[0], y[1], y[2]],
+            tip: [y[3], y[4], y[5]],
+        }
+    }
+}
+
 /// A running simulation of the platform: its model, the integrator and the input last applied.
 #[derive(Clone, Debug)]
 pub struct Simulator {
@@ -262,13 +276,7 @@ impl Simulator {
 
     /// The outputs at the current point.
     pub fn sample(&self) -> Sample {
-        let x = self.solver.y();
-        Sample {
-            t: self.t(),
-            u: self.u_now,
-            h: self.model.heights(x),
-            tip: self.model.tip(x),
-        }
+        Sample::of(&self.model, self.t(), self.u_now, self.solver.y())
     }
 
     /// Makes `piece` the input from now on; restarts the integrator where the input jumps.
@@ -469,12 +477,7 @@ impl Simulator {
             loop {
                 while k < times.len() && times[k] <= self.t() {
                     self.solver.interpolate(times[k], &mut x);
-                    let sample = Sample {
-                        t: times[k],
-                        u: input.value(times[k]),
-                        h: self.model.heights(&x),
-                        tip: self.model.tip(&x),
-                    };
+                    let sample = Sample::of(&self.model, times[k], input.value(times[k]), &x);
                     observer.sampled(&sample, &x);
                     k += 1;
                 }

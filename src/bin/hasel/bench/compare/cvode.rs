@@ -17,7 +17,7 @@ use hasel_fmu::model::Platform;
 use hasel_fmu::simulation::{Input, Sample, SimError, tolerances};
 use sundials_sys as sun;
 
-use super::{Case, Work, sample};
+use super::{Case, Work};
 use crate::error::Error;
 
 /// CVODE's linear solver for the Newton iterations.
@@ -242,7 +242,7 @@ pub fn run(
     };
     let (dt, n_out) = (1e-3, 10_000usize);
     let mut samples = Vec::with_capacity(n_out + 1);
-    samples.push(sample(model, 0.0, problem.input.value(0.0), &x0));
+    samples.push(Sample::of(model, 0.0, problem.input.value(0.0), &x0));
     // SAFETY: the SUNDIALS calls get the objects created here (freed by `cv`'s drop) and the
     // problem, which outlives every CVode call
     unsafe {
@@ -303,7 +303,12 @@ pub fn run(
                         "CVode",
                         sun::CVode(cv.mem, tk, cv.y, &mut t, sun::CV_NORMAL),
                     )?;
-                    samples.push(sample(model, tk, problem.input.value(tk), slice(cv.y, n)));
+                    samples.push(Sample::of(
+                        model,
+                        tk,
+                        problem.input.value(tk),
+                        slice(cv.y, n),
+                    ));
                 }
                 counters(cv.mem, &mut work)?;
             }
@@ -317,7 +322,12 @@ pub fn run(
                         "CVode",
                         sun::CVode(cv.mem, t1, cv.y, &mut t, sun::CV_NORMAL),
                     )?;
-                    samples.push(sample(model, t1, problem.input.value(t1), slice(cv.y, n)));
+                    samples.push(Sample::of(
+                        model,
+                        t1,
+                        problem.input.value(t1),
+                        slice(cv.y, n),
+                    ));
                     // CVodeReInit sets CVODE's counters to zero: take them before it
                     counters(cv.mem, &mut work)?;
                 }

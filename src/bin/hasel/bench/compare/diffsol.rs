@@ -16,7 +16,7 @@ use diffsol::{
 use hasel_fmu::model::Platform;
 use hasel_fmu::simulation::{Input, Sample, SimError, tolerances};
 
-use super::{Case, Work, sample};
+use super::{Case, Work};
 use crate::error::Error;
 
 type M = NalgebraMat<f64>;
@@ -187,7 +187,7 @@ impl Drive<'_, '_> {
         let (dt, n_out) = (1e-3, 10_000usize);
         let mut samples = Vec::with_capacity(n_out + 1);
         let y = solver.state().y.batch_as_slice(0).to_vec();
-        samples.push(sample(self.model, 0.0, self.input.value(0.0), &y));
+        samples.push(Sample::of(self.model, 0.0, self.input.value(0.0), &y));
         match self.case {
             Case::Sine => {
                 // adaptive steps to 10 s (stopping exactly there), outputs from the interpolant
@@ -200,7 +200,7 @@ impl Drive<'_, '_> {
                     while k <= n_out && (k as f64 * dt).min(t_end) <= t {
                         let ts = (k as f64 * dt).min(t_end);
                         let x = solver.interpolate(ts)?;
-                        samples.push(sample(
+                        samples.push(Sample::of(
                             self.model,
                             ts,
                             self.input.value(ts),
@@ -237,7 +237,7 @@ impl Drive<'_, '_> {
                     while !matches!(solver.step()?, OdeSolverStopReason::TstopReached) {}
                     let st = solver.state();
                     let t = st.t;
-                    samples.push(sample(
+                    samples.push(Sample::of(
                         self.model,
                         t,
                         self.input.value(t),

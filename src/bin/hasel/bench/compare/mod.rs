@@ -104,15 +104,6 @@ pub struct Row {
     pub dh: Option<f64>,
 }
 
-pub fn sample(model: &Platform, t: f64, u: [f64; 3], x: &[f64]) -> Sample {
-    Sample {
-        t,
-        u,
-        h: model.heights(x),
-        tip: model.tip(x),
-    }
-}
-
 fn dh_against(reference: &Table, samples: &[Sample]) -> Option<f64> {
     error_against(reference, samples).map(|(dh, _)| dh)
 }
