@@ -1018,24 +1018,13 @@ fn magnitude_interval(
                     .and_then(|e| e.std_error.map(|se| e.value > 1.96 * se.abs()))
                     .unwrap_or(false)
             };
-            let magnitudes = magnitudes(form);
-            let shown = magnitudes
+            let shown = form
+                .magnitudes
                 .iter()
                 .find(|n| excludes(n))
-                .unwrap_or(&magnitudes[0]);
+                .unwrap_or(&form.magnitudes[0]);
             (ci(shown), excludes(shown))
         }
-    }
-}
-
-/// The parameters that switch a form on: its first, or each of interchangeable ones (the two
-/// stages of a second-order amplifier, the two creep branches), of which one is enough; the
-/// fit may leave either of them near 0 (src/diagnose/diagnose.md, "The decision rule").
-fn magnitudes(form: &Form) -> &'static [&'static str] {
-    match (form.effect, form.name) {
-        (Effect::AmplifierLag, "second_order") => &["tau_a", "tau_a2"],
-        (Effect::Creep, "two_times") => &["k_v", "k_v2"],
-        _ => &form.free[..1],
     }
 }
 

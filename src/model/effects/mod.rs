@@ -117,6 +117,7 @@ impl Effect {
                 effect,
                 name,
                 free,
+                magnitudes: free.split_at(1).0,
                 settings,
             }
         }
@@ -142,7 +143,10 @@ impl Effect {
         ];
         const CREEP: [Form; 2] = [
             form(Creep, "one_time", &["k_v", "tau_v"], &[]),
-            form(Creep, "two_times", &["k_v", "tau_v", "k_v2", "tau_v2"], &[]),
+            Form {
+                magnitudes: &["k_v", "k_v2"],
+                ..form(Creep, "two_times", &["k_v", "tau_v", "k_v2", "tau_v2"], &[])
+            },
         ];
         const HYSTERESIS: [Form; 2] = [
             form(Hysteresis, "rate_independent", &["k_h", "theta_h"], &[]),
@@ -155,7 +159,10 @@ impl Effect {
         ];
         const AMPLIFIER: [Form; 2] = [
             form(AmplifierLag, "first_order", &["tau_a"], &[]),
-            form(AmplifierLag, "second_order", &["tau_a", "tau_a2"], &[]),
+            Form {
+                magnitudes: &["tau_a", "tau_a2"],
+                ..form(AmplifierLag, "second_order", &["tau_a", "tau_a2"], &[])
+            },
         ];
         const DELAY: [Form; 1] = [form(Delay, "constant", &["tau_d"], &[])];
         const SATURATION: [Form; 1] = [form(Saturation, "hard", &["U_max"], &[])];
@@ -210,6 +217,10 @@ pub struct Form {
     pub effect: Effect,
     pub name: &'static str,
     pub free: &'static [&'static str],
+    /// The parameters that switch the form on, any one of which is enough: its first free
+    /// parameter, or each of interchangeable ones (the two stages of a second-order amplifier,
+    /// the two creep branches), of which a fit may leave either near 0.
+    pub magnitudes: &'static [&'static str],
     /// Parameters set to select the form, never fitted (e.g. `drift_site`).
     pub settings: &'static [(&'static str, f64)],
 }
