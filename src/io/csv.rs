@@ -176,19 +176,28 @@ const ROWS_PER_THREAD: usize = 2_000;
 /// The rows as CSV lines, into one buffer.
 fn format_rows<R: AsRef<[f64]>>(rows: &[R]) -> Vec<u8> {
     let width = rows.first().map_or(0, |r| r.as_ref().len());
-    // ~20 bytes a number is the common case (sign, 17 digits, point, exponent)
-    let mut text = Vec::with_capacity(rows.len() * width * 20);
+    let mut text = Vec::with_capacity(rows.len() * width * BYTES_PER_NUMBER);
     let mut number = zmij::Buffer::new();
     for row in rows {
-        for (k, v) in row.as_ref().iter().enumerate() {
-            if k > 0 {
-                text.push(b',');
-            }
-            text.extend_from_slice(number.format(*v).as_bytes());
-        }
-        text.push(b'\n');
+        format_row(&mut text, &mut number, row.as_ref());
     }
     text
+}
+
+/// Room for a number and its separator in the common case (sign, 17 digits, point, exponent,
+/// comma).
+pub const BYTES_PER_NUMBER: usize = 24;
+
+/// Appends `row` to `text` as one CSV line, each number in its shortest round-trip form
+/// (formatted in `number`, which the caller keeps across rows).
+pub fn format_row(text: &mut Vec<u8>, number: &mut zmij::Buffer, row: &[f64]) {
+    for (k, v) in row.iter().enumerate() {
+        if k > 0 {
+            text.push(b',');
+        }
+        text.extend_from_slice(number.format(*v).as_bytes());
+    }
+    text.push(b'\n');
 }
 
 #[cfg(test)]

@@ -101,11 +101,21 @@ pub fn run(a: Args) -> Result<(), Error> {
         );
         bar
     });
+    // the CSV is written while the run computes it (on a second core), and appears only
+    // once the run has succeeded
+    let mut csv = a
+        .out
+        .as_deref()
+        .map(trajectory::Stream::create)
+        .transpose()?;
     let started = Instant::now();
-    let mut samples: Vec<Sample> = Vec::new();
+    let mut samples: Vec<Sample> = Vec::with_capacity(expected_samples(t_end, a.dt));
     sim.run(&input, t_end, a.dt, |s| {
         if let Some(b) = &bar {
             b.set_position((s.t * 1000.0) as u64);
+        }
+        if let Some(csv) = &mut csv {
+            csv.push(s);
         }
         samples.push(*s);
     })?;
@@ -142,8 +152,8 @@ pub fn run(a: Args) -> Result<(), Error> {
         range(&|s| s.tip[0]),
         range(&|s| s.tip[1])
     );
-    if let Some(path) = &a.out {
-        trajectory::write(path, &samples)?;
+    if let (Some(csv), Some(path)) = (csv, &a.out) {
+        csv.finish()?;
         say!("wrote {}", path.display());
     }
     if let Some(path) = &a.plot {
@@ -151,6 +161,13 @@ pub fn run(a: Args) -> Result<(), Error> {
         say!("wrote {}", path.display());
     }
     Ok(())
+}
+
+/// Samples of a run to `t_end` every `dt` (0, dt, ... and t_end), bounded so that a wild
+/// request reserves no more than it would fill before its first report.
+fn expected_samples(t_end: f64, dt: f64) -> usize {
+    const MOST: f64 = 1e7;
+    ((t_end / dt).ceil() + 1.0).clamp(1.0, MOST) as usize
 }
 
 /// h_i(t) and the tip's XY path.
