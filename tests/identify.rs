@@ -220,3 +220,43 @@ fn parameters_the_data_cannot_determine_are_reported_not_fitted() {
         "{kb:?}"
     );
 }
+
+/// `iteration_budget` bounds a group's Levenberg–Marquardt iterations over all its runs; the fit
+/// then ends where it got to, still a fit with its fits and covariance.
+#[test]
+fn an_iteration_budget_ends_each_group_fit_where_it_got_to() {
+    let truth = Params::default();
+    let start = offset_start(&truth);
+    let est = [experiment(
+        "w3pi.csv",
+        3.0 * std::f64::consts::PI,
+        Columns::Heights,
+        11,
+        &truth,
+    )];
+    let free_run = identify(&start, &est, &[], &Options::default()).unwrap();
+    let budget = 2;
+    let cut = identify(
+        &start,
+        &est,
+        &[],
+        &Options {
+            iteration_budget: Some(budget),
+            ..Options::default()
+        },
+    )
+    .unwrap();
+    // one group per actuator: the heights are measured apart
+    assert!(
+        cut.iterations <= 3 * budget,
+        "{} iterations",
+        cut.iterations
+    );
+    assert!(free_run.iterations > cut.iterations);
+    let total = |fits: &[hasel_fmu::identify::ExperimentFit]| -> f64 {
+        fits[0].fits.iter().map(|(_, f)| f).sum()
+    };
+    // it got somewhere, and not as far as the fit without a budget
+    assert!(total(&cut.estimation) > total(&cut.estimation_before) + 1.0);
+    assert!(total(&cut.estimation) <= total(&free_run.estimation) + 1e-6);
+}

@@ -470,7 +470,14 @@ pub(super) fn fit_group(
                 z.clamp(z_lo[k], z_hi[k])
             })
             .collect();
-        let sol = lm::minimize(&reduced, &z_start, &z_lo, &z_hi, &lm_opts)?;
+        let left = opts
+            .iteration_budget
+            .map_or(usize::MAX, |b| b.saturating_sub(iterations));
+        let run = lm::Options {
+            max_iterations: lm_opts.max_iterations.min(left),
+            ..lm_opts.clone()
+        };
+        let sol = lm::minimize(&reduced, &z_start, &z_lo, &z_hi, &run)?;
         iterations += sol.iterations;
         // polish with Gauss–Newton on the sensitivities of tighter simulations, which
         // also gives the covariance: Kb and gamma1 correlate to 0.999, and forward differences

@@ -49,6 +49,10 @@ pub struct Options {
     /// Relative tolerance of the simulations (default [`FIT_RTOL`]).
     pub rtol: f64,
     pub lm: lm::Options,
+    /// Levenberg–Marquardt iterations a group's fit may take in all, over its runs after
+    /// holding undetermined directions (each run also stops at `lm.max_iterations`); `None`:
+    /// no limit beyond that. Where it runs out the fit ends where it got to, converged or not.
+    pub iteration_budget: Option<usize>,
 }
 
 impl Default for Options {
@@ -61,6 +65,7 @@ impl Default for Options {
                 fd_step: 1e-4,
                 ..lm::Options::default()
             },
+            iteration_budget: None,
         }
     }
 }
