@@ -253,6 +253,7 @@ fn an_iteration_budget_ends_each_group_fit_where_it_got_to() {
         cut.iterations
     );
     assert!(free_run.iterations > cut.iterations);
+    assert!(cut.out_of_budget && !free_run.out_of_budget);
     let total = |fits: &[hasel_fmu::identify::ExperimentFit]| -> f64 {
         fits[0].fits.iter().map(|(_, f)| f).sum()
     };

@@ -190,6 +190,8 @@ pub(super) struct GroupResult {
     pub(super) covariance: DMatrix<f64>,
     pub(super) iterations: usize,
     pub(super) simulations: usize,
+    /// A run of the fit ended unconverged because the iteration budget ran out.
+    pub(super) out_of_budget: bool,
 }
 
 /// The group's problem seen in reduced coordinates z: x = x0 + B z, clamped to the bounds.
@@ -424,6 +426,7 @@ pub(super) fn fit_group(
     let mut held: Vec<DVector<f64>> = Vec::new();
     let mut reasons: Vec<String> = Vec::new();
     let mut iterations = 0;
+    let mut out_of_budget = false;
     // the fit stops where the noise can no longer tell a step (see NOISE_TELL)
     let lm_opts = lm::Options {
         ftol: opts.lm.ftol.max(NOISE_TELL / len as f64),
@@ -459,6 +462,7 @@ pub(super) fn fit_group(
                     covariance: DMatrix::zeros(0, 0),
                     iterations,
                     simulations,
+                    out_of_budget,
                 },
             ));
         }
@@ -479,6 +483,7 @@ pub(super) fn fit_group(
         };
         let sol = lm::minimize(&reduced, &z_start, &z_lo, &z_hi, &run)?;
         iterations += sol.iterations;
+        out_of_budget |= !sol.converged && left < lm_opts.max_iterations && sol.iterations == left;
         // polish with Gauss–Newton on the sensitivities of tighter simulations, which
         // also gives the covariance: Kb and gamma1 correlate to 0.999, and forward differences
         // at the optimiser's tolerance misjudge the gradient and the information along that valley
@@ -640,6 +645,7 @@ pub(super) fn fit_group(
                 covariance,
                 iterations,
                 simulations,
+                out_of_budget,
             },
         ));
     }

@@ -122,6 +122,8 @@ pub struct Identification {
     pub estimation_before: Vec<ExperimentFit>,
     pub iterations: usize,
     pub simulations: usize,
+    /// A group's fit ended unconverged at `Options::iteration_budget`.
+    pub out_of_budget: bool,
     pub seconds: f64,
     /// Simulated outputs at the fitted parameters, estimation then validation experiments.
     pub simulated: Vec<Vec<Sample>>,
@@ -198,6 +200,7 @@ pub fn identify(
 
     let mut params = start.clone();
     let (mut iterations, mut simulations) = (0, estimation.len());
+    let mut out_of_budget = false;
     let mut estimated: Vec<(String, f64, f64, (f64, f64))> = Vec::new();
     let mut not_identifiable = Vec::new();
     let mut held_combinations = Vec::new();
@@ -221,6 +224,7 @@ pub fn identify(
         }
         iterations += r.iterations;
         simulations += r.simulations;
+        out_of_budget |= r.out_of_budget;
         estimated.extend(r.estimates);
         not_identifiable.extend(r.not_identifiable);
         held_combinations.extend(r.held_combinations);
@@ -297,6 +301,7 @@ pub fn identify(
         estimation_before,
         iterations,
         simulations,
+        out_of_budget,
         seconds: began.elapsed().as_secs_f64(),
         simulated,
     })

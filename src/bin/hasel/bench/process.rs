@@ -25,6 +25,13 @@ const SIMULATE: [&str; 7] = [
     "0.001",
 ];
 
+/// Issue #14's yardstick: the Python implementation of the same model with SUNDIALS CVODE and
+/// an analytic Jacobian, integration only, 10 s of the default excitation [ms] (measured by the
+/// issue's author; the Python code is not part of this repository).
+const PYTHON_CVODE_MS: f64 = 468.0;
+/// The whole process with `--out` must be this many times faster than that.
+const TARGET_SPEEDUP: f64 = 50.0;
+
 /// Best wall time of `repeat` runs of this executable with `args`, each after `before` (not
 /// timed).
 fn process(repeat: usize, args: &[&str], before: impl FnMut()) -> Result<Duration, Error> {
@@ -98,11 +105,21 @@ fn measure(repeat: usize, csv: &Path) -> Result<(), Error> {
         "hasel {} [--out run.csv], whole process, best of {repeat}",
         SIMULATE.join(" ")
     );
+    let speedup = |d: Duration| PYTHON_CVODE_MS / ms(d);
+    let slower = new_file.max(over_existing);
     say!(
-        "  without --out {:.1} ms | with --out {:.1} ms ({:.1} ms over an existing run.csv)",
+        "  without --out {:.1} ms | with --out {:.1} ms ({:.1} ms over an existing run.csv): \
+         {:.0}x / {:.0}x the Python run's {PYTHON_CVODE_MS} ms (target >= {TARGET_SPEEDUP}x: {})",
         ms(quiet),
         ms(new_file),
         ms(over_existing),
+        speedup(new_file),
+        speedup(over_existing),
+        if speedup(slower) >= TARGET_SPEEDUP {
+            "met"
+        } else {
+            "MISSED"
+        },
     );
     say!(
         "  in the process: integration and sampling {:.2} ms; writing the {}-row CSV alone {:.2} ms \
