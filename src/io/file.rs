@@ -180,6 +180,17 @@ fn replace_file(tmp: &Path, path: &Path) -> bool {
     swapped
 }
 
+/// The names in folder `dir`, for tests that no temporary file is left behind.
+#[cfg(test)]
+pub(crate) fn file_names(dir: &Path) -> Vec<std::ffi::OsString> {
+    let mut names: Vec<_> = std::fs::read_dir(dir)
+        .expect("a readable folder")
+        .map(|e| e.expect("a readable entry").file_name())
+        .collect();
+    names.sort();
+    names
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -191,11 +202,7 @@ mod tests {
         write_text_atomic(&path, "first\n").unwrap();
         write_text_atomic(&path, "second\n").unwrap();
         assert_eq!(std::fs::read_to_string(&path).unwrap(), "second\n");
-        let names: Vec<_> = std::fs::read_dir(&dir)
-            .unwrap()
-            .map(|e| e.unwrap().file_name())
-            .collect();
-        assert_eq!(names, ["out.txt"]);
+        assert_eq!(file_names(&dir), ["out.txt"]);
         let e = write_text_atomic(&dir, "x").unwrap_err();
         assert!(
             e.to_string().ends_with("is a folder: name a file in it"),

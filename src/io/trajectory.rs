@@ -169,11 +169,7 @@ mod tests {
         (0..2 * CHUNK).for_each(|k| stream.push(&sample(k)));
         drop(stream); // a run that failed half-way
         assert_eq!(std::fs::read_to_string(&path).unwrap(), "old\n");
-        let names: Vec<_> = std::fs::read_dir(&dir)
-            .unwrap()
-            .map(|e| e.unwrap().file_name())
-            .collect();
-        assert_eq!(names, ["run.csv"]);
+        assert_eq!(crate::io::file::file_names(&dir), ["run.csv"]);
         // a path that cannot be a file fails at once, naming it
         let e = Stream::create(&dir).err().unwrap();
         assert!(e.to_string().starts_with(&dir.display().to_string()), "{e}");
