@@ -670,12 +670,13 @@ pub fn diagnose(
                 forms.push(best.form);
                 // the budget bounds the competition, not the answer: the model taken on is
                 // fitted to convergence
-                current = converged(rb.id.clone(), estimation, held, &{
-                    let mut o = id_opts(free_list(&forms));
-                    o.iteration_budget = None;
-                    o.lm.deadline = Some(Instant::now() + opts.refit_budget);
-                    o
-                });
+                current = converged(
+                    rb.id.clone(),
+                    estimation,
+                    held,
+                    &id_opts(free_list(&forms)),
+                    opts.refit_budget,
+                );
                 Some(best.effect)
             }
         };
@@ -767,18 +768,23 @@ pub fn diagnose(
     })
 }
 
-/// `id` itself, or where its fit goes on to converge (with `opts`, which have no iteration
-/// budget) when it stopped at the budget; where going on fails (the time budget), `id`.
+/// `id` itself, or, when its fit stopped at the iteration budget, where that fit goes on to
+/// converge: the options it was made with (`refit`) without the budget, given a fresh `time`;
+/// where going on fails (the time runs out), `id`.
 fn converged(
     id: Identification,
     estimation: &[Experiment],
     held: &[Experiment],
-    opts: &IdOptions,
+    refit: &IdOptions,
+    time: Duration,
 ) -> Identification {
     if !id.out_of_budget {
         return id;
     }
-    identify::identify(&id.params, estimation, held, opts).unwrap_or(id)
+    let mut o = refit.clone();
+    o.iteration_budget = None;
+    o.lm.deadline = Some(Instant::now() + time);
+    identify::identify(&id.params, estimation, held, &o).unwrap_or(id)
 }
 
 /// Once a later effect has been added, each earlier effect (the model's `forms`, `current`) is
@@ -837,11 +843,7 @@ fn revisit(
                 let swapped = delta <= -BIC_MARGIN && at_floor;
                 if swapped {
                     forms[pos] = c.form;
-                    let full = IdOptions {
-                        iteration_budget: None,
-                        ..o.clone()
-                    };
-                    *current = converged(id, estimation, held, &full);
+                    *current = converged(id, estimation, held, &o, opts.refit_budget);
                 }
                 (Ok(delta), swapped)
             }
