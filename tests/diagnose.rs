@@ -197,11 +197,16 @@ fn film_retention_and_hysteresis_are_both_named() {
 
 #[test]
 fn an_amplifier_lag_and_stiffening_are_both_named() {
-    // on this device a delay stands in for the lag in the first round, and the stiffening
-    // beside it leaves the held-out fits short of the floor: it is added tentatively, and the
-    // revisit puts the amplifier in the delay's place
+    // on this device a delay passes beside the lag in the first round; once the stiffening is
+    // added, the revisit tries the delay in the lag's place, and the lag stays
     let d = both_named("amplifier_lag+stiffening", 3);
-    assert!(d.rounds[1].revisits.iter().any(|v| v.swapped));
+    assert_eq!(d.effects[0], Effect::AmplifierLag);
+    let revisits = &d.rounds[1].revisits;
+    assert!(
+        revisits.iter().any(|v| v.by.effect == Effect::Delay)
+            && revisits.iter().all(|v| !v.swapped),
+        "{revisits:?}"
+    );
 }
 
 #[test]

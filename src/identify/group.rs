@@ -5,7 +5,7 @@
 use nalgebra::{DMatrix, DVector};
 
 use super::experiment::{Channel, Experiment};
-use super::{Error, Options, lm, simulate};
+use super::{Error, Hold, Options, lm, simulate};
 use crate::model::Params;
 use crate::model::params::{ParamDef, Rule};
 use crate::simulation::sensitivity::{Direction, simulate_sensitive};
@@ -434,11 +434,13 @@ pub(super) fn fit_group(
     };
     // where the last fit ended: a refit after holding a direction starts there
     let mut x_last = x0.clone();
+    // where the held directions are held: the start, or where the fit had taken them
+    let mut anchor = x0.clone();
     loop {
         let basis = complement(n, &held);
         let reduced = Reduced {
             inner: &problem,
-            x0: &x0,
+            x0: &anchor,
             basis: &basis,
             lo: &lo,
             hi: &hi,
@@ -470,7 +472,9 @@ pub(super) fn fit_group(
         // the last fit's point without its component along the held directions
         let z_start: Vec<f64> = (0..m)
             .map(|k| {
-                let z: f64 = (0..n).map(|i| basis[(i, k)] * (x_last[i] - x0[i])).sum();
+                let z: f64 = (0..n)
+                    .map(|i| basis[(i, k)] * (x_last[i] - anchor[i]))
+                    .sum();
                 z.clamp(z_lo[k], z_hi[k])
             })
             .collect();
@@ -576,6 +580,9 @@ pub(super) fn fit_group(
             }
             held.push(v.normalize());
             reasons.push(reason);
+            if opts.hold == Hold::Reached {
+                anchor = x.clone();
+            }
             x_last = x;
             continue;
         }
@@ -597,7 +604,13 @@ pub(super) fn fit_group(
                         .map(|(c, w)| (c.def.name.to_string(), *w))
                         .collect(),
                 );
-                not_identifiable.push((format!("combination {text}"), format!("{r}; held at its start value, so the parameters in it are estimated relative to that")));
+                not_identifiable.push((
+                    format!("combination {text}"),
+                    format!(
+                        "{r}; held {}, so the parameters in it are estimated relative to that",
+                        opts.hold.at()
+                    ),
+                ));
             }
         }
         let active: Vec<usize> = (0..n)
@@ -605,7 +618,11 @@ pub(super) fn fit_group(
             .collect();
         // held parameters keep their start value exactly (not exp(ln(value)))
         let mut fitted = base.clone();
-        for &c in &active {
+        let set: Vec<usize> = match opts.hold {
+            Hold::Start => active.clone(),
+            Hold::Reached => (0..n).collect(),
+        };
+        for &c in &set {
             fitted.set(coords[c].def.name, value_at(c, x[c]))?;
         }
         let estimates = active

@@ -53,6 +53,29 @@ pub struct Options {
     /// holding undetermined directions (each run also stops at `lm.max_iterations`); `None`:
     /// no limit beyond that. Where it runs out the fit ends where it got to, converged or not.
     pub iteration_budget: Option<usize>,
+    /// Where a direction the data do not determine is held.
+    pub hold: Hold,
+}
+
+/// Where a group's fit holds a direction of parameter space the data do not determine
+/// (src/identify/identify.md, "How `hasel identify` estimates").
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Hold {
+    /// At the start value: the prior, which the data cannot improve on along it.
+    Start,
+    /// Where the fit had taken it when it was found: for a start that is a guess, such as a
+    /// diagnosis's refit, where holding it at the start would undo what the fit had gained.
+    Reached,
+}
+
+impl Hold {
+    /// Where, in words.
+    pub fn at(self) -> &'static str {
+        match self {
+            Hold::Start => "at its start value",
+            Hold::Reached => "where the fit had taken it",
+        }
+    }
 }
 
 impl Default for Options {
@@ -66,6 +89,7 @@ impl Default for Options {
                 ..lm::Options::default()
             },
             iteration_budget: None,
+            hold: Hold::Start,
         }
     }
 }
