@@ -309,12 +309,14 @@ pub fn minimize(
                 break;
             }
         }
-        confirming = false;
         if !converged {
-            let (j, spent, o) = jacobian_at(p, &x, &r, (lo, hi), own, opts)?;
+            // a confirmation that found more to go hands back to the problem's own Jacobian:
+            // differences cost a simulation per parameter, every iteration
+            let (j, spent, o) = jacobian_at(p, &x, &r, (lo, hi), own || confirming, opts)?;
             (jac, own) = (j, o);
             evaluations += spent;
         }
+        confirming = false;
     }
     Ok(Solution {
         x,
