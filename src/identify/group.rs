@@ -194,21 +194,22 @@ pub(super) struct GroupResult {
     pub(super) out_of_budget: bool,
 }
 
-/// The group's problem seen in reduced coordinates z: x = x0 + B z, clamped to the bounds.
-/// The columns of B span the directions the data determine; the others stay at the start.
+/// The group's problem seen in reduced coordinates z: x = anchor + B z, clamped to the bounds.
+/// The columns of B span the directions the data determine; the others stay where they are
+/// held, at the anchor (the start, or where the fit had taken them: [`Hold`]).
 struct Reduced<'a, 'b> {
     inner: &'a Problem<'b>,
-    x0: &'a [f64],
+    anchor: &'a [f64],
     basis: &'a DMatrix<f64>,
     lo: &'a [f64],
     hi: &'a [f64],
 }
 
 impl Reduced<'_, '_> {
-    /// x0 + B z before the clamping.
+    /// anchor + B z before the clamping.
     fn unclamped(&self, z: &[f64]) -> Vec<f64> {
-        (0..self.x0.len())
-            .map(|i| self.x0[i] + (0..z.len()).map(|k| self.basis[(i, k)] * z[k]).sum::<f64>())
+        (0..self.anchor.len())
+            .map(|i| self.anchor[i] + (0..z.len()).map(|k| self.basis[(i, k)] * z[k]).sum::<f64>())
             .collect()
     }
 
@@ -224,8 +225,8 @@ impl Reduced<'_, '_> {
                     return (f64::NEG_INFINITY, f64::INFINITY);
                 }
                 let (a, b) = (
-                    (self.lo[i] - self.x0[i]) / col[i],
-                    (self.hi[i] - self.x0[i]) / col[i],
+                    (self.lo[i] - self.anchor[i]) / col[i],
+                    (self.hi[i] - self.anchor[i]) / col[i],
                 );
                 (a.min(b), a.max(b))
             })
@@ -257,7 +258,7 @@ impl lm::Residuals for Reduced<'_, '_> {
         if u != x {
             for (k, zk) in z.iter_mut().enumerate() {
                 *zk = (0..x.len())
-                    .map(|i| self.basis[(i, k)] * (x[i] - self.x0[i]))
+                    .map(|i| self.basis[(i, k)] * (x[i] - self.anchor[i]))
                     .sum();
             }
         }
@@ -344,8 +345,8 @@ fn describe(v: &DVector<f64>, coords: &[Coordinate]) -> (Option<String>, String)
 
 /// Fits one group. Directions of parameter space the data do not determine (a parameter
 /// without influence, or a combination such as a common scale of Kb, b and gamma1² that only
-/// moves the unobserved heave) are found from the covariance, held at the start value, and the
-/// rest is fitted again.
+/// moves the unobserved heave) are found from the covariance, held (at the start value, or
+/// where the fit had taken them: `opts.hold`), and the rest is fitted again.
 pub(super) fn fit_group(
     base: &Params,
     group: &Group,
@@ -440,7 +441,7 @@ pub(super) fn fit_group(
         let basis = complement(n, &held);
         let reduced = Reduced {
             inner: &problem,
-            x0: &anchor,
+            anchor: &anchor,
             basis: &basis,
             lo: &lo,
             hi: &hi,
@@ -616,13 +617,10 @@ pub(super) fn fit_group(
         let active: Vec<usize> = (0..n)
             .filter(|&c| !fixed.iter().any(|f| f == coords[c].def.name))
             .collect();
-        // held parameters keep their start value exactly (not exp(ln(value)))
+        // a parameter held at the start keeps its start value exactly (not exp(ln(value)));
+        // one held where the fit had taken it takes that value
         let mut fitted = base.clone();
-        let set: Vec<usize> = match opts.hold {
-            Hold::Start => active.clone(),
-            Hold::Reached => (0..n).collect(),
-        };
-        for &c in &set {
+        for c in (0..n).filter(|c| opts.hold == Hold::Reached || active.contains(c)) {
             fitted.set(coords[c].def.name, value_at(c, x[c]))?;
         }
         let estimates = active
