@@ -29,8 +29,8 @@ pub enum Interpolation {
     Spline,
     /// A measured command (src/identify/identify.md, "How an experiment is simulated"): the
     /// natural spline through each smooth run of samples, and the command held across a step
-    /// (a change from one sample to the next larger than [`STEP_MIN`] and [`STEP_RATIO`] times
-    /// both neighbouring changes), where the integrator stops exactly, as with zero-order hold.
+    /// (a change from one sample to the next larger than [`STEP_MIN`], at a rate [`STEP_RATIO`]
+    /// times both neighbouring intervals' rates: a gap of dropped rows is no step), where the integrator stops exactly, as with zero-order hold.
     /// A staircase replays as steps, a sine or a chirp as one spline.
     Measured,
 }
@@ -157,7 +157,7 @@ impl Input {
             return Err(InputError::VoltageNotFinite { sample: k, u: u[k] });
         }
         let steps = if interpolation == Interpolation::Measured {
-            steps(&u)
+            steps(&t, &u)
         } else {
             Vec::new()
         };
@@ -269,10 +269,11 @@ fn pchip_slope(t: &[f64], u: &[[f64; 3]], k: usize) -> [f64; 3] {
 
 /// The intervals a measured command steps in (see [`Interpolation::Measured`]), on any of the
 /// three channels.
-fn steps(u: &[[f64; 3]]) -> Vec<usize> {
-    let change = |k: usize, i: usize| -> f64 {
+fn steps(t: &[f64], u: &[[f64; 3]]) -> Vec<usize> {
+    // rates, not differences: a gap of dropped rows is no step
+    let rate = |k: usize, i: usize| -> f64 {
         if k + 1 < u.len() {
-            (u[k + 1][i] - u[k][i]).abs()
+            (u[k + 1][i] - u[k][i]).abs() / (t[k + 1] - t[k])
         } else {
             0.0
         }
@@ -280,9 +281,9 @@ fn steps(u: &[[f64; 3]]) -> Vec<usize> {
     (0..u.len() - 1)
         .filter(|&k| {
             (0..3).any(|i| {
-                let before = if k > 0 { change(k - 1, i) } else { 0.0 };
-                let d = change(k, i);
-                d > STEP_MIN && d > STEP_RATIO * before.max(change(k + 1, i))
+                let before = if k > 0 { rate(k - 1, i) } else { 0.0 };
+                (u[k + 1][i] - u[k][i]).abs() > STEP_MIN
+                    && rate(k, i) > STEP_RATIO * before.max(rate(k + 1, i))
             })
         })
         .collect()
