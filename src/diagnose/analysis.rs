@@ -2,8 +2,8 @@
 //! against the measurement noise, its harmonics of the drive, its drift, the time window where
 //! it is worst, and its correlation with the signals a missing effect would follow.
 
-use crate::identify::fit::departures;
 pub use crate::identify::fit::noise_level;
+use crate::identify::fit::{departures, robust_sigma};
 use crate::identify::{Channel, Experiment};
 use crate::simulation::Sample;
 
@@ -55,11 +55,9 @@ pub fn outliers(t: &[f64], y: &[f64]) -> Vec<usize> {
         return Vec::new();
     }
     let mut abs: Vec<f64> = d.iter().map(|v| v.abs()).collect();
-    let mid = abs.len() / 2;
-    let (_, median, _) = abs.select_nth_unstable_by(mid, f64::total_cmp);
     // quantization can make most departures equal; the RMS keeps the scale honest then
     let rms = (d.iter().map(|v| v * v).sum::<f64>() / d.len() as f64).sqrt();
-    let sigma = (1.4826 * *median).max(0.5 * rms);
+    let sigma = robust_sigma(&mut abs).max(0.5 * rms);
     let a = |k: usize| d.get(k).map_or(0.0, |v: &f64| v.abs());
     (0..d.len())
         .filter(|&k| {

@@ -7,7 +7,7 @@
 use nalgebra::DMatrix;
 
 use super::experiment::{Channel, Conditions, Experiment};
-use super::fit::noise_level;
+use super::fit::{noise_level, robust_sigma};
 use super::{Error, lm, simulate};
 use crate::model::{Params, Platform};
 use crate::simulation::{SimError, Start};
@@ -25,9 +25,6 @@ pub const LAG_MAX: f64 = 1e-3;
 const START_SIGMAS: f64 = 5.0;
 /// …and by more than this share of the output's range.
 const START_SHARE: f64 = 0.02;
-
-/// A normal σ from the median absolute deviation.
-const MAD_SIGMA: f64 = 1.4826;
 
 /// Where a record starts, as asked (`--start`).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -144,8 +141,7 @@ fn starts_mid_run(params: &Params, exp: &Experiment, rtol: f64) -> Result<bool, 
             .map(|(m, s)| (m - c.of(s)).abs())
             .collect();
         let first = off[0];
-        off.sort_by(f64::total_cmp);
-        let fit_sigma = MAD_SIGMA * off[off.len() / 2];
+        let fit_sigma = robust_sigma(&mut off);
         let (lo, hi) = y
             .iter()
             .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), v| {

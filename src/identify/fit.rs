@@ -56,6 +56,12 @@ pub fn noise_level(t: &[f64], y: &[f64]) -> f64 {
     (d.iter().map(|v| v * v).sum::<f64>() / d.len() as f64).sqrt()
 }
 
+/// A normal σ from absolute deviations: 1.4826 × their median (reorders `abs`).
+pub fn robust_sigma(abs: &mut [f64]) -> f64 {
+    let mid = abs.len() / 2;
+    1.4826 * *abs.select_nth_unstable_by(mid, f64::total_cmp).1
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
