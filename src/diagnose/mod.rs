@@ -32,7 +32,7 @@ use std::collections::BTreeMap;
 use std::time::{Duration, Instant};
 
 use crate::identify::{self, Experiment, FIT_RTOL, Hold, Identification, Options as IdOptions};
-use crate::model::effects::Form;
+use crate::model::effects::{Form, Magnitude};
 use crate::model::{Effect, Params};
 use analysis::Disagreement;
 pub use error::Error;
@@ -1112,14 +1112,14 @@ fn magnitude_interval(
             .find(|e| e.name == name)
             .and_then(|e| e.ci95.map(|(lo, hi)| (name.to_string(), lo, hi)))
     };
-    match form.effect {
-        Effect::Saturation => {
+    match form.effect.family().magnitude {
+        Magnitude::Limit => {
             let u_peak = analysis::peak_command(&estimation[0]);
             let c = ci("U_max");
             let ok = c.as_ref().is_some_and(|(_, _, hi)| *hi < u_peak);
             (c, ok)
         }
-        Effect::Preload => {
+        Magnitude::Signed => {
             let cs: Vec<_> = form.free.iter().filter_map(|n| ci(n)).collect();
             let best = cs
                 .iter()
@@ -1129,7 +1129,7 @@ fn magnitude_interval(
             let ok = cs.iter().any(|(_, lo, hi)| lo * hi > 0.0);
             (best, ok)
         }
-        _ => {
+        Magnitude::Positive => {
             // in log coordinates the interval is positive; its relative width must exclude 0
             // in linear terms: value / (1.96 se) > 1
             let excludes = |name: &str| {
@@ -1151,7 +1151,7 @@ fn magnitude_interval(
 
 /// Which experiment tells two effects apart: what exposes each.
 pub fn separating_experiment(a: Effect, b: Effect) -> String {
-    let exposes = separate::exposes;
+    let exposes = |e: Effect| e.family().exposing.text;
     format!("{}: {}; {}: {}", a, exposes(a), b, exposes(b))
 }
 
