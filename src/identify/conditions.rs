@@ -18,17 +18,16 @@ use crate::simulation::{SimError, Start};
 /// to this much of it.
 pub const LAG_MAX: f64 = 1e-3;
 
-/// The first samples a start is judged on: within them a model from rest has not moved by a
-/// micrometre, whatever its parameters or what it lacks (a record from rest of a device with a
-/// delay waits, the model does not).
-const START_SAMPLES: usize = 3;
-
-/// A record starts mid-run when its first samples stand away from the simulation from rest by
-/// more than this many standard errors of their mean…
+/// A record starts mid-run when its first sample stands away from the rest state's outputs
+/// by more than this many σ, σ the larger of the noise's and the fit's (the median residual
+/// over the record, as a normal σ: a model that lacks an effect is off at the rest state by as
+/// much as elsewhere, and a fit bends the parameters that set the rest heights)…
 const START_SIGMAS: f64 = 5.0;
-/// …and by more than this share of the output's range (the start parameters are a guess: a
-/// model 20 % off moves differently, not from elsewhere).
+/// …and by more than this share of the output's range.
 const START_SHARE: f64 = 0.02;
+
+/// A normal σ from the median absolute deviation.
+const MAD_SIGMA: f64 = 1.4826;
 
 /// Where a record starts, as asked (`--start`).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -41,6 +40,8 @@ pub enum StartChoice {
     Estimate,
     /// Stated: the heights at the first sample [m].
     Heights([f64; 3]),
+    /// As the record's conditions have it (found before: a refit keeps its model's start).
+    Kept,
 }
 
 /// What to estimate of each record's conditions.
@@ -54,8 +55,8 @@ pub struct Choice {
 impl Default for Choice {
     fn default() -> Self {
         Choice {
-            start: StartChoice::Rest,
-            lag: Some(0.0),
+            start: StartChoice::Auto,
+            lag: None,
         }
     }
 }
@@ -128,29 +129,30 @@ fn residuals(params: &Params, exp: &Experiment, rtol: f64, r: &mut [f64]) -> Res
     Ok(())
 }
 
-/// Whether the first samples of `exp` stand away from its simulation from rest by more than
-/// noise can: the level of the residual over [`START_SAMPLES`]. (Not a longer window, nor the
-/// slope: a model without a delay the data hold moves at once where the data wait.)
+/// Whether the first sample of `exp` stands away from the rest state's outputs by more than
+/// noise and the fit's error elsewhere can. Only the first: at it a record from rest shows the
+/// rest state whatever the input does next, where a later sample shows the response, in which a
+/// missing effect looks like a start elsewhere.
 fn starts_mid_run(params: &Params, exp: &Experiment, rtol: f64) -> Result<bool, Error> {
     let mut at_rest = exp.clone();
     at_rest.conditions.start = Start::Rest;
     let sim = simulate(params, &at_rest, rtol)?;
-    let window = START_SAMPLES;
     Ok(exp.channels.iter().any(|(c, y)| {
-        let level = sim
+        let mut off: Vec<f64> = y
             .iter()
-            .zip(y)
-            .take(window)
-            .map(|(s, m)| m - c.of(s))
-            .sum::<f64>()
-            / window as f64;
+            .zip(&sim)
+            .map(|(m, s)| (m - c.of(s)).abs())
+            .collect();
+        let first = off[0];
+        off.sort_by(f64::total_cmp);
+        let fit_sigma = MAD_SIGMA * off[off.len() / 2];
         let (lo, hi) = y
             .iter()
             .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), v| {
                 (l.min(*v), h.max(*v))
             });
-        let se = START_SIGMAS * noise_level(&exp.t, y) / (window as f64).sqrt();
-        level.abs() > se.max(START_SHARE * (hi - lo))
+        let sigma = noise_level(&exp.t, y).max(fit_sigma);
+        first > (START_SIGMAS * sigma).max(START_SHARE * (hi - lo))
     }))
 }
 
@@ -206,8 +208,12 @@ pub fn estimate(
             (false, "stated")
         }
         StartChoice::Estimate => (true, "estimated"),
+        StartChoice::Kept => (false, "kept"),
         StartChoice::Auto => {
-            if starts_mid_run(params, exp, rtol)? {
+            // once found mid-run, a record stays so: the fit under its start no longer holds
+            // the parameters that set the rest heights to the first samples
+            let found_before = matches!(exp.conditions.start, Start::Settled(_));
+            if found_before || starts_mid_run(params, exp, rtol)? {
                 (true, "detected mid-run, estimated")
             } else {
                 at.start = Start::Rest;

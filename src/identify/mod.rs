@@ -241,12 +241,18 @@ pub fn identify(
             })
             .collect()
     };
-    // the start parameters are a guess: the lag, a fraction of a sample, waits for the fit
-    let no_lag = conditions::Choice {
+    // the start parameters are a guess: the lag, a fraction of a sample, waits for the fit,
+    // and so does the detection of a start mid-run (the rest heights move with the
+    // parameters: a device 20 % off the guess rests elsewhere): the first fit is under the
+    // records' conditions as they come (at rest, unless found before)
+    let first = conditions::Choice {
         lag: Some(choice.lag.unwrap_or(0.0)),
-        ..choice
+        start: match choice.start {
+            conditions::StartChoice::Auto => conditions::StartChoice::Kept,
+            stated => stated,
+        },
     };
-    let mut est = under(estimation, &found(start, estimation, no_lag)?);
+    let mut est = under(estimation, &found(start, estimation, first)?);
     let mut val = validation.to_vec();
     let mut id = fit(start, &est, &val, opts)?;
     // the start and the parameters pull on each other (a start off by a micrometre is a slow

@@ -30,16 +30,17 @@ pub fn read_all(paths: &[PathBuf]) -> Result<Vec<Experiment>, Error> {
 /// "Records that start mid-run" and "Sensor lag").
 #[derive(clap::Args)]
 pub struct ConditionArgs {
-    /// Where each record starts: rest, auto (estimated where the first samples are not the rest
-    /// state's), estimate, or FILE.toml giving the heights h1, h2, h3 [m] at the first sample
+    /// Where each record starts: auto (estimated where the first sample is not the rest
+    /// state's), rest, estimate, or FILE.toml giving the heights h1, h2, h3 [m] at the first
+    /// sample
     #[arg(
         long,
-        default_value = "rest",
-        value_name = "rest|auto|estimate|FILE.toml"
+        default_value = "auto",
+        value_name = "auto|rest|estimate|FILE.toml"
     )]
     start: String,
-    /// The sensor's lag: stated in seconds (0: none), or estimate (within 0-1 ms)
-    #[arg(long, default_value = "0", value_name = "SECONDS|estimate")]
+    /// The sensor's lag: estimate (within 0-1 ms), or stated in seconds (0: none)
+    #[arg(long, default_value = "estimate", value_name = "estimate|SECONDS")]
     lag: String,
 }
 

@@ -178,6 +178,13 @@ impl Effect {
         self.family().mechanism
     }
 
+    /// Whether the effect delays the command on its way to the actuators (a transport delay,
+    /// an amplifier's lag): what a lag of the sensor does to the outputs of a nearly linear
+    /// device, so the two are not fitted side by side.
+    pub fn delays_the_command(self) -> bool {
+        matches!(self, Effect::Delay | Effect::AmplifierLag)
+    }
+
     /// The library's term, as written in src/model/effects/effects.md ("The effect library").
     pub fn form(self) -> &'static str {
         self.family().form
