@@ -53,6 +53,7 @@ pub const FAMILY: Family = Family {
         f.amplifier_lag.tau_a2 = 0.005;
     },
     structures: &[],
+    delays_the_command: true,
     magnitude: Magnitude::Positive,
     probes,
     exposing: Exposing {

@@ -127,6 +127,7 @@ pub const FAMILY: Family = Family {
             f.charge_drift.c3 = 1e-9;
         },
     ],
+    delays_the_command: false,
     magnitude: Magnitude::Positive,
     probes,
     exposing: Exposing {

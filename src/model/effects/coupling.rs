@@ -55,6 +55,7 @@ pub const FAMILY: Family = Family {
         f.coupling.weights = [1.0, 0.5, 1.5];
     },
     structures: &[],
+    delays_the_command: false,
     magnitude: Magnitude::Positive,
     probes,
     exposing: Exposing {

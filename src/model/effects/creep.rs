@@ -73,6 +73,7 @@ pub const FAMILY: Family = Family {
         f.creep.k_v2 = 0.02;
     },
     structures: &[],
+    delays_the_command: false,
     magnitude: Magnitude::Positive,
     probes,
     exposing: Exposing {

@@ -35,6 +35,7 @@ pub const FAMILY: Family = Family {
     is_active: |p| p.delay.tau_d > 0.0,
     on: |f| f.delay.tau_d = 1e-3,
     structures: &[],
+    delays_the_command: true,
     magnitude: Magnitude::Positive,
     probes: |_, _| {
         [0.005, 0.02]

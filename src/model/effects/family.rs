@@ -38,6 +38,9 @@ pub struct Family {
     /// Further settings over `on` whose Jacobian structure differs from it (another circuit
     /// site): the FMU reads the structure there too.
     pub structures: &'static [fn(&mut EffectParams)],
+    /// Whether the family delays the command on its way to the actuators, as a lag of the
+    /// sensor does to the outputs of a nearly linear device.
+    pub delays_the_command: bool,
     /// What the neutral value of the family's magnitude is, for its confidence interval.
     pub magnitude: Magnitude,
     /// The screening probes of every form, at the model `params` and the peak command [V]

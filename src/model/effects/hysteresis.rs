@@ -81,6 +81,7 @@ pub const FAMILY: Family = Family {
         f.hysteresis.r_h = 2.0;
     },
     structures: &[],
+    delays_the_command: false,
     magnitude: Magnitude::Positive,
     probes,
     exposing: Exposing {

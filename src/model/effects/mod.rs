@@ -182,7 +182,7 @@ impl Effect {
     /// an amplifier's lag): what a lag of the sensor does to the outputs of a nearly linear
     /// device, so the two are not fitted side by side.
     pub fn delays_the_command(self) -> bool {
-        matches!(self, Effect::Delay | Effect::AmplifierLag)
+        self.family().delays_the_command
     }
 
     /// The library's term, as written in src/model/effects/effects.md ("The effect library").

@@ -56,6 +56,7 @@ pub const FAMILY: Family = Family {
     is_active: |p| p.preload.tau0.iter().any(|&t| t != 0.0),
     on: |f| f.preload.tau0 = [1e-4, -2e-4, 3e-4],
     structures: &[],
+    delays_the_command: false,
     magnitude: Magnitude::Signed,
     // each actuator's torque alone, of either sign
     probes: |params, _| {

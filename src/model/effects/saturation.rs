@@ -46,6 +46,7 @@ pub const FAMILY: Family = Family {
     is_active: |p| p.saturation.u_max.is_finite(),
     on: |f| f.saturation.u_max = 50.0,
     structures: &[],
+    delays_the_command: false,
     magnitude: Magnitude::Limit,
     // limits just below the peak command, kept as they are
     probes: |_, u_peak| {

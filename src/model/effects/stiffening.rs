@@ -48,6 +48,7 @@ pub const FAMILY: Family = Family {
     is_active: |p| p.stiffening.k3 != 0.0,
     on: |f| f.stiffening.k3 = 30.0,
     structures: &[],
+    delays_the_command: false,
     magnitude: Magnitude::Positive,
     // a fifth of Kb θ at 15 mrad
     probes: |params, _| {

@@ -141,8 +141,8 @@ pub fn run(
                 format!("{got} [{}]", forms.join("+")),
                 if ok { "ok  " } else { "MISS" },
                 seconds,
-                fmt_fits(&before),
-                fmt_fits(&after),
+                fmt_fits(before),
+                fmt_fits(after),
                 floor.join("/"),
                 d.outliers.iter().map(|o| o.times.len()).sum::<usize>(),
                 case.description
