@@ -15,7 +15,8 @@ use hasel_fmu::control::port_hamiltonian::{self, PortHamiltonian};
 use hasel_fmu::control::{
     ControlError, Linearization, linalg, linearize_at, linearize_equilibrium, reduce,
 };
-use hasel_fmu::model::effects::{Effect, HysteresisLaw};
+use hasel_fmu::model::effects::Effect;
+use hasel_fmu::model::effects::hysteresis::HysteresisLaw;
 use hasel_fmu::model::{Params, Platform, actuator};
 use hasel_fmu::simulation::{Input, Simulator};
 use nalgebra::DMatrix;

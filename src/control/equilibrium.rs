@@ -25,8 +25,8 @@
 use nalgebra::{DMatrix, Matrix3, Vector3};
 
 use super::{ControlError, NoEquilibrium};
+use crate::model::Effect;
 use crate::model::actuator::{self, L_P, P, Q1, Q2, THETA};
-use crate::model::effects::terms::Extra;
 use crate::model::shell::Shell;
 use crate::model::{ModelError, Platform};
 
@@ -221,9 +221,10 @@ impl<'m> Reduced<'m> {
         let mut local = vec![Q1, Q2];
         let mut hysteresis = None;
         for (k, e) in extras.iter().enumerate() {
-            match e {
-                Extra::Hysteresis => hysteresis = Some(actuator::N + k),
-                _ => local.push(actuator::N + k),
+            if e.effect == Effect::Hysteresis {
+                hysteresis = Some(actuator::N + k);
+            } else {
+                local.push(actuator::N + k);
             }
         }
         let inner = (0..3)
@@ -278,11 +279,13 @@ impl<'m> Reduced<'m> {
             x[o + Q1] = a.par.c1 * a.par.r1 * i_dc;
             x[o + Q2] = a.c2(theta[i], l_p).map_err(wrap)? * a.par.r2 * i_dc;
             for (k, e) in model.extra_states().iter().enumerate() {
-                x[o + actuator::N + k] = match e {
-                    Extra::Creep(_) => theta[i],
-                    Extra::Hysteresis => self.virgin(i, theta[i]).0,
-                    Extra::Amplifier(_) => u[i],
-                    Extra::Q3(_) => fx.charge_drift.tau3 * i_dc,
+                // a family without a guess here starts from 0; Newton solves its states
+                x[o + actuator::N + k] = match e.effect {
+                    Effect::Creep => theta[i],
+                    Effect::Hysteresis => self.virgin(i, theta[i]).0,
+                    Effect::AmplifierLag => u[i],
+                    Effect::ChargeDrift => fx.charge_drift.tau3 * i_dc,
+                    _ => 0.0,
                 };
             }
         }

@@ -17,9 +17,9 @@ use nalgebra::{Complex, DMatrix};
 
 use super::equilibrium::{self, Equilibrium};
 use super::{ControlError, linalg};
+use crate::model::Effect;
 use crate::model::actuator::{self, L_P, P, THETA};
-use crate::model::effects::HysteresisLaw;
-use crate::model::effects::terms::Extra;
+use crate::model::effects::hysteresis::HysteresisLaw;
 use crate::model::shell::Shell;
 use crate::model::{ModelError, Platform};
 
@@ -271,7 +271,7 @@ fn effect_notes(model: &Platform, x: &[f64], u: [f64; 3]) -> Vec<EffectNote> {
         if sat.u_max.is_finite() {
             let amp = extras
                 .iter()
-                .rposition(|e| matches!(e, Extra::Amplifier(_)));
+                .rposition(|e| e.effect == Effect::AmplifierLag);
             let v = amp.map_or(u[i], |k| xi[actuator::N + k]);
             let knee = if sat.soft {
                 0.85 * sat.u_max
@@ -310,7 +310,7 @@ fn effect_notes(model: &Platform, x: &[f64], u: [f64; 3]) -> Vec<EffectNote> {
             });
         }
     }
-    if let Some(k) = extras.iter().position(|e| *e == Extra::Hysteresis) {
+    if let Some(k) = extras.iter().position(|e| e.effect == Effect::Hysteresis) {
         for i in 0..3 {
             let xi = &x[nb * i..nb * (i + 1)];
             let (omega, z) = (xi[P] / model.actuators[i].inertia, xi[actuator::N + k]);

@@ -17,7 +17,8 @@ use super::artifacts::Artifacts;
 use crate::identify::Experiment;
 use crate::identify::synth::{self, Columns, DATA_RTOL, Normal, Sensor, Spec};
 use crate::model::Params;
-use crate::model::effects::{ChargeDrift, Creep, DriftSite, Effect, HysteresisLaw, PreloadLaw};
+use crate::model::effects::delay::{WANDER, WANDER_HZ};
+use crate::model::effects::{Effect, Plant};
 use crate::simulation::input::PAPER_PHASES;
 use crate::simulation::{Input, InputError, Interpolation};
 
@@ -38,15 +39,6 @@ pub enum Truth {
     /// Two mechanisms at once: the two cases of [`PAIRS`]`[k]`.
     Two(usize),
 }
-
-/// The families with a second hidden form, and its name.
-const VARIANTS: [(Effect, &str); 5] = [
-    (Effect::Coupling, "coupling_tilt"),
-    (Effect::ChargeDrift, "charge_drift_film"),
-    (Effect::Creep, "creep_two_times"),
-    (Effect::Hysteresis, "hysteresis_rate"),
-    (Effect::AmplifierLag, "amplifier_lag_second_order"),
-];
 
 /// The two-mechanism cases: physically independent causes that leave different marks
 /// (src/diagnose/diagnose.md, "Two mechanisms at once"), each in a form that differs from the
@@ -86,10 +78,7 @@ impl Truth {
         match self {
             Truth::Nothing => "none",
             Truth::Effect(e) => e.name(),
-            Truth::Variant(e) => VARIANTS
-                .iter()
-                .find(|(v, _)| *v == e)
-                .map_or(e.name(), |(_, n)| n),
+            Truth::Variant(e) => e.family().variants.first().map_or(e.name(), |v| v.0),
             Truth::Outside => "vibration",
             Truth::Ripple => "supply_ripple",
             Truth::Two(k) => PAIRS.get(k).map_or("two", |p| p.0),
@@ -118,12 +107,17 @@ impl Truth {
         }
     }
 
-    /// Every truth: no effect, the nine effects, the five second forms, the two mechanisms
+    /// Every truth: no effect, each family, each family's second form, the two mechanisms
     /// outside the library, the pairs.
     pub fn all() -> Vec<Truth> {
         std::iter::once(Truth::Nothing)
             .chain(Effect::ALL.into_iter().map(Truth::Effect))
-            .chain(VARIANTS.iter().map(|(e, _)| Truth::Variant(*e)))
+            .chain(
+                Effect::ALL
+                    .into_iter()
+                    .filter(|e| !e.family().variants.is_empty())
+                    .map(Truth::Variant),
+            )
             .chain([Truth::Outside, Truth::Ripple])
             .chain((0..PAIRS.len()).map(Truth::Two))
             .collect()
@@ -159,10 +153,6 @@ pub struct Hidden {
     pub description: String,
 }
 
-/// Angle at which the stiffness terms are compared with Kb θ: within the stroke of actuators 2
-/// and 3 [rad].
-const THETA_REF: f64 = 0.012;
-
 /// Draws a case hiding `truth`; `seed` fixes everything.
 pub fn hide(truth: Truth, seed: u64) -> Result<Hidden, Error> {
     let mut rng = Normal::new(seed.wrapping_mul(0x2545_F491_4F6C_DD1D) ^ 0x5EED);
@@ -196,15 +186,12 @@ pub fn hide(truth: Truth, seed: u64) -> Result<Hidden, Error> {
 fn plant(
     case: &mut Hidden,
     truth: Truth,
-    mut between: &mut dyn FnMut(f64, f64) -> f64,
+    between: &mut dyn FnMut(f64, f64) -> f64,
 ) -> Result<String, Error> {
     let params = &mut case.params;
-    let kb = params.act.map(|a| a.kb);
-    let mean_kb = kb.iter().sum::<f64>() / 3.0;
     let mut wandering_delay = None;
     let mut vibration = None;
     let mut ripple = None;
-    let fx = &mut params.effects;
     let description = match truth {
         Truth::Nothing => "no effect".to_string(),
         Truth::Outside => {
@@ -231,160 +218,11 @@ fn plant(
                 100.0 * depth
             )
         }
-        Truth::Variant(Effect::Coupling) => {
-            // a tilt spring H = 1/2 (K_x phi_x^2 + K_y phi_y^2), stiffer about one axis; with
-            // the anchors at 90, 210 and 330 degrees, phi_x = (h3 - h2) / (sqrt 3 r) and
-            // phi_y = (h1 - (h2 + h3)/2) / (1.5 r), so (in units of K_y / r^2)
-            // w_12 = w_13 = 2/9 and w_23 = K_x/(3 K_y) - 1/9 (positive for K_x > K_y / 3)
-            let ratio = if between(0.0, 1.0) < 0.5 {
-                between(1.6, 2.5)
-            } else {
-                1.0 / between(1.6, 2.5)
-            };
-            let w = [2.0 / 9.0, 2.0 / 9.0, ratio / 3.0 - 1.0 / 9.0];
-            let mean = w.iter().sum::<f64>() / 3.0;
-            fx.coupling.weights = w.map(|x| x / mean);
-            fx.coupling.k_c = log_between(&mut between, 800.0, 3000.0);
-            format!(
-                "a platform tilt spring, K_x / K_y = {ratio:.2}: pair weights {:.2?}, k_c = {:.0} N/m",
-                fx.coupling.weights, fx.coupling.k_c
-            )
-        }
-        Truth::Variant(Effect::ChargeDrift) => {
-            // the source holds the film's voltage through R0 + R1: the branch takes a visible
-            // share of the current when its R3 = tau3 / C3 is 1 to 4 times R0 + R1
-            let r01 = params.act[0].r0 + params.act[0].r1;
-            let (tau3, f) = (
-                log_between(&mut between, 0.3, 3.0),
-                log_between(&mut between, 1.0, 4.0),
-            );
-            fx.charge_drift = ChargeDrift {
-                site: DriftSite::Film,
-                tau3,
-                c3: tau3 / (f * r01),
-                ..fx.charge_drift
-            };
-            format!(
-                "an absorption branch across the whole film, R3 = {:.0} Ohm ({f:.2} (R0 + R1)), tau3 = {tau3:.2} s",
-                f * r01
-            )
-        }
-        Truth::Variant(Effect::Creep) => {
-            let k_v = between(0.15, 0.4) * mean_kb;
-            let tau_v = log_between(&mut between, 0.1, 0.5);
-            let share = between(0.25, 0.4);
-            two_branches(&mut fx.creep, k_v, share, tau_v, 8.0 * tau_v);
-            format!(
-                "creep in two branches, {:.0} % at tau = {tau_v:.2} s and the rest at 8 tau, k_v = {k_v:.3} N.m/rad",
-                100.0 * share
-            )
-        }
-        Truth::Variant(Effect::Hysteresis) => {
-            fx.hysteresis.law = HysteresisLaw::Dahl;
-            fx.hysteresis.k_h = between(0.25, 0.5) * mean_kb;
-            fx.hysteresis.theta_h = log_between(&mut between, 2e-3, 6e-3);
-            fx.hysteresis.r_h = log_between(&mut between, 2.0, 8.0);
-            format!(
-                "rate-dependent Dahl hysteresis, k_h = {:.3} N.m/rad, theta_h = {:.2e} rad, relaxing at {:.1} 1/s",
-                fx.hysteresis.k_h, fx.hysteresis.theta_h, fx.hysteresis.r_h
-            )
-        }
-        Truth::Variant(Effect::AmplifierLag) => {
-            let tau = log_between(&mut between, 0.01, 0.03);
-            fx.amplifier_lag.tau_a = tau;
-            fx.amplifier_lag.tau_a2 = tau;
-            format!(
-                "a second-order amplifier, two equal stages of {:.1} ms",
-                1000.0 * tau
-            )
-        }
-        Truth::Variant(e) => return Err(Error::NoVariant(e)),
-        Truth::Effect(Effect::Coupling) => {
-            fx.coupling.k_c = log_between(&mut between, 800.0, 3000.0);
-            let k = (between(0.0, 3.0) as usize).min(2);
-            fx.coupling.weights = [[0.5, 1.0, 1.5], [1.5, 0.5, 1.0], [1.0, 1.5, 0.5]][k];
-            format!(
-                "coupling k_c = {:.0} N/m with unequal pair weights {:?}",
-                fx.coupling.k_c, fx.coupling.weights
-            )
-        }
-        Truth::Effect(Effect::ChargeDrift) => {
-            fx.charge_drift.two_stages = true;
-            fx.charge_drift.tau3 = log_between(&mut between, 0.3, 3.0);
-            // the stage takes i R3 / (1 + (ω τ3)²)^½ from the electrode: a tenth to a half of
-            // its voltage at the drive frequency
-            let r2 = params.act[0].r2;
-            fx.charge_drift.r3 =
-                between(0.1, 0.5) * r2 * (1.0 + (10.0 * fx.charge_drift.tau3).powi(2)).sqrt();
-            format!(
-                "two trapping stages in series (R3/2 at tau3/3 and 3 tau3), R3 = {:.3e} Ohm, tau3 = {:.2} s",
-                fx.charge_drift.r3, fx.charge_drift.tau3
-            )
-        }
-        Truth::Effect(Effect::Creep) => {
-            let k_v = between(0.15, 0.4) * mean_kb;
-            let tau_v = log_between(&mut between, 0.2, 2.0);
-            two_branches(&mut fx.creep, k_v, 0.5, tau_v / 3.0, 3.0 * tau_v);
-            format!(
-                "creep in two branches (tau_v/3 and 3 tau_v), k_v = {k_v:.3} N.m/rad, tau_v = {tau_v:.2} s"
-            )
-        }
-        Truth::Effect(Effect::Hysteresis) => {
-            fx.hysteresis.law = HysteresisLaw::Dahl;
-            fx.hysteresis.k_h = between(0.25, 0.5) * mean_kb;
-            fx.hysteresis.theta_h = log_between(&mut between, 2e-3, 6e-3);
-            format!(
-                "Dahl hysteresis, k_h = {:.3} N.m/rad, theta_h = {:.2e} rad",
-                fx.hysteresis.k_h, fx.hysteresis.theta_h
-            )
-        }
-        Truth::Effect(Effect::AmplifierLag) => {
-            let tau = log_between(&mut between, 0.02, 0.06);
-            fx.amplifier_lag.tau_a = 0.8 * tau;
-            fx.amplifier_lag.tau_a2 = 0.2 * tau;
-            format!(
-                "two-stage amplifier, {:.1} ms and {:.1} ms",
-                800.0 * tau,
-                200.0 * tau
-            )
-        }
-        Truth::Effect(Effect::Delay) => {
-            let tau = log_between(&mut between, 0.008, 0.025);
-            wandering_delay = Some((tau, between(0.0, 2.0 * PI)));
-            format!(
-                "a transport delay wandering by +-{:.0} % around {:.1} ms at {WANDER_HZ} Hz (network jitter)",
-                100.0 * WANDER,
-                1000.0 * tau
-            )
-        }
-        Truth::Effect(Effect::Saturation) => {
-            fx.saturation.soft = true;
-            fx.saturation.u_max = between(42.0, 55.0);
-            format!(
-                "amplifier compressing from 0.85 U_max into U_max = {:.1} V",
-                fx.saturation.u_max
-            )
-        }
-        Truth::Effect(Effect::Stiffening) => {
-            fx.stiffening.exponent = 5;
-            let s = between(0.3, 0.8);
-            fx.stiffening.k3 = s * mean_kb / THETA_REF.powi(3);
-            format!(
-                "fifth-power stiffening H += k |theta|^5 / 5, {:.0} % of Kb theta at theta = {THETA_REF} rad",
-                100.0 * s
-            )
-        }
-        Truth::Effect(Effect::Preload) => {
-            fx.preload.law = PreloadLaw::Weight;
-            // a load that lowers each actuator by 3–10 µm at rest: Δθ = 2 Δh / Lv
-            for (tau0, kb) in fx.preload.tau0.iter_mut().zip(kb) {
-                *tau0 = kb * 2.0 * between(3e-6, 10e-6) / params.lv;
-            }
-            format!(
-                "a weight on the platform, torques {:.2e} {:.2e} {:.2e} N.m (tau0 cos theta)",
-                fx.preload.tau0[0], fx.preload.tau0[1], fx.preload.tau0[2]
-            )
-        }
+        Truth::Effect(e) => planted(e.family().hidden, params, &mut wandering_delay, between),
+        Truth::Variant(e) => match e.family().variants.first() {
+            Some(&(_, plant)) => planted(plant, params, &mut wandering_delay, between),
+            None => return Err(Error::NoVariant(e)),
+        },
         Truth::Two(k) => {
             let [a, b] = PAIRS.get(k).ok_or(Error::NoPair(k))?.1;
             let first = plant(case, a, between)?;
@@ -395,6 +233,18 @@ fn plant(
     case.vibration = case.vibration.or(vibration);
     case.ripple = case.ripple.or(ripple);
     Ok(description)
+}
+
+/// The mechanism `plant` plants in `params`, in words; a wandering delay it asks for is kept.
+fn planted(
+    plant: Plant,
+    params: &mut Params,
+    wandering_delay: &mut Option<(f64, f64)>,
+    between: &mut dyn FnMut(f64, f64) -> f64,
+) -> String {
+    let p = plant(params, between);
+    *wandering_delay = p.wandering_delay;
+    p.text
 }
 
 /// Length of the records the generator's cases are drawn for (the benchmark's and the tests'
@@ -415,22 +265,6 @@ fn clear_of_harmonics(f: f64) -> bool {
         (f - nearest).abs() > HARMONIC_CLEARANCE / RECORD_S
     })
 }
-
-/// Creep of stiffness `k_v` in two branches: a `share` of it at `tau`, the rest at `tau2`.
-fn two_branches(creep: &mut Creep, k_v: f64, share: f64, tau: f64, tau2: f64) {
-    creep.k_v = share * k_v;
-    creep.tau_v = tau;
-    creep.k_v2 = (1.0 - share) * k_v;
-    creep.tau_v2 = tau2;
-}
-
-fn log_between(between: &mut impl FnMut(f64, f64) -> f64, lo: f64, hi: f64) -> f64 {
-    between(lo.ln(), hi.ln()).exp()
-}
-
-/// Relative wander of the hidden transport delay, and its frequency [Hz].
-const WANDER: f64 = 0.05;
-const WANDER_HZ: f64 = 0.37;
 
 /// The command late by τ(t) = τ (1 + WANDER sin(2π WANDER_HZ t + phase)), 0 before it
 /// arrives.

@@ -32,7 +32,7 @@ use std::collections::BTreeMap;
 use std::time::{Duration, Instant};
 
 use crate::identify::{self, Experiment, FIT_RTOL, Hold, Identification, Options as IdOptions};
-use crate::model::effects::Form;
+use crate::model::effects::{Form, Magnitude};
 use crate::model::{Effect, Params};
 use analysis::Disagreement;
 pub use error::Error;
@@ -241,6 +241,66 @@ pub struct Diagnosis {
     pub experiments: Vec<Experiment>,
     /// The outliers found and trimmed, per experiment and output.
     pub outliers: Vec<analysis::Outliers>,
+    /// The fits the verdict rests on, against the noise floor.
+    pub fits: Fits,
+}
+
+/// The fits behind a verdict, computed once with it; the report only shows them.
+#[derive(Clone, Debug)]
+pub struct Fits {
+    /// Per-channel fits of the paper's model and of the final one on the held-out experiments
+    /// (the estimation one when there is none), averaged over experiments [%].
+    pub before: BTreeMap<String, f64>,
+    pub after: BTreeMap<String, f64>,
+    /// The fit the noise alone allows, per experiment (in diagnosed order) and channel [%].
+    pub floor: Vec<BTreeMap<String, f64>>,
+    /// The same on the held-out experiments, averaged over them [%].
+    pub held_out_floor: BTreeMap<String, f64>,
+    /// The held-out outputs the final model leaves more than [`AT_FLOOR`] below the noise
+    /// floor (src/diagnose/diagnose.md, "What remains").
+    pub remaining: Vec<Remaining>,
+}
+
+impl Fits {
+    /// The fits of the paper's model `base` and the final model `last` on `experiments` (the
+    /// estimation one first), with the disagreement `after` that the final model leaves.
+    fn new(
+        experiments: &[Experiment],
+        base: &Identification,
+        last: &Identification,
+        after: &[Disagreement],
+    ) -> Fits {
+        let floor: Vec<BTreeMap<String, f64>> = experiments
+            .iter()
+            .map(|e| {
+                let names = e.channels.iter().map(|(c, _)| c.name());
+                names
+                    .filter_map(|n| Some((n.to_string(), floor_fit(e, n)?)))
+                    .collect()
+            })
+            .collect();
+        let held = if last.validation.is_empty() {
+            &floor[..1]
+        } else {
+            &floor[1..]
+        };
+        let mut sum = BTreeMap::<String, (f64, usize)>::new();
+        for (name, f) in held.iter().flatten() {
+            let s = sum.entry(name.clone()).or_default();
+            s.0 += f;
+            s.1 += 1;
+        }
+        Fits {
+            before: held_out_fits(base),
+            after: held_out_fits(last),
+            held_out_floor: sum
+                .into_iter()
+                .map(|(k, (s, n))| (k, s / n as f64))
+                .collect(),
+            remaining: remaining(experiments, &floor, last, after),
+            floor,
+        }
+    }
 }
 
 impl Diagnosis {
@@ -259,7 +319,7 @@ impl Diagnosis {
 
 /// Per-channel NRMSE fits on the held-out experiments (the estimation one when there is
 /// none), averaged over experiments, with the noise floor's fit beside them.
-pub fn held_out_fits(id: &Identification) -> BTreeMap<String, f64> {
+fn held_out_fits(id: &Identification) -> BTreeMap<String, f64> {
     let fits = if id.validation.is_empty() {
         &id.estimation
     } else {
@@ -452,58 +512,38 @@ fn worst_gap_to_floor(held: &[Experiment], id: &Identification) -> f64 {
 /// below its noise floor: how far, and where (the disagreement's worst window, largest
 /// harmonic and drift).
 #[derive(Clone, Debug)]
-pub struct Remaining<'d> {
+pub struct Remaining {
     /// Noise-floor fit minus the fit [points].
     pub gap: f64,
-    pub disagreement: &'d Disagreement,
+    pub disagreement: Disagreement,
 }
 
-impl Remaining<'_> {
-    /// Where the remaining disagreement lies, in words.
-    pub fn describe(&self) -> String {
-        let d = self.disagreement;
-        let (k, a) = d
-            .harmonics
-            .iter()
-            .enumerate()
-            .fold((0, 0.0), |m, (k, &a)| if a > m.1 { (k, a) } else { m });
-        let at = if k == 0 {
-            "as an offset".to_string()
-        } else {
-            format!("at {k} x the drive ({:.1} rad/s)", k as f64 * d.omega)
-        };
-        format!(
-            "{} on {}: {:.2} points below the noise floor; largest component {:.3} um {at}, drift {:.3} um, worst in {:.2}-{:.2} s, {:.0} % of the structured residual off the drive's harmonics",
-            d.channel.name(),
-            d.experiment,
-            self.gap,
-            a * 1e6,
-            d.drift * 1e6,
-            d.worst_window.0.0,
-            d.worst_window.0.1,
-            100.0 * d.off_harmonic
-        )
-    }
-}
-
-/// The held-out outputs the final model leaves more than [`AT_FLOOR`] below the noise
-/// floor (src/diagnose/diagnose.md, "What remains").
-pub fn remaining(d: &Diagnosis) -> Vec<Remaining<'_>> {
-    let (exps, fits) = if d.last.validation.is_empty() {
-        (&d.experiments[..1], &d.last.estimation)
+/// The held-out outputs the final model `last` leaves more than [`AT_FLOOR`] below the noise
+/// floor (`floor`, per experiment), with the disagreement `after` found there
+/// (src/diagnose/diagnose.md, "What remains").
+fn remaining(
+    experiments: &[Experiment],
+    floor: &[BTreeMap<String, f64>],
+    last: &Identification,
+    after: &[Disagreement],
+) -> Vec<Remaining> {
+    let (first, fits) = if last.validation.is_empty() {
+        (0, &last.estimation)
     } else {
-        (&d.experiments[1..], &d.last.validation)
+        (1, &last.validation)
     };
     let mut out = Vec::new();
-    for (e, f) in exps.iter().zip(fits) {
+    for ((e, floor), f) in experiments[first..].iter().zip(&floor[first..]).zip(fits) {
         for (name, v) in &f.fits {
-            let gap = floor_fit(e, name).map_or(0.0, |floor| floor - v);
-            let dis = d
-                .after
+            let gap = floor.get(name).map_or(0.0, |floor| floor - v);
+            let dis = after
                 .iter()
                 .find(|x| x.experiment == e.name && x.channel.name() == name);
             if let (true, Some(disagreement)) = (gap > AT_FLOOR, dis) {
-                out.push(Remaining { gap, disagreement });
+                out.push(Remaining {
+                    gap,
+                    disagreement: disagreement.clone(),
+                });
             }
         }
     }
@@ -877,6 +917,7 @@ pub fn diagnose(
     let after = disagreements(&ordered, &current);
     let separating_experiment = (verdict == Verdict::Ambiguous)
         .then(|| separating_experiment(ambiguous_between[0], ambiguous_between[1]));
+    let fits = Fits::new(&ordered, &base, &current, &after);
     timing.push(("total".to_string(), began.elapsed().as_secs_f64()));
     Ok(Diagnosis {
         verdict,
@@ -895,6 +936,7 @@ pub fn diagnose(
         timing,
         experiments: ordered,
         outliers,
+        fits,
     })
 }
 
@@ -1163,14 +1205,14 @@ fn magnitude_interval(
             .find(|e| e.name == name)
             .and_then(|e| e.ci95.map(|(lo, hi)| (name.to_string(), lo, hi)))
     };
-    match form.effect {
-        Effect::Saturation => {
+    match form.effect.family().magnitude {
+        Magnitude::Limit => {
             let u_peak = analysis::peak_command(&estimation[0]);
             let c = ci("U_max");
             let ok = c.as_ref().is_some_and(|(_, _, hi)| *hi < u_peak);
             (c, ok)
         }
-        Effect::Preload => {
+        Magnitude::Signed => {
             let cs: Vec<_> = form.free.iter().filter_map(|n| ci(n)).collect();
             let best = cs
                 .iter()
@@ -1180,7 +1222,7 @@ fn magnitude_interval(
             let ok = cs.iter().any(|(_, lo, hi)| lo * hi > 0.0);
             (best, ok)
         }
-        _ => {
+        Magnitude::Positive => {
             // in log coordinates the interval is positive; its relative width must exclude 0
             // in linear terms: value / (1.96 se) > 1
             let excludes = |name: &str| {
@@ -1202,7 +1244,7 @@ fn magnitude_interval(
 
 /// Which experiment tells two effects apart: what exposes each.
 pub fn separating_experiment(a: Effect, b: Effect) -> String {
-    let exposes = separate::exposes;
+    let exposes = |e: Effect| e.family().exposing.text;
     format!("{}: {}; {}: {}", a, exposes(a), b, exposes(b))
 }
 

@@ -7,7 +7,7 @@ use std::path::Path;
 use serde_json::{Map, Value, json};
 
 use super::analysis::Disagreement;
-use super::{Candidate, Diagnosis, Verdict, floor_fit, held_out_fits, remaining};
+use super::{Candidate, Diagnosis, Remaining, Verdict};
 use crate::identify::report::{
     conditions_json, conditions_section, fits_json, residual_series, round,
 };
@@ -62,26 +62,30 @@ fn disagreement_json(d: &Disagreement) -> Value {
     })
 }
 
-/// The noise-floor fit of every held-out output, averaged over experiments.
-fn floor_map(d: &Diagnosis) -> Map<String, Value> {
-    let exps: Vec<_> = if d.held_out.is_empty() {
-        d.experiments.iter().take(1).collect()
+/// Where a remaining disagreement lies, in words.
+fn where_it_remains(r: &Remaining) -> String {
+    let d = &r.disagreement;
+    let (k, a) = d
+        .harmonics
+        .iter()
+        .enumerate()
+        .fold((0, 0.0), |m, (k, &a)| if a > m.1 { (k, a) } else { m });
+    let at = if k == 0 {
+        "as an offset".to_string()
     } else {
-        d.experiments.iter().skip(1).collect()
+        format!("at {k} x the drive ({:.1} rad/s)", k as f64 * d.omega)
     };
-    let mut m = std::collections::BTreeMap::<String, (f64, usize)>::new();
-    for e in exps {
-        for (c, _) in &e.channels {
-            if let Some(f) = floor_fit(e, c.name()) {
-                let s = m.entry(c.name().to_string()).or_default();
-                s.0 += f;
-                s.1 += 1;
-            }
-        }
-    }
-    m.into_iter()
-        .map(|(k, (s, n))| (k, json!(round(s / n as f64, 2))))
-        .collect()
+    format!(
+        "{} on {}: {:.2} points below the noise floor; largest component {:.3} um {at}, drift {:.3} um, worst in {:.2}-{:.2} s, {:.0} % of the structured residual off the drive's harmonics",
+        d.channel.name(),
+        d.experiment,
+        r.gap,
+        a * 1e6,
+        d.drift * 1e6,
+        d.worst_window.0.0,
+        d.worst_window.0.1,
+        100.0 * d.off_harmonic
+    )
 }
 
 /// The JSON of src/diagnose/diagnose.md ("diagnosis.json"), and the evidence behind it.
@@ -95,9 +99,9 @@ pub fn to_json(d: &Diagnosis) -> Value {
             Some((name.to_string(), json!({"value": e.value, "ci95": e.ci95.map(|(a, b)| vec![a, b]), "estimated": e.estimated})))
         })
         .collect();
-    let as_map = |f: std::collections::BTreeMap<String, f64>| -> Map<String, Value> {
-        f.into_iter()
-            .map(|(k, v)| (k, json!(round(v, 2))))
+    let as_map = |f: &std::collections::BTreeMap<String, f64>| -> Map<String, Value> {
+        f.iter()
+            .map(|(k, v)| (k.clone(), json!(round(*v, 2))))
             .collect()
     };
     json!({
@@ -113,9 +117,9 @@ pub fn to_json(d: &Diagnosis) -> Value {
             "noise_um": round(s.noise * 1e6, 4),
             "separates": s.separates(),
         })).collect::<Vec<_>>(),
-        "fit_before": as_map(held_out_fits(&d.base)),
-        "fit_after": as_map(held_out_fits(&d.last)),
-        "noise_floor_fit": floor_map(d),
+        "fit_before": as_map(&d.fits.before),
+        "fit_after": as_map(&d.fits.after),
+        "noise_floor_fit": as_map(&d.fits.held_out_floor),
         "fits_on": if d.held_out.is_empty() { "estimation (no held-out experiment)" } else { "held-out experiments" },
         "candidates": d.rounds.first().map(|r| r.candidates.iter().map(candidate_json).collect::<Vec<_>>()).unwrap_or_default(),
         "rounds": d.rounds.iter().map(|r| json!({
@@ -151,11 +155,11 @@ pub fn to_json(d: &Diagnosis) -> Value {
         },
         "disagreement_before": d.before.iter().map(disagreement_json).collect::<Vec<_>>(),
         "disagreement_after": d.after.iter().map(disagreement_json).collect::<Vec<_>>(),
-        "remaining": remaining(d).iter().map(|r| json!({
+        "remaining": d.fits.remaining.iter().map(|r| json!({
             "experiment": r.disagreement.experiment,
             "output": r.disagreement.channel.name(),
             "below_noise_floor": round(r.gap, 2),
-            "where": r.describe(),
+            "where": where_it_remains(r),
         })).collect::<Vec<_>>(),
         "conditions": conditions_json(&d.base.conditions),
         "outliers": d.outliers.iter().map(|o| json!({
@@ -372,7 +376,9 @@ fn fits_table(md: &mut String, d: &Diagnosis) {
     for (k, (b, a)) in rows.enumerate() {
         let role = if k == 0 { "estimation" } else { "held out" };
         for ((c, fb), (_, fa)) in b.fits.iter().zip(&a.fits) {
-            let floor = floor_fit(&d.experiments[k], c).map_or("".into(), |f| format!("{f:.2}"));
+            let floor = d.fits.floor[k]
+                .get(c)
+                .map_or("".into(), |f| format!("{f:.2}"));
             let _ = writeln!(
                 md,
                 "| {} | {role} | {c} | {fb:.2} | {fa:.2} | {floor} |",
@@ -531,11 +537,10 @@ pub fn write(dir: &Path, d: &Diagnosis) -> Result<(), FileError> {
     fits_table(&mut md, d);
     let _ = writeln!(md, "\n## Where the disagreement went\n");
     disagreement_table(&mut md, &d.after);
-    let left = remaining(d);
-    if !left.is_empty() {
+    if !d.fits.remaining.is_empty() {
         let _ = writeln!(md, "\n## What remains\n");
-        for r in &left {
-            let _ = writeln!(md, "- {}", r.describe());
+        for r in &d.fits.remaining {
+            let _ = writeln!(md, "- {}", where_it_remains(r));
         }
     }
     conditions_section(&mut md, &d.base.conditions);

@@ -3,151 +3,27 @@
 //! of what the base parameters can already do (their sensitivities); the share of the
 //! residual that the rest explains is the effect's score, and the projection's coefficient
 //! scales the probe into a starting value for the refit. Every form of an effect's family has
-//! its own probes (src/diagnose/diagnose.md, "Families of forms"); a form is worth its explained
-//! share less the price of its dimensions, in the units of the BIC.
+//! its own probes, which the family's module writes (src/diagnose/diagnose.md, "Families of
+//! forms"); a form is worth its explained share less the price of its dimensions, in the units
+//! of the BIC.
 
 use nalgebra::{DMatrix, DVector};
 
 use super::Error;
 use super::analysis::noise_level;
 use crate::identify::{Channel, Experiment, simulate};
-use crate::model::effects::Form;
+use crate::model::effects::{Form, Probe, Scaling};
 use crate::model::{Effect, Params};
 
-/// Effect parameter settings that switch a form of an effect on, each giving one direction in
-/// output space; several settings of one probe span a subspace (the preload's three torques,
-/// the coupling's three pairs, the creep's two branches).
-pub struct Probe {
-    pub form: &'static Form,
-    pub columns: Vec<Vec<(&'static str, f64)>>,
-    pub scaling: Scaling,
-}
-
-/// How a probe's first setting (its magnitude) becomes a start value.
-#[derive(Clone, Copy, PartialEq, Eq)]
-pub enum Scaling {
-    /// A positive magnitude, scaled by the projection coefficient (within ×/÷ 5).
-    Magnitude,
-    /// A magnitude of either sign, scaled by the coefficient.
-    Signed,
-    /// A limit (U_max): the probe value is kept.
-    Fixed,
-    /// The coupling's pairs: column j switches pair j on alone at k_c; the start is
-    /// k_c c_12 with the weights c_13 / c_12 and c_23 / c_12 (all kept positive).
-    Pairs,
-}
-
-/// Probes of every form of every effect not yet in `params`, at values that change the response
+/// Probes of every form of every family not yet in `params`, at values that change the response
 /// by a few percent of its range at the paper's excitation (src/diagnose/diagnose.md,
-/// "Screening").
+/// "Screening"): each family's own.
 pub fn probes(params: &Params, u_peak: f64) -> Vec<Probe> {
-    let kb = params.act.iter().map(|a| a.kb).sum::<f64>() / 3.0;
-    let mut out = Vec::new();
-    for e in Effect::ALL
+    Effect::ALL
         .into_iter()
         .filter(|e| !e.is_active(&params.effects))
-    {
-        for form in e.forms() {
-            let one = |settings: Vec<(&'static str, f64)>| Probe {
-                form,
-                columns: vec![[settings, form.settings.to_vec()].concat()],
-                scaling: Scaling::Magnitude,
-            };
-            match (e, form.name) {
-                (Effect::Coupling, "equal") => out.push(one(vec![("k_c", 1000.0)])),
-                (Effect::Coupling, _) => out.push(Probe {
-                    form,
-                    columns: [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]]
-                        .iter()
-                        .map(|w| {
-                            vec![
-                                ("k_c", 1000.0),
-                                ("w_c12", w[0]),
-                                ("w_c13", w[1]),
-                                ("w_c23", w[2]),
-                            ]
-                        })
-                        .collect(),
-                    scaling: Scaling::Pairs,
-                }),
-                (Effect::ChargeDrift, site) => {
-                    // the film's voltage is held by the source through R0 + R1: a branch
-                    // across it shows when its R3 = tau3 / C3 is a few times R0 + R1
-                    let r01 = params.act[0].r0 + params.act[0].r1;
-                    for tau in [0.3, 1.0, 3.0] {
-                        let magnitude = if site == "series" {
-                            ("R3", 3e4)
-                        } else {
-                            ("C3", tau / (3.0 * r01))
-                        };
-                        out.push(one(vec![magnitude, ("tau3", tau)]));
-                    }
-                }
-                (Effect::Creep, "one_time") => {
-                    for tau in [0.2, 0.6, 2.0] {
-                        out.push(one(vec![("k_v", 0.2 * kb), ("tau_v", tau)]));
-                    }
-                }
-                (Effect::Creep, _) => out.push(Probe {
-                    form,
-                    columns: vec![
-                        vec![("k_v", 0.2 * kb), ("tau_v", 0.2)],
-                        vec![("k_v2", 0.2 * kb), ("tau_v2", 2.0)],
-                    ],
-                    scaling: Scaling::Magnitude,
-                }),
-                (Effect::Hysteresis, name) => {
-                    let rates: &[f64] = if name == "rate_independent" {
-                        &[0.0]
-                    } else {
-                        &[3.0, 10.0]
-                    };
-                    for &r_h in rates {
-                        for theta in [1e-3, 3e-3] {
-                            let mut col = vec![("k_h", 0.2 * kb), ("theta_h", theta)];
-                            if r_h > 0.0 {
-                                col.push(("r_h", r_h));
-                            }
-                            out.push(one(col));
-                        }
-                    }
-                }
-                (Effect::AmplifierLag, name) => {
-                    for tau in [0.01, 0.04] {
-                        out.push(one(if name == "first_order" {
-                            vec![("tau_a", tau)]
-                        } else {
-                            vec![("tau_a", 0.5 * tau), ("tau_a2", 0.5 * tau)]
-                        }));
-                    }
-                }
-                (Effect::Delay, _) => {
-                    for tau in [0.005, 0.02] {
-                        out.push(one(vec![("tau_d", tau)]));
-                    }
-                }
-                (Effect::Saturation, _) => {
-                    for f in [0.8, 0.9, 0.97] {
-                        out.push(Probe {
-                            form,
-                            columns: vec![vec![("U_max", f * u_peak)]],
-                            scaling: Scaling::Fixed,
-                        });
-                    }
-                }
-                (Effect::Stiffening, _) => out.push(one(vec![("k3", 0.2 * kb / 0.015f64.powi(2))])),
-                (Effect::Preload, _) => out.push(Probe {
-                    form,
-                    columns: ["tau0_1", "tau0_2", "tau0_3"]
-                        .iter()
-                        .map(|n| vec![(*n, kb * 1e-3)])
-                        .collect(),
-                    scaling: Scaling::Signed,
-                }),
-            }
-        }
-    }
-    out
+        .flat_map(|e| (e.family().probes)(params, u_peak))
+        .collect()
 }
 
 /// The stacked outputs of `params` on `exp`, each channel divided by its weight.

@@ -2,11 +2,10 @@
 //! rule"): for each effect, the experiment that exposes it, as an input, and both refitted models
 //! driven by it, to show that it would separate them.
 
-use std::f64::consts::PI;
-
 use super::Error;
 use super::analysis;
 use crate::identify::{self, Channel, Experiment};
+use crate::model::effects::Drive;
 use crate::model::{Effect, Params, Platform};
 use crate::simulation::{Input, Interpolation, Simulator, Tone};
 
@@ -17,7 +16,7 @@ const DT: f64 = 1e-3;
 /// (RMS over the record): the difference then stands out of the noise on every sample's scale.
 pub const SEPARATES: f64 = 1.0;
 
-/// The experiment that exposes one effect.
+/// The experiment that exposes one effect, as a command.
 pub struct Exposing {
     /// What to do and why it exposes the effect, in words.
     pub text: &'static str,
@@ -27,105 +26,55 @@ pub struct Exposing {
 }
 
 /// A piecewise-linear command through `(t, U)` corners, the same on every actuator.
-fn corners(points: &[(f64, f64)]) -> Input {
-    let t = points.iter().map(|p| p.0).collect();
-    let u = points.iter().map(|p| [p.1; 3]).collect();
+fn corners(points: impl Iterator<Item = (f64, f64)>) -> Input {
+    let (t, u) = points.map(|(t, u)| (t, [u; 3])).unzip();
     Input::sampled(t, u, Interpolation::Linear).expect("increasing corners of finite values")
 }
 
-/// The experiment exposing `effect`, at commands up to `u` [V].
+/// The experiment exposing `effect` (its family's), at commands up to `u` [V].
 pub fn exposing(effect: Effect, u: f64) -> Exposing {
     let sine = |amplitude: f64, omega: f64, phase: f64| Tone {
         amplitude,
         omega,
         phase,
     };
-    let (input, t_end) = match effect {
-        Effect::Coupling => (
-            Input::Tones {
-                offset: [0.0; 3],
-                tones: [vec![sine(u, 3.0 * PI, 0.0)], vec![], vec![]],
-            },
-            6.0,
-        ),
-        Effect::ChargeDrift => (corners(&[(0.0, 0.0), (0.05, u), (20.0, u)]), 20.0),
-        Effect::Creep => (
-            corners(&[(0.0, 0.0), (0.05, u), (10.0, u), (10.05, 0.0), (20.0, 0.0)]),
-            20.0,
-        ),
-        Effect::Hysteresis => (
-            corners(&[
-                (0.0, 0.0),
-                (2.5, 0.5 * u),
-                (7.5, -0.5 * u),
-                (10.0, 0.0),
-                (12.5, u),
-                (17.5, -u),
-                (20.0, 0.0),
-            ]),
-            20.0,
-        ),
-        Effect::AmplifierLag | Effect::Delay => (
-            Input::Tones {
-                offset: [0.0; 3],
-                tones: crate::simulation::input::PAPER_PHASES.map(|phase| {
-                    [5.0, 15.0, 40.0, 100.0]
-                        .iter()
-                        .enumerate()
-                        .map(|(k, &w)| sine(0.25 * u, w, phase + k as f64))
-                        .collect()
-                }),
-            },
-            6.0,
-        ),
-        Effect::Saturation | Effect::Stiffening => (
+    let e = &effect.family().exposing;
+    let input = match e.drive {
+        Drive::Corners(points) => corners(points.iter().map(|&(t, share)| (t, share * u))),
+        Drive::Alone { omega } => Input::Tones {
+            offset: [0.0; 3],
+            tones: [vec![sine(u, omega, 0.0)], vec![], vec![]],
+        },
+        Drive::Multisine(omegas) => Input::Tones {
+            offset: [0.0; 3],
+            tones: crate::simulation::input::PAPER_PHASES.map(|phase| {
+                omegas
+                    .iter()
+                    .enumerate()
+                    .map(|(k, &w)| sine(0.25 * u, w, phase + k as f64))
+                    .collect()
+            }),
+        },
+        Drive::Levels { omega, switch } => {
+            let n = (e.t_end / DT).round() as usize;
             Input::sampled(
-                (0..=12000).map(|k| k as f64 * DT).collect(),
-                (0..=12000)
+                (0..=n).map(|k| k as f64 * DT).collect(),
+                (0..=n)
                     .map(|k| {
                         let t = k as f64 * DT;
-                        let a = if t < 6.0 { 0.5 * u } else { u };
-                        [a * (3.0 * PI * t).sin(); 3]
+                        let a = if t < switch { 0.5 * u } else { u };
+                        [a * (omega * t).sin(); 3]
                     })
                     .collect(),
                 Interpolation::Linear,
             )
-            .expect("increasing times, finite values"),
-            12.0,
-        ),
-        Effect::Preload => (corners(&[(0.0, 0.0), (2.0, 0.0), (2.5, u), (6.0, u)]), 6.0),
+            .expect("increasing times, finite values")
+        }
     };
     Exposing {
-        text: exposes(effect),
+        text: e.text,
         input,
-        t_end,
-    }
-}
-
-/// What exposes `effect`, in words.
-pub fn exposes(effect: Effect) -> &'static str {
-    match effect {
-        Effect::Coupling => "driving one actuator alone: coupling moves the undriven ones",
-        Effect::ChargeDrift => {
-            "a unipolar voltage step held for tens of seconds: trapped charge keeps drifting the stroke"
-        }
-        Effect::Creep => {
-            "a step held for tens of seconds and then released: creep relaxes and recovers mechanically"
-        }
-        Effect::Hysteresis => {
-            "a slow triangle at two amplitudes: rate-independent loops keep their width at any speed"
-        }
-        Effect::AmplifierLag => "a multisine up to 100 rad/s: a lag attenuates the fast tones",
-        Effect::Delay => {
-            "a multisine up to 100 rad/s: a delay shifts the fast tones' phase without attenuating them"
-        }
-        Effect::Saturation => "the same sine at 30 V and 60 V: clipping acts only above U_max",
-        Effect::Stiffening => {
-            "the same sine at 30 V and 60 V: stiffening grows with the stroke, not the voltage peak"
-        }
-        Effect::Preload => {
-            "a record of the rest position before the drive starts: a preload shifts it"
-        }
+        t_end: e.t_end,
     }
 }
 

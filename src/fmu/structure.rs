@@ -10,62 +10,34 @@ use std::sync::OnceLock;
 
 use super::variables::{Slot, rows, state_vr};
 use crate::fmi_common::model_api::{ModelStructure, OutputDependency, StateDerivative};
-use crate::model::effects::{DriftSite, Effect, EffectParams};
+use crate::model::Effect;
 use crate::model::{Params, Platform};
 
-/// Every effect on, in the library's forms (the ones the FMU's parameters set).
+/// Every family on, every form the FMU's parameters reach at once (each family's `on`).
 fn all_on() -> Params {
     let mut p = Params::default();
-    let f = &mut p.effects;
-    f.coupling.k_c = 40.0;
-    f.charge_drift.r3 = 2e4;
-    f.charge_drift.tau3 = 0.5;
-    f.coupling.weights = [1.0, 0.5, 1.5];
-    f.creep.k_v = 0.05;
-    f.creep.tau_v = 0.3;
-    f.creep.k_v2 = 0.02;
-    f.hysteresis.k_h = 0.04;
-    f.hysteresis.theta_h = 2e-3;
-    f.hysteresis.r_h = 2.0;
-    f.amplifier_lag.tau_a = 0.02;
-    f.amplifier_lag.tau_a2 = 0.005;
-    f.delay.tau_d = 1e-3;
-    f.saturation.u_max = 50.0;
-    f.stiffening.k3 = 30.0;
-    f.preload.tau0 = [1e-4, -2e-4, 3e-4];
+    for e in Effect::ALL {
+        (e.family().on)(&mut p.effects);
+    }
     p
 }
 
-/// `effect` back at its neutral default.
-fn switch_off(f: &mut EffectParams, effect: Effect) {
-    let d = EffectParams::default();
-    match effect {
-        Effect::Coupling => f.coupling = d.coupling,
-        Effect::ChargeDrift => f.charge_drift = d.charge_drift,
-        Effect::Creep => f.creep = d.creep,
-        Effect::Hysteresis => f.hysteresis = d.hysteresis,
-        Effect::AmplifierLag => f.amplifier_lag = d.amplifier_lag,
-        Effect::Delay => f.delay = d.delay,
-        Effect::Saturation => f.saturation = d.saturation,
-        Effect::Stiffening => f.stiffening = d.stiffening,
-        Effect::Preload => f.preload = d.preload,
-    }
-}
-
-/// The configurations whose structures together hold every other's: all effects on, and all
-/// on but one (an effect's terms only add entries, except the amplifier's lag, which moves the
-/// command's entry from the circuit to its own state), and the drift element at each site.
+/// The configurations whose structures together hold every other's: all families on, and all
+/// on but one (a family's terms only add entries, except the amplifier's lag, which moves the
+/// command's entry from the circuit to its own state), and all on with each family's further
+/// structures (the drift element at each site).
 fn configurations() -> Vec<Params> {
     let mut all = vec![all_on()];
-    for site in [DriftSite::Electrode, DriftSite::Film] {
-        let mut p = all_on();
-        p.effects.charge_drift.site = site;
-        p.effects.charge_drift.c3 = 1e-9;
-        all.push(p);
+    for effect in Effect::ALL {
+        for structure in effect.family().structures {
+            let mut p = all_on();
+            structure(&mut p.effects);
+            all.push(p);
+        }
     }
     for effect in Effect::ALL {
         let mut p = all_on();
-        switch_off(&mut p.effects, effect);
+        p.effects.switch_off(effect);
         all.push(p);
     }
     all

@@ -49,7 +49,7 @@ pub struct Row {
 fn fmu_states() -> impl Iterator<Item = BlockState> {
     (0..actuator::N)
         .map(BlockState::Paper)
-        .chain(Extra::TABLE_STATES.map(BlockState::Extra))
+        .chain(Extra::table_states().map(BlockState::Extra))
 }
 
 /// A state's description: the model's, with the effect and what it reads while off.
@@ -59,7 +59,7 @@ fn state_description(state: BlockState, actuator: usize) -> String {
         BlockState::Paper(_) => format!("{} of actuator {actuator}", info.description),
         BlockState::Extra(e) => format!(
             "{}: {} (0 while off) of actuator {actuator}",
-            e.effect().name(),
+            e.effect.name(),
             info.description
         ),
     }

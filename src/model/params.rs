@@ -6,7 +6,7 @@
 
 use std::fmt;
 
-use super::effects::{DriftSite, EffectParams};
+use super::effects::{Effect, EffectParams};
 
 /// Parameters of one HASEL actuator (the paper's identified table: src/model/model.md,
 /// "Parameters").
@@ -207,11 +207,11 @@ macro_rules! actuator_rows {
 macro_rules! common_rows {
     ($($name:literal, $unit:literal, $rule:ident, $desc:literal, $($field:ident).+ $([$idx:literal])?;)*) => {
         [$(
-            ParamDef {
+            $crate::model::params::ParamDef {
                 name: $name,
                 unit: $unit,
                 description: $desc,
-                rule: Rule::$rule,
+                rule: $crate::model::params::Rule::$rule,
                 actuator: None,
                 get: |p| p.$($field).+ $([$idx])?,
                 set: |p, v| p.$($field).+ $([$idx])? = v,
@@ -219,6 +219,8 @@ macro_rules! common_rows {
         )*]
     };
 }
+// the families' modules write their rows with it
+pub(crate) use common_rows;
 
 const ACTUATOR_ROWS: [ParamDef; 27] = actuator_rows! {
     k, "K", "N/m", NonNegative, "Top-film stiffness K";
@@ -251,52 +253,15 @@ const COMMON_ROWS: [ParamDef; 16] = common_rows! {
     "L", "m", Positive, "Antenna length from the platform centre to the tip", antenna_length;
 };
 
-/// The effect library's parameters (model/effects, src/model/effects/effects.md,
-/// "Parameters"), each neutral by default.
-const EFFECT_ROWS: [ParamDef; 22] = common_rows! {
-    "k_c", "N/m", NonNegative, "coupling: stiffness k_c of H += 1/2 k_c sum_{i<j} w_ij (h_i - h_j)^2 (0: off)", effects.coupling.k_c;
-    "w_c12", "1", NonNegative, "coupling: weight w_12 of the pair (1, 2) (1: the equal pairs)", effects.coupling.weights[0];
-    "w_c13", "1", NonNegative, "coupling: weight w_13 of the pair (1, 3) (1: the equal pairs)", effects.coupling.weights[1];
-    "w_c23", "1", NonNegative, "coupling: weight w_23 of the pair (2, 3) (1: the equal pairs)", effects.coupling.weights[2];
-    "R3", "Ohm", NonNegative, "charge_drift: resistance R3 of a (C3 || R3) stage in series (0: off; drift_site 0)", effects.charge_drift.r3;
-    "tau3", "s", Positive, "charge_drift: time constant tau3 = R3 C3 of the drift element", effects.charge_drift.tau3;
-    "C3", "F", NonNegative, "charge_drift: capacitance C3 of an R3-C3 absorption branch (0: off; drift_site 1 or 2)", effects.charge_drift.c3;
-    "k_v", "N.m/rad", NonNegative, "creep: stiffness k_v of the standard linear solid on theta (0: off)", effects.creep.k_v;
-    "tau_v", "s", Positive, "creep: relaxation time tau_v = eta / k_v", effects.creep.tau_v;
-    "k_v2", "N.m/rad", NonNegative, "creep: stiffness k_v2 of a second branch (0: off)", effects.creep.k_v2;
-    "tau_v2", "s", Positive, "creep: relaxation time tau_v2 of the second branch", effects.creep.tau_v2;
-    "k_h", "N.m/rad", NonNegative, "hysteresis: stiffness k_h of the Bouc-Wen torque -k_h z (0: off)", effects.hysteresis.k_h;
-    "theta_h", "rad", Positive, "hysteresis: angle theta_h at which the Bouc-Wen state saturates", effects.hysteresis.theta_h;
-    "r_h", "Hz", NonNegative, "hysteresis: relaxation rate r_h [1/s] of the hysteretic state (0: rate-independent)", effects.hysteresis.r_h;
-    "tau_a", "s", NonNegative, "amplifier_lag: time constant tau_a of the amplifier (0: off)", effects.amplifier_lag.tau_a;
-    "tau_a2", "s", NonNegative, "amplifier_lag: time constant tau_a2 of a second stage (0: none)", effects.amplifier_lag.tau_a2;
-    "tau_d", "s", NonNegative, "delay: transport delay tau_d between command and actuator (0: off)", effects.delay.tau_d;
-    "U_max", "V", PositiveOrInfinite, "saturation: the amplifier clips its output to +-U_max (inf: off)", effects.saturation.u_max;
-    "k3", "N.m", NonNegative, "stiffening: coefficient k3 [N.m/rad^3] of H += 1/4 k3 theta^4 (0: off)", effects.stiffening.k3;
-    "tau0_1", "N.m", Finite, "preload: constant torque against theta on actuator 1 (0: off)", effects.preload.tau0[0];
-    "tau0_2", "N.m", Finite, "preload: constant torque against theta on actuator 2 (0: off)", effects.preload.tau0[1];
-    "tau0_3", "N.m", Finite, "preload: constant torque against theta on actuator 3 (0: off)", effects.preload.tau0[2];
-};
-
-/// The effects' choices among forms that no magnitude expresses.
-const FORM_ROWS: [ParamDef; 1] = [ParamDef {
-    name: "drift_site",
-    unit: "1",
-    description: "charge_drift: where the element sits: 0 in series (R3), 1 across the zipping capacitor C2 (C3), 2 across the whole film (C3)",
-    rule: Rule::Index(3),
-    actuator: None,
-    get: |p| p.effects.charge_drift.site.index(),
-    set: |p, v| p.effects.charge_drift.site = DriftSite::from_index(v),
-}];
-
 /// Every parameter, per-actuator ones first (`K_1, K_2, K_3, Kb_1, …`), then the common ones,
-/// then the effects'.
+/// then each family's (src/model/effects/effects.md, "Parameters"), then the families' choices
+/// among forms.
 pub fn parameters() -> impl Iterator<Item = &'static ParamDef> {
     ACTUATOR_ROWS
         .iter()
         .chain(COMMON_ROWS.iter())
-        .chain(EFFECT_ROWS.iter())
-        .chain(FORM_ROWS.iter())
+        .chain(Effect::ALL.into_iter().flat_map(|e| e.family().rows))
+        .chain(Effect::ALL.into_iter().flat_map(|e| e.family().choices))
 }
 
 /// Looks a parameter up by its flat name.

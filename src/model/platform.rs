@@ -242,6 +242,7 @@ impl Platform {
     ) -> Result<(), ModelError> {
         let nb = self.nb;
         let xs = self.blocks(x);
+        let refs = self.refs();
         self.each(|i, a| {
             let o = nb * i;
             if self.terms.neutral {
@@ -251,7 +252,7 @@ impl Platform {
                 add(o + actuator::Q2, i, g[actuator::Q2]);
             } else {
                 self.terms
-                    .add_input_jacobian(a, xs[i], u[i], |r, v| add(o + r, i, v));
+                    .add_input_jacobian(&refs, xs, u[i], i, |r, v| add(o + r, i, v));
             }
             Ok(())
         })?;
@@ -316,7 +317,7 @@ impl Platform {
 
     /// Sizes of the diagonal blocks of ∂f/∂x: the actuators are independent unless coupled.
     pub fn jacobian_blocks(&self) -> Vec<usize> {
-        if self.params.effects.coupling.k_c != 0.0 {
+        if self.terms.links_actuators() {
             vec![3 * self.nb]
         } else {
             vec![self.nb; 3]
@@ -438,12 +439,12 @@ impl Platform {
 
     /// Power supplied through the electrical ports at the voltages they receive [W].
     pub fn supplied_power(&self, x: &[f64], u: [f64; 3]) -> Result<f64, ModelError> {
-        let xs = self.blocks(x);
+        let (xs, refs) = (self.blocks(x), self.refs());
         Ok(self
             .each(|i, a| {
                 Ok(
                     a.port_output(&xs[i][..actuator::N])? * self.port_voltage(xs[i], u[i])
-                        + self.terms.port_power(a, xs[i], u[i]),
+                        + self.terms.port_power(&refs, xs, u[i], i),
                 )
             })?
             .iter()
@@ -463,12 +464,12 @@ impl Platform {
 
     /// dH/dt along the flow with the large electrical terms cancelled analytically [W].
     pub fn stored_power(&self, x: &[f64], u: [f64; 3]) -> Result<f64, ModelError> {
-        let xs = self.blocks(x);
+        let (xs, refs) = (self.blocks(x), self.refs());
         Ok(self
             .each(|i, a| {
                 Ok(
                     a.stored_power(&xs[i][..actuator::N], self.port_voltage(xs[i], u[i]))?
-                        + self.terms.port_power(a, xs[i], u[i])
+                        + self.terms.port_power(&refs, xs, u[i], i)
                         - self.terms.dissipation(a, xs[i])?,
                 )
             })?

@@ -69,14 +69,8 @@ pub struct SynthArgs {
     /// or the hidden case's 0.5-2 % with --effect)
     #[arg(long)]
     noise: Option<f64>,
-    /// Hide a mechanism in the data, in a form that differs from the library's term: an effect
-    /// of the library (coupling, charge_drift, creep, hysteresis, amplifier_lag, delay,
-    /// saturation, stiffening, preload), a second form of one (coupling_tilt,
-    /// charge_drift_film, creep_two_times, hysteresis_rate, amplifier_lag_second_order),
-    /// `vibration` or `supply_ripple` (outside the library), `none`, or two at once
-    /// (coupling_tilt+creep, charge_drift_film+hysteresis, amplifier_lag+stiffening); with the
-    /// base parameters Kb, b, gamma1, gamma2 off by up to 20 %, all drawn from --case
-    #[arg(long, value_name = "NAME", conflicts_with_all = ["params", "set"])]
+    // the help lists the hidden cases from the registry of families
+    #[arg(long, value_name = "NAME", conflicts_with_all = ["params", "set"], help = effect_help())]
     effect: Option<String>,
     /// With --effect: the seed of the hidden case (the device); experiments of one device share
     /// it and differ in --seed
@@ -170,6 +164,21 @@ pub fn run(a: Args) -> Result<(), Error> {
         a.out.display()
     );
     Ok(())
+}
+
+/// `--effect`'s help: hide a mechanism of the library, one of their second forms, one outside
+/// the library, or two at once.
+fn effect_help() -> String {
+    let names = |kind: fn(&Truth) -> bool| {
+        let all = Truth::all().into_iter().filter(kind);
+        all.map(|t| t.name()).collect::<Vec<_>>().join(", ")
+    };
+    format!(
+        "Hide a mechanism in the data, in a form that differs from the library's term: an effect of the library ({}), a second form of one ({}), `vibration` or `supply_ripple` (outside the library), `none`, or two at once ({}); with the base parameters Kb, b, gamma1, gamma2 off by up to 20 %, all drawn from --case",
+        names(|t| matches!(t, Truth::Effect(_))),
+        names(|t| matches!(t, Truth::Variant(_))),
+        names(|t| matches!(t, Truth::Two(_))),
+    )
 }
 
 pub fn synth(a: SynthArgs) -> Result<(), Error> {

@@ -1,3 +1,6 @@
+use super::charge_drift::DriftSite;
+use super::hysteresis::HysteresisLaw;
+use super::preload::PreloadLaw;
 use super::*;
 use crate::model::platform::BlockState;
 use crate::model::platform::tests::assert_jacobian_matches;
@@ -209,7 +212,118 @@ fn state_positions_agree_with_the_names() {
         }
     }
     let paper = Platform::new(Params::default()).unwrap();
-    for e in terms::Extra::TABLE_STATES {
+    for e in terms::Extra::table_states() {
         assert_eq!(paper.state_position(0, BlockState::Extra(e)), None, "{e:?}");
     }
+}
+
+/// The registry is the one list: each family's module describes itself whole, and everything
+/// that lists the families (the parameter table, the FMU's states, the documents) follows.
+/// A family added to the registry and forgotten somewhere is named here.
+#[test]
+fn each_family_describes_itself_whole() {
+    let doc = include_str!("effects.md");
+    let rows_of = |e: Effect| {
+        let f = e.family();
+        f.rows.iter().chain(f.choices).map(|d| d.name)
+    };
+    let mut sections = Vec::new();
+    for e in Effect::ALL {
+        let f = e.family();
+        assert_eq!(f.effect, e, "{}: FAMILY names another effect", f.name);
+        // its rows, named for it in the table, neutral by default
+        for d in f.rows.iter().chain(f.choices) {
+            assert!(
+                d.description.starts_with(&format!("{}: ", f.name)),
+                "{e}: the row {} does not name its family",
+                d.name
+            );
+            assert!(Params::default().get(d.name).is_ok(), "{e}: {}", d.name);
+        }
+        // every form frees, switches on and sets rows of its own family
+        for form in f.forms {
+            assert_eq!(form.effect, e, "{e}/{}", form.name);
+            let names = form.free.iter().chain(form.magnitudes);
+            for name in names.chain(form.settings.iter().map(|s| &s.0)) {
+                assert!(rows_of(e).any(|n| n == *name), "{e}/{}: {name}", form.name);
+            }
+        }
+        // on, off, and the states the table can switch on
+        let mut p = EffectParams::default();
+        (f.on)(&mut p);
+        assert!(e.is_active(&p), "{e}: `on` leaves it off");
+        let m = Platform::new(Params {
+            effects: p,
+            ..Params::default()
+        })
+        .unwrap();
+        let states = m.extra_states().iter().filter(|s| s.effect == e).count();
+        assert_eq!(states, f.table_stages, "{e}: `on` and table_stages");
+        assert_eq!(f.state.is_some(), f.table_stages > 0, "{e}: its state");
+        p.switch_off(e);
+        assert_eq!(p, EffectParams::default(), "{e}: switch_off");
+        // its probes reach every form, through its own rows
+        let probes = (f.probes)(&Params::default(), 60.0);
+        for form in f.forms {
+            assert!(
+                probes.iter().any(|p| p.form == form),
+                "{e}/{}: no probe",
+                form.name
+            );
+        }
+        for (probe, (name, _)) in probes
+            .iter()
+            .flat_map(|p| p.columns.iter().flatten().map(move |c| (p, c)))
+        {
+            assert!(
+                rows_of(probe.form.effect).any(|n| n == *name),
+                "{e}: probe of {name}"
+            );
+        }
+        // its hidden forms switch it on
+        for (name, plant) in std::iter::once((f.name, f.hidden)).chain(f.variants.iter().copied()) {
+            let mut p = Params::default();
+            let planted = plant(&mut p, &mut |lo, hi| 0.5 * (lo + hi));
+            let delayed = planted.wandering_delay.is_some();
+            assert!(
+                e.is_active(&p.effects) || delayed,
+                "{name}: planted nothing"
+            );
+            assert!(!planted.text.is_empty(), "{name}");
+        }
+        // the documents: its section, its row of the library's table, its parameters
+        let section = format!("\n## {}\n", f.name);
+        sections.push(
+            doc.find(&section)
+                .unwrap_or_else(|| panic!("effects.md: no {section}")),
+        );
+        let row = format!("\n| `{}` |", f.name);
+        assert!(
+            doc.contains(&row),
+            "effects.md: {e} not in the library's table"
+        );
+        for name in rows_of(e) {
+            assert!(
+                doc.contains(&format!("`{name}`")),
+                "effects.md: {e}'s {name}"
+            );
+        }
+    }
+    assert!(
+        sections.is_sorted(),
+        "effects.md: the families' sections in registry order"
+    );
+    // names are unique among families and hidden forms
+    let mut names: Vec<&str> = Effect::ALL
+        .iter()
+        .flat_map(|e| std::iter::once(e.name()).chain(e.family().variants.iter().map(|v| v.0)))
+        .collect();
+    let n = names.len();
+    names.sort();
+    names.dedup();
+    assert_eq!(
+        names.len(),
+        n,
+        "a name twice among the families and their hidden forms"
+    );
 }

@@ -31,13 +31,13 @@ fn right(t: Truth, d: &diagnose::Diagnosis) -> bool {
 
 /// The largest distance of a held-out fit below its noise floor [points].
 fn worst_gap(d: &diagnose::Diagnosis) -> f64 {
-    d.experiments[1..]
+    d.fits.floor[1..]
         .iter()
         .zip(&d.last.validation)
-        .flat_map(|(e, f)| {
+        .flat_map(|(floor, f)| {
             f.fits
                 .iter()
-                .filter_map(|(name, v)| diagnose::floor_fit(e, name).map(|floor| floor - v))
+                .filter_map(|(name, v)| floor.get(name).map(|floor| floor - v))
         })
         .fold(f64::NEG_INFINITY, f64::max)
 }
@@ -129,8 +129,7 @@ pub fn run(
                 effect_cases += 1;
                 effect_right += ok as usize;
             }
-            let before = diagnose::held_out_fits(&d.base);
-            let after = diagnose::held_out_fits(&d.last);
+            let (before, after) = (&d.fits.before, &d.fits.after);
             let floor: Vec<String> = d
                 .after
                 .iter()
@@ -144,8 +143,8 @@ pub fn run(
                 format!("{got} [{}]", forms.join("+")),
                 if ok { "ok  " } else { "MISS" },
                 seconds,
-                fmt_fits(&before),
-                fmt_fits(&after),
+                fmt_fits(before),
+                fmt_fits(after),
                 floor.join("/"),
                 d.outliers.iter().map(|o| o.times.len()).sum::<usize>(),
                 case.description

@@ -1,0 +1,197 @@
+//! What a family of the effect library is (src/model/effects/effects.md, "The effect library"):
+//! the one description each family's module gives of itself, which the registry
+//! ([`super::Effect::family`]) hands to everything else: the parameter table, the FMU, the
+//! screening and separation of `hasel diagnose`, the hidden-mechanism generator, the CLI and the
+//! documents. Its terms (energy, right-hand side, Jacobian, dissipation) are the module's
+//! [`super::terms::Law`].
+
+use super::{Effect, EffectParams};
+use crate::model::Params;
+use crate::model::actuator::StateInfo;
+use crate::model::params::ParamDef;
+
+/// One family: a place in the model where a missing mechanism enters, with its forms.
+pub struct Family {
+    pub effect: Effect,
+    /// The name in src/model/effects/effects.md, the CLI and the reports.
+    pub name: &'static str,
+    /// The physical mechanism, in words.
+    pub mechanism: &'static str,
+    /// The library's term, as written in src/model/effects/effects.md.
+    pub form: &'static str,
+    /// The forms of the family, the library form first (effects.md, each family's "Forms").
+    pub forms: &'static [Form],
+    /// The family's rows of the parameter table, magnitudes and settings.
+    pub rows: &'static [ParamDef],
+    /// Rows that choose among forms (an index no magnitude expresses); the table lists them
+    /// after every family's `rows`.
+    pub choices: &'static [ParamDef],
+    /// Name, unit and meaning of the family's extra state (every stage shares them), if any.
+    pub state: Option<StateInfo>,
+    /// How many stages of that state the parameter table can switch on: the FMU's states.
+    pub table_stages: usize,
+    /// Is the family switched on by these parameters?
+    pub is_active: fn(&EffectParams) -> bool,
+    /// Switches every form the table reaches on at once, at values inside the model's domain
+    /// (the FMU reads the model structure there).
+    pub on: fn(&mut EffectParams),
+    /// Further settings over `on` whose Jacobian structure differs from it (another circuit
+    /// site): the FMU reads the structure there too.
+    pub structures: &'static [fn(&mut EffectParams)],
+    /// Whether the family delays the command on its way to the actuators, as a lag of the
+    /// sensor does to the outputs of a nearly linear device.
+    pub delays_the_command: bool,
+    /// What the neutral value of the family's magnitude is, for its confidence interval.
+    pub magnitude: Magnitude,
+    /// The screening probes of every form, at the model `params` and the peak command [V]
+    /// (src/diagnose/diagnose.md, "Screening").
+    pub probes: fn(&Params, f64) -> Vec<Probe>,
+    /// The experiment that exposes the family (src/diagnose/diagnose.md, "The decision rule").
+    pub exposing: Exposing,
+    /// The family hidden in a form unlike its library term, for synthetic data.
+    pub hidden: Plant,
+    /// Further hidden forms, by name (their names are hidden cases of the CLI).
+    pub variants: &'static [(&'static str, Plant)],
+}
+
+/// One form of a family: the parameters it frees (its magnitude first) and the settings that
+/// select it (src/model/effects/effects.md, each family's "Forms").
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Form {
+    pub effect: Effect,
+    pub name: &'static str,
+    pub free: &'static [&'static str],
+    /// The parameters that switch the form on, any one of which is enough: its first free
+    /// parameter, or each of interchangeable ones (the two stages of a second-order amplifier,
+    /// the two creep branches), of which a fit may leave either near 0.
+    pub magnitudes: &'static [&'static str],
+    /// Parameters set to select the form, never fitted (e.g. `drift_site`).
+    pub settings: &'static [(&'static str, f64)],
+}
+
+impl Form {
+    /// A form whose first free parameter is its magnitude.
+    pub const fn new(
+        effect: Effect,
+        name: &'static str,
+        free: &'static [&'static str],
+        settings: &'static [(&'static str, f64)],
+    ) -> Form {
+        Form {
+            effect,
+            name,
+            free,
+            magnitudes: free.split_at(1).0,
+            settings,
+        }
+    }
+
+    /// The library form of `effect`.
+    pub fn library(effect: Effect) -> &'static Form {
+        &effect.forms()[0]
+    }
+
+    /// Is this the family's library form?
+    pub fn is_library(&self) -> bool {
+        self.name == self.effect.forms()[0].name
+    }
+}
+
+/// The neutral value of a family's magnitude.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Magnitude {
+    /// A positive magnitude, off at 0 (fitted in log coordinates).
+    Positive,
+    /// Magnitudes of either sign, off at 0; any one away from 0 is enough.
+    Signed,
+    /// A limit, off above the largest command (a limit above it clips nothing).
+    Limit,
+}
+
+/// Effect parameter settings that switch a form of a family on, each giving one direction in
+/// output space; several settings of one probe span a subspace (the preload's three torques,
+/// the coupling's three pairs, the creep's two branches).
+pub struct Probe {
+    pub form: &'static Form,
+    pub columns: Vec<Vec<(&'static str, f64)>>,
+    pub scaling: Scaling,
+}
+
+impl Probe {
+    /// A probe of one setting, scaled as a positive magnitude, with the form's own settings.
+    pub fn one(form: &'static Form, settings: Vec<(&'static str, f64)>) -> Probe {
+        Probe {
+            form,
+            columns: vec![[settings, form.settings.to_vec()].concat()],
+            scaling: Scaling::Magnitude,
+        }
+    }
+}
+
+/// How a probe's first setting (its magnitude) becomes a start value.
+#[derive(Clone, Copy, PartialEq, Eq)]
+pub enum Scaling {
+    /// A positive magnitude, scaled by the projection coefficient (within ×/÷ 5).
+    Magnitude,
+    /// A magnitude of either sign, scaled by the coefficient.
+    Signed,
+    /// A limit (U_max): the probe value is kept.
+    Fixed,
+    /// The coupling's pairs: column j switches pair j on alone at k_c; the start is
+    /// k_c c_12 with the weights c_13 / c_12 and c_23 / c_12 (all kept positive).
+    Pairs,
+}
+
+/// The experiment that exposes a family, at commands up to a peak U.
+pub struct Exposing {
+    /// What to do and why it exposes the family, in words.
+    pub text: &'static str,
+    pub drive: Drive,
+    /// The record's length [s].
+    pub t_end: f64,
+}
+
+/// A command of an exposing experiment, scaled to the peak command U.
+pub enum Drive {
+    /// Piecewise linear through (t [s], share of U) corners, the same on every actuator.
+    Corners(&'static [(f64, f64)]),
+    /// A sine of amplitude U at ω [rad/s] on the first actuator alone.
+    Alone { omega: f64 },
+    /// On every actuator, tones at these ω [rad/s], each of amplitude U/4, at the paper's
+    /// phase of the actuator plus the tone's index.
+    Multisine(&'static [f64]),
+    /// A sine at ω [rad/s] on every actuator, of amplitude U/2 before `switch` [s] and U after.
+    Levels { omega: f64, switch: f64 },
+}
+
+/// Plants a family's hidden form in `params`, its values drawn by `between(lo, hi)`.
+pub type Plant = fn(&mut Params, &mut dyn FnMut(f64, f64) -> f64) -> Planted;
+
+/// A planted mechanism.
+pub struct Planted {
+    /// The mechanism and its values, in words.
+    pub text: String,
+    /// A transport delay the data generator applies to the command, wandering around its mean
+    /// as no parameter can: (mean [s], phase of the wander).
+    pub wandering_delay: Option<(f64, f64)>,
+}
+
+impl Planted {
+    pub fn text(text: String) -> Planted {
+        Planted {
+            text,
+            wandering_delay: None,
+        }
+    }
+}
+
+/// A value drawn log-uniformly in [lo, hi] by `between`.
+pub fn log_between(between: &mut dyn FnMut(f64, f64) -> f64, lo: f64, hi: f64) -> f64 {
+    between(lo.ln(), hi.ln()).exp()
+}
+
+/// The mean bending stiffness Kb of the three actuators [N m/rad]: the scale of the
+/// mechanical families' probes and hidden magnitudes.
+pub fn mean_kb(params: &Params) -> f64 {
+    params.act.iter().map(|a| a.kb).sum::<f64>() / 3.0
+}
