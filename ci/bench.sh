@@ -5,6 +5,8 @@
 source "$(dirname "${BASH_SOURCE[0]}")/lib.sh"
 ensure_apt
 build_fmu
+step "the library-solver comparison compiles lint-free (feature compare: diffsol, SUNDIALS)"
+cargo clippy -q --release --features compare --bin hasel -- -D warnings
 step "solver: hasel bench, with the library solvers beside it (diffsol, native SUNDIALS CVODE)"
 cargo run -q --release --features compare --bin hasel -- bench
 step "identification: hasel bench --identify"

@@ -11,8 +11,6 @@ cargo clippy -q --release --all-targets -- -D warnings
 build_fmu
 step "Rust tests"
 cargo test --release --all-targets
-step "the library-solver comparison of hasel bench compiles lint-free (feature compare, diffsol)"
-cargo clippy -q --release --features compare --bin hasel -- -D warnings
 ensure_fmi_sim
 step "Python tests of the packed FMU"
 python -m pytest tests/python -q -p no:cacheprovider

@@ -11,19 +11,15 @@ use std::time::Duration;
 
 use hasel_fmu::diagnose::hidden::{self, Truth};
 use hasel_fmu::diagnose::{self, FIT_TOLERANCE, Options, Verdict, floor_fit};
-use hasel_fmu::identify::conditions::{Choice, StartChoice};
 use hasel_fmu::identify::synth::Columns;
 use hasel_fmu::model::{Effect, Params};
-
-/// Seconds per experiment, as in the issue's benchmark.
-const T_END: f64 = 6.0;
 
 fn diagnose_case(truth: Truth, columns: Columns, seed: u64) -> diagnose::Diagnosis {
     diagnose_hidden(hidden::hide(truth, seed).unwrap(), columns, seed)
 }
 
 fn diagnose_hidden(case: hidden::Hidden, columns: Columns, seed: u64) -> diagnose::Diagnosis {
-    let exps = case.experiments(columns, T_END, seed).unwrap();
+    let exps = case.experiments(columns, seed).unwrap();
     diagnose::diagnose(&Params::default(), exps, &Options::default()).unwrap()
 }
 
@@ -155,7 +151,7 @@ fn both_named(case: &str, seed: u64) -> diagnose::Diagnosis {
     let truth = Truth::from_name(case).unwrap();
     let exps = hidden::hide(truth, seed)
         .unwrap()
-        .experiments(Columns::Heights, T_END, seed)
+        .experiments(Columns::Heights, seed)
         .unwrap();
     // two rounds of four refits and a revisit: a budget that no refit exhausts even on a machine
     // shared with other work, so that the answer does not depend on the load
@@ -272,18 +268,11 @@ fn an_effect_is_named_on_lab_data() {
     outliers_reported(&case, &d);
 }
 
-/// A diagnosis of heights with the records' conditions estimated: the start detected, the
-/// sensor's lag fitted (`--start auto --lag estimate`).
+/// A diagnosis of heights with the records' conditions estimated as by default: the start
+/// detected, the sensor's lag fitted (`--start auto --lag estimate`).
 fn diagnose_lab(case: hidden::Hidden, seed: u64) -> diagnose::Diagnosis {
-    let exps = case.experiments(Columns::Heights, T_END, seed).unwrap();
-    let opts = Options {
-        conditions: Choice {
-            start: StartChoice::Auto,
-            lag: None,
-        },
-        ..Options::default()
-    };
-    diagnose::diagnose(&Params::default(), exps, &opts).unwrap()
+    let exps = case.experiments(Columns::Heights, seed).unwrap();
+    diagnose::diagnose(&Params::default(), exps, &Options::default()).unwrap()
 }
 
 /// Twins of one device (issue: lab protocols): recorded from rest and `after` seconds into the
@@ -317,7 +306,7 @@ fn a_record_that_starts_mid_run_is_judged_as_from_rest() {
     // noise-free record's first (the start is fitted to the whole transient, at rest velocity)
     let mut clean = hidden::hide(Truth::Nothing, 1).unwrap().mid_run(1.37);
     clean.noise = 0.0;
-    let truth = clean.experiments(Columns::Heights, T_END, 1).unwrap();
+    let truth = clean.experiments(Columns::Heights, 1).unwrap();
     for ((f, e), noisy) in mid.base.conditions.iter().zip(&truth).zip(&mid.experiments) {
         for (i, (c, y)) in e.channels.iter().enumerate() {
             let sigma = diagnose::analysis::noise_level(&noisy.t, &noisy.channels[i].1);

@@ -272,7 +272,7 @@ fn a_direction_held_where_the_fit_reached_keeps_what_it_gained() {
     use hasel_fmu::diagnose::hidden::{self, Truth};
     use hasel_fmu::identify::Hold;
     let case = hidden::hide(Truth::from_name("coupling_tilt+creep").unwrap(), 1).unwrap();
-    let exps = case.experiments(Columns::Heights, 6.0, 1).unwrap();
+    let exps = case.experiments(Columns::Heights, 1).unwrap();
     let start = Params::default();
     let run = |hold: Hold| {
         identify(

@@ -124,8 +124,12 @@ impl Truth {
     }
 }
 
-/// The drive frequencies of the paper [rad/s]: identification, then validation.
+/// The drive frequencies of the paper [rad/s]: identification, then validation (records after
+/// the second repeat them, as a lab repeats a run).
 pub const OMEGAS: [f64; 2] = [3.0 * PI, 11.0];
+
+/// The amplitudes of the `levels` protocol's sines [V], record after record (repeated likewise).
+const LEVELS: [f64; 2] = [60.0, 35.0];
 
 /// A generated case: the true parameters and what else the data hide.
 #[derive(Clone)]
@@ -370,18 +374,15 @@ impl Hidden {
         self
     }
 
-    /// The case's two experiments of `t_end` seconds (from `record_from` into the drive), the
-    /// estimation then the held-out one, in its protocol (the paper's: the 60 V sine at 3π and
-    /// 11 rad/s at 1 ms, named `w3pi.csv` and `w11.csv`).
-    pub fn experiments(
-        &self,
-        columns: Columns,
-        t_end: f64,
-        seed: u64,
-    ) -> Result<Vec<Experiment>, Error> {
-        let total = self.record_from + t_end;
+    /// The case's experiments in its protocol (from `record_from` into the drive), the
+    /// estimation first, then the held-out ones (the paper's: the 60 V sine at 3π and 11 rad/s,
+    /// 6 s at 1 ms, named `w3pi.csv` and `w11.csv`), recorded in `columns` unless the protocol
+    /// records the tip.
+    pub fn experiments(&self, columns: Columns, seed: u64) -> Result<Vec<Experiment>, Error> {
         let p = self.protocol;
-        (0..2)
+        let total = self.record_from + p.length;
+        let columns = if p.tip { Columns::TipXy } else { columns };
+        (0..p.records)
             .map(|k| {
                 let spec = self.spec(
                     p.input(k, total)?,
@@ -407,37 +408,64 @@ pub enum Drive {
     Sines,
     /// Each actuator stepping between levels in 0–60 V every 0.3–0.8 s, held between steps.
     Staircase,
-    /// A 60 V sine swept logarithmically in frequency, 2 → 20 rad/s, then 20 → 2 rad/s.
+    /// A 60 V sine swept logarithmically in frequency, 2 → 20 rad/s, then 20 → 2 rad/s (and
+    /// so on, record after record).
     Chirp,
     /// The sine at two voltage levels: 60 V at 3π rad/s, then 35 V at 11 rad/s.
     Levels,
 }
 
-/// A protocol: the drive, the sampling interval, and the draw of its random parts.
+/// A protocol: the drive, the sampling, the records, and the draw of its random parts.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Protocol {
     pub drive: Drive,
     /// Sample interval [s].
     pub dt: f64,
+    /// Length of each record [s].
+    pub length: f64,
+    /// Number of records: the estimation one, then the held-out ones.
+    pub records: usize,
+    /// Whether the records hold the tip's X/Y rather than the heights.
+    pub tip: bool,
     seed: u64,
 }
 
 impl Protocol {
-    /// The paper's: two sines at 1 ms.
+    /// The paper's: two 6 s sines at 1 ms.
     pub const PAPER: Protocol = Protocol {
         drive: Drive::Sines,
         dt: 1e-3,
+        length: RECORD_S,
+        records: 2,
+        tip: false,
         seed: 0,
     };
 
-    /// A protocol drawn from `seed`: any drive, sampled every 0.5, 1 or 2 ms.
+    /// A protocol drawn from `seed` (issue: lab protocols): any drive, sampled every 0.5, 1
+    /// or 2 ms, one to four records of 3–20 s, a quarter of them of the tip.
     pub fn draw(seed: u64) -> Protocol {
         let mut rng = Normal::new(seed.wrapping_mul(0xD1B5_4A32_D192_ED03) ^ 0x0907_0C01);
         let pick = |rng: &mut Normal, n: usize| ((rng.uniform() * n as f64) as usize).min(n - 1);
         let drive =
             [Drive::Sines, Drive::Staircase, Drive::Chirp, Drive::Levels][pick(&mut rng, 4)];
         let dt = [5e-4, 1e-3, 2e-3][pick(&mut rng, 3)];
-        Protocol { drive, dt, seed }
+        // whole seconds: the sines' periods and the staircase's holds need not fit
+        let length = 3.0 + pick(&mut rng, 18) as f64;
+        let records = 1 + pick(&mut rng, 4);
+        let tip = pick(&mut rng, 4) == 0;
+        Protocol {
+            drive,
+            dt,
+            length,
+            records,
+            tip,
+            seed,
+        }
+    }
+
+    /// This protocol with records of `length` seconds.
+    pub fn lasting(self, length: f64) -> Protocol {
+        Protocol { length, ..self }
     }
 
     pub fn name(&self) -> &'static str {
@@ -451,25 +479,41 @@ impl Protocol {
 
     /// In words, for the case's description.
     pub fn describe(&self) -> String {
-        format!("{} sampled every {} ms", self.name(), self.dt * 1e3)
+        format!(
+            "{} {} x {} s of the {} sampled every {} ms",
+            self.name(),
+            self.records,
+            self.length,
+            if self.tip { "tip" } else { "heights" },
+            self.dt * 1e3
+        )
     }
 
     fn file_name(&self, k: usize) -> String {
         match (self.drive, k) {
             (Drive::Sines, 0) => "w3pi.csv".into(),
-            (Drive::Sines, _) => "w11.csv".into(),
+            (Drive::Sines, 1) => "w11.csv".into(),
+            (Drive::Sines, _) => format!("{}_{}.csv", ["w3pi", "w11"][k % 2], k / 2 + 1),
             (_, 0) => format!("{}_estimation.csv", self.name()),
-            _ => format!("{}_held_out.csv", self.name()),
+            (_, 1) => format!("{}_held_out.csv", self.name()),
+            _ => format!("{}_held_out{k}.csv", self.name()),
         }
     }
 
     /// The command of experiment `k` (0: estimation, 1: held out), `t_end` seconds long.
     fn input(&self, k: usize, t_end: f64) -> Result<Input, InputError> {
         match self.drive {
-            Drive::Sines => Ok(Input::sine(60.0, OMEGAS[k])),
-            Drive::Levels => Ok(Input::sine([60.0, 35.0][k], OMEGAS[k])),
+            Drive::Sines => Ok(Input::sine(60.0, OMEGAS[k % OMEGAS.len()])),
+            Drive::Levels => Ok(Input::sine(
+                LEVELS[k % LEVELS.len()],
+                OMEGAS[k % OMEGAS.len()],
+            )),
             Drive::Chirp => {
-                let (w0, w1): (f64, f64) = if k == 0 { (2.0, 20.0) } else { (20.0, 2.0) };
+                let (w0, w1): (f64, f64) = if k.is_multiple_of(2) {
+                    (2.0, 20.0)
+                } else {
+                    (20.0, 2.0)
+                };
                 // phase of a logarithmic sweep: ∫ w0 (w1/w0)^(s/T) ds
                 let rate = (w1 / w0).ln() / t_end;
                 resampled(t_end, |t| {
@@ -490,6 +534,52 @@ impl Protocol {
                 }
                 Input::sampled(t, u, Interpolation::ZeroOrderHold)
             }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::identify::Channel;
+
+    #[test]
+    fn drawn_protocols_span_the_lab_protocols() {
+        let draws: Vec<Protocol> = (0..400).map(Protocol::draw).collect();
+        for drive in [Drive::Sines, Drive::Staircase, Drive::Chirp, Drive::Levels] {
+            assert!(draws.iter().any(|p| p.drive == drive), "{drive:?}");
+        }
+        for dt in [5e-4, 1e-3, 2e-3] {
+            assert!(draws.iter().any(|p| p.dt == dt), "{dt}");
+        }
+        for records in 1..=4 {
+            assert!(draws.iter().any(|p| p.records == records), "{records}");
+        }
+        let lengths = draws.iter().map(|p| p.length);
+        assert_eq!(lengths.clone().fold(f64::INFINITY, f64::min), 3.0);
+        assert_eq!(lengths.fold(0.0, f64::max), 20.0);
+        let tips = draws.iter().filter(|p| p.tip).count();
+        assert!((60..140).contains(&tips), "{tips} of 400 of the tip");
+    }
+
+    #[test]
+    fn a_case_is_recorded_as_its_protocol_says() {
+        let p = (0..)
+            .map(Protocol::draw)
+            .find(|p| p.tip && p.records == 3)
+            .unwrap()
+            .lasting(1.0);
+        let case = hide(Truth::Nothing, 1).unwrap().with_protocol(p);
+        let exps = case.experiments(Columns::Heights, 1).unwrap();
+        assert_eq!(exps.len(), 3);
+        let names: Vec<&str> = exps.iter().map(|e| e.name.as_str()).collect();
+        let unique: std::collections::BTreeSet<&str> = names.iter().copied().collect();
+        assert_eq!(unique.len(), 3, "{names:?}");
+        for e in &exps {
+            let channels: Vec<Channel> = e.channels.iter().map(|(c, _)| *c).collect();
+            assert_eq!(channels, Columns::TipXy.channels(), "{}", e.name);
+            let span = e.t[e.t.len() - 1] - e.t[0];
+            assert!((span - 1.0).abs() <= p.dt, "{}: {span} s", e.name);
         }
     }
 }

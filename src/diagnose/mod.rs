@@ -31,6 +31,7 @@ pub mod separate;
 use std::collections::BTreeMap;
 use std::time::{Duration, Instant};
 
+use crate::identify::conditions::{Choice, LagChoice, StartChoice};
 use crate::identify::{self, Experiment, FIT_RTOL, Hold, Identification, Options as IdOptions};
 use crate::model::effects::{Form, Magnitude};
 use crate::model::{Effect, Params};
@@ -415,8 +416,8 @@ fn nested_refit(
 /// neutral, under the conditions the refit holds (`opts.conditions`: a lag held at 0 where
 /// the refit's forms delay the command).
 fn nested_rss(current: &Identification, exp: &Experiment, opts: &IdOptions) -> Result<f64, Error> {
-    match opts.conditions.and_then(|c| c.lag) {
-        Some(lag) if lag != exp.conditions.lag => {
+    match opts.conditions.map(|c| c.lag) {
+        Some(LagChoice::Stated(lag)) if lag != exp.conditions.lag => {
             let mut held_lag = exp.clone();
             held_lag.conditions.lag = lag;
             let sim = identify::simulate(&current.params, &held_lag, opts.rtol)?;
@@ -429,6 +430,17 @@ fn nested_rss(current: &Identification, exp: &Experiment, opts: &IdOptions) -> R
 /// Relative excess of a residual sum of squares over the nested model's that counts as above it:
 /// the effect's states change the integrator's steps, which moves the sum in its last digits.
 const NESTED_TOLERANCE: f64 = 1e-6;
+
+/// The unknowns a BIC counts of `id`, fitted with `free` parameters: those and the effects'
+/// states of a start mid-run of the estimation record (the angles and the lag are every
+/// model's alike).
+fn unknowns(id: &Identification, free: usize) -> usize {
+    let slow = match id.conditions.first().map(|f| &f.conditions.start) {
+        Some(crate::simulation::Start::Settled { slow, .. }) => slow.len(),
+        _ => 0,
+    };
+    free + slow
+}
 
 /// BIC over the channels of one experiment: Σ_c N_c ln(RSS_c / N_c) + k ln N.
 fn bic(exp: &Experiment, sim: &[crate::simulation::Sample], k: usize) -> f64 {
@@ -579,20 +591,23 @@ fn free_list(forms: &[&Form]) -> Vec<String> {
     free
 }
 
-/// The records' conditions in a refit with `forms`: the paper's model's (`None`: as the
-/// records carry them), but where a form delays the command the sensor's lag is held at 0
-/// (src/diagnose/diagnose.md, "Records' conditions"). A lag of the outputs and a delay of the
-/// input are one thing to a nearly linear device: the base model's lag took up what it could of
-/// a missing delay, and left beside a delay or an amplifier's lag it would lend either the
+/// The records' conditions in a refit with `forms` (src/diagnose/diagnose.md, "Records'
+/// conditions"): the paper's model's, but a start mid-run estimated again with the effects'
+/// states (a creep or a charge that the record's past left unsettled), and where a form delays
+/// the command the sensor's lag held at 0. A lag of the outputs and a delay of the input are
+/// one thing to a nearly linear device: the base model's lag took up what it could of a
+/// missing delay, and left beside a delay or an amplifier's lag it would lend either the
 /// other's shape.
-fn refit_conditions(forms: &[&Form]) -> Option<identify::conditions::Choice> {
-    forms
-        .iter()
-        .any(|f| f.effect.delays_the_command())
-        .then_some(identify::conditions::Choice {
-            start: identify::conditions::StartChoice::Kept,
-            lag: Some(0.0),
-        })
+fn refit_conditions(forms: &[&Form]) -> Choice {
+    let delays = forms.iter().any(|f| f.effect.delays_the_command());
+    Choice {
+        start: StartChoice::Refined,
+        lag: if delays {
+            LagChoice::Stated(0.0)
+        } else {
+            LagChoice::Kept
+        },
+    }
 }
 
 /// One refit of a round: the candidate's index, the form refitted and its start values.
@@ -674,7 +689,7 @@ pub fn diagnose(
         // a refit starts from the screening's guess: held there, a direction would give back
         // what the fit had gained along it (src/identify/identify.md)
         hold: Hold::Reached,
-        conditions: refit_conditions(forms),
+        conditions: Some(refit_conditions(forms)),
         ..IdOptions::default()
     };
     // the paper's model fitted to convergence: every candidate is judged against it
@@ -696,7 +711,7 @@ pub fn diagnose(
         .iter()
         .zip(&base.conditions)
         .map(|(e, found)| Experiment {
-            conditions: found.conditions,
+            conditions: found.conditions.clone(),
             ..e.clone()
         })
         .collect();
@@ -1003,12 +1018,15 @@ fn revisit(
         let refit = identify::identify(&start, estimation, held, &o);
         let (delta_bic, swapped) = match refit {
             Ok(id) => {
-                let delta = bic(&estimation[0], &id.simulated[0], o.free.len())
-                    - bic(
-                        &estimation[0],
-                        &current.simulated[0],
-                        free_list(forms).len(),
-                    );
+                let delta = bic(
+                    &estimation[0],
+                    &id.simulated[0],
+                    unknowns(&id, o.free.len()),
+                ) - bic(
+                    &estimation[0],
+                    &current.simulated[0],
+                    unknowns(current, free_list(forms).len()),
+                );
                 let at_floor =
                     worst_gap_to_floor(held_or_estimation(estimation, held), &id) <= FIT_TOLERANCE;
                 let swapped = delta <= -BIC_MARGIN && at_floor;
@@ -1141,8 +1159,12 @@ fn judge(
 ) -> Refit {
     let k_before = free_list(forms).len();
     let k_after = k_before + form.free.len();
-    let delta_bic = bic(&estimation[0], &id.simulated[0], k_after)
-        - bic(&estimation[0], &before.simulated[0], k_before);
+    let delta_bic = bic(&estimation[0], &id.simulated[0], unknowns(&id, k_after))
+        - bic(
+            &estimation[0],
+            &before.simulated[0],
+            unknowns(before, k_before),
+        );
     let (fit_gain, gap_closed) = held_out_gain(held_or_estimation(estimation, held), before, &id);
     let (interval, excludes) = magnitude_interval(form, &id, estimation);
     let mut failed = Vec::new();
@@ -1297,7 +1319,7 @@ mod tests {
         use crate::identify::synth::Columns;
         let exps = hidden::hide(hidden::Truth::Nothing, 1)
             .unwrap()
-            .experiments(Columns::Heights, 6.0, 1)
+            .experiments(Columns::Heights, 1)
             .unwrap();
         let (estimation, held) = exps.split_at(1);
         let base_opts = IdOptions {

@@ -159,8 +159,10 @@ mod tests {
 
     #[test]
     fn a_multisine_separates_a_lag_from_a_delay_that_the_paper_sine_cannot() {
-        let case = hidden::hide(Truth::Nothing, 1).unwrap();
-        let data = &case.experiments(Columns::Heights, 2.0, 1).unwrap()[0];
+        let case = hidden::hide(Truth::Nothing, 1)
+            .unwrap()
+            .with_protocol(hidden::Protocol::PAPER.lasting(2.0));
+        let data = &case.experiments(Columns::Heights, 1).unwrap()[0];
         let mut lag = case.params.clone();
         lag.set("tau_a", 0.01).unwrap();
         let mut delay = case.params.clone();

@@ -37,7 +37,22 @@ pub enum StartChoice {
     Estimate,
     /// Stated: the heights at the first sample [m].
     Heights([f64; 3]),
-    /// As the record's conditions have it (found before: a refit keeps its model's start).
+    /// As the record's conditions have it (found before: a first fit keeps its start).
+    Kept,
+    /// As the record's conditions have it, but a start mid-run estimated again with the
+    /// effects' states among its unknowns (a refit: an effect whose states are slow stood
+    /// elsewhere than settled when the device had been driven before the record).
+    Refined,
+}
+
+/// The sensor's lag, as asked (`--lag`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum LagChoice {
+    /// Estimated within [0, LAG_MAX].
+    Estimate,
+    /// Stated [s].
+    Stated(f64),
+    /// As the record's conditions have it.
     Kept,
 }
 
@@ -45,15 +60,14 @@ pub enum StartChoice {
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Choice {
     pub start: StartChoice,
-    /// The sensor's lag as stated [s], or `None`: estimated within [0, LAG_MAX].
-    pub lag: Option<f64>,
+    pub lag: LagChoice,
 }
 
 impl Default for Choice {
     fn default() -> Self {
         Choice {
             start: StartChoice::Auto,
-            lag: None,
+            lag: LagChoice::Estimate,
         }
     }
 }
@@ -72,13 +86,15 @@ pub struct Found {
 }
 
 /// The residuals of a record against the conditions' unknowns: z = (lag / LAG_MAX) and, where
-/// the start is estimated, the three angles over the stroke scale.
+/// the start is estimated, the three angles over the stroke scale and the effects' states over
+/// their scales (`slow_scales`, empty where they settle).
 struct Unknowns<'a> {
     params: &'a Params,
     exp: &'a Experiment,
     rtol: f64,
     lag: bool,
     start: bool,
+    slow_scales: Vec<f64>,
     /// The conditions the unknowns move from (a stated or rest start, a lag of 0).
     at: Conditions,
     len: usize,
@@ -89,14 +105,21 @@ const THETA_UNIT: f64 = 1e-3;
 
 impl Unknowns<'_> {
     fn conditions(&self, z: &[f64]) -> Conditions {
-        let mut c = self.at;
+        let mut c = self.at.clone();
         let mut k = 0;
         if self.lag {
             c.lag = z[0] * LAG_MAX;
             k = 1;
         }
         if self.start {
-            c.start = Start::Settled([0, 1, 2].map(|i| z[k + i] * THETA_UNIT));
+            c.start = Start::Settled {
+                theta: [0, 1, 2].map(|i| z[k + i] * THETA_UNIT),
+                slow: z[k + 3..]
+                    .iter()
+                    .zip(&self.slow_scales)
+                    .map(|(z, s)| z * s)
+                    .collect(),
+            };
         }
         c
     }
@@ -153,15 +176,25 @@ fn starts_mid_run(params: &Params, exp: &Experiment, rtol: f64) -> Result<bool, 
 }
 
 /// Whether conditions `b` differ from `a` by more than the fit can tell: a lag by a
-/// microsecond, a start's angle by 1e-7 rad (about a nanometre of height).
+/// microsecond, a start's angle by 1e-7 rad (about a nanometre of height), an effect's state
+/// by 1e-4 of its size.
 pub fn moved(a: &Conditions, b: &Conditions) -> bool {
-    let angles = |s: &Start| match *s {
-        Start::Rest => None,
-        Start::Settled(theta) => Some(theta),
-    };
-    let start_moved = match (angles(&a.start), angles(&b.start)) {
-        (Some(x), Some(y)) => (0..3).any(|i| (x[i] - y[i]).abs() > 1e-7),
-        (None, None) => false,
+    let start_moved = match (&a.start, &b.start) {
+        (
+            Start::Settled { theta, slow },
+            Start::Settled {
+                theta: theta_b,
+                slow: slow_b,
+            },
+        ) => {
+            (0..3).any(|i| (theta[i] - theta_b[i]).abs() > 1e-7)
+                || slow.len() != slow_b.len()
+                || slow
+                    .iter()
+                    .zip(slow_b)
+                    .any(|(x, y)| (x - y).abs() > 1e-4 * x.abs().max(y.abs()))
+        }
+        (Start::Rest, Start::Rest) => false,
         _ => true,
     };
     start_moved || (a.lag - b.lag).abs() > 1e-6
@@ -181,6 +214,24 @@ fn angles_at_first_samples(model: &Platform, exp: &Experiment) -> Result<[f64; 3
     Ok(theta.map(|s: f64| s.clamp(-0.99, 0.99).asin()))
 }
 
+/// How far an effect's state at a start mid-run may stand, in its scales (a full stroke, 100 V).
+const SLOW_RANGE: f64 = 10.0;
+
+/// Where the effects' states of a start at angles `theta` begin their estimate: as the record's
+/// conditions give them, else settled at the angles and the first command.
+fn slow_at_start(model: &Platform, exp: &Experiment, theta: [f64; 3]) -> Result<Vec<f64>, Error> {
+    let extras = model.n_effect_states();
+    if let Start::Settled { slow, .. } = &exp.conditions.start
+        && slow.len() == extras
+    {
+        return Ok(slow.clone());
+    }
+    let x = model
+        .settled_state(theta, &[], exp.input.value(exp.t[0]))
+        .map_err(SimError::from)?;
+    Ok(model.effect_states(&x))
+}
+
 /// Estimates the conditions of `exp` under `params` as `choice` asks, from its current ones.
 pub fn estimate(
     params: &Params,
@@ -189,26 +240,38 @@ pub fn estimate(
     rtol: f64,
 ) -> Result<Found, Error> {
     let model = Platform::new(params.clone())?;
-    let mut at = Conditions {
-        lag: choice.lag.unwrap_or(0.0),
-        ..exp.conditions
+    let mut at = exp.conditions.clone();
+    let estimate_lag = match choice.lag {
+        LagChoice::Estimate => {
+            at.lag = 0.0;
+            true
+        }
+        LagChoice::Stated(lag) => {
+            at.lag = lag;
+            false
+        }
+        LagChoice::Kept => false,
     };
-    let estimate_lag = choice.lag.is_none();
+    let found_before = matches!(exp.conditions.start, Start::Settled { .. });
     let (estimate_start, start_how) = match choice.start {
         StartChoice::Rest => {
             at.start = Start::Rest;
             (false, "rest")
         }
         StartChoice::Heights(h) => {
-            at.start = Start::Settled(h.map(|h| (2.0 * h / params.lv).clamp(-0.99, 0.99).asin()));
+            at.start = Start::Settled {
+                theta: h.map(|h| (2.0 * h / params.lv).clamp(-0.99, 0.99).asin()),
+                slow: Vec::new(),
+            };
             (false, "stated")
         }
         StartChoice::Estimate => (true, "estimated"),
         StartChoice::Kept => (false, "kept"),
+        StartChoice::Refined if found_before => (true, "detected mid-run, estimated"),
+        StartChoice::Refined => (false, "rest"),
         StartChoice::Auto => {
             // once found mid-run, a record stays so: the fit under its start no longer holds
             // the parameters that set the rest heights to the first samples
-            let found_before = matches!(exp.conditions.start, Start::Settled(_));
             if found_before || starts_mid_run(params, exp, rtol)? {
                 (true, "detected mid-run, estimated")
             } else {
@@ -224,9 +287,10 @@ pub fn estimate(
         lo.push(0.0);
         hi.push(1.0);
     }
+    let mut slow_scales = Vec::new();
     if estimate_start {
         let theta = match exp.conditions.start {
-            Start::Settled(theta) => theta,
+            Start::Settled { theta, .. } => theta,
             Start::Rest => angles_at_first_samples(&model, exp)?,
         };
         let theta_max = model
@@ -238,6 +302,19 @@ pub fn estimate(
             lo.push(-m / THETA_UNIT);
             hi.push(m / THETA_UNIT);
         }
+        let slow = slow_at_start(&model, exp, theta)?;
+        let scales = model.state_scales();
+        let n_block = scales.len() / 3;
+        let extras = slow.len() / 3;
+        slow_scales = (0..3)
+            .flat_map(|i| &scales[n_block * (i + 1) - extras..n_block * (i + 1)])
+            .copied()
+            .collect();
+        for (v, s) in slow.iter().zip(&slow_scales) {
+            z0.push(v / s);
+            lo.push(-SLOW_RANGE);
+            hi.push(SLOW_RANGE);
+        }
     }
     let len = exp.channels.iter().map(|(_, y)| y.len()).sum();
     let problem = Unknowns {
@@ -246,7 +323,8 @@ pub fn estimate(
         rtol,
         lag: estimate_lag,
         start: estimate_start,
-        at,
+        slow_scales,
+        at: at.clone(),
         len,
     };
     let (conditions, lag_se) = if z0.is_empty() {

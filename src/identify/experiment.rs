@@ -65,7 +65,7 @@ pub struct Experiment {
 
 /// How a record was taken beyond its samples (src/identify/identify.md, "Records that start
 /// mid-run" and "Sensor lag").
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct Conditions {
     /// The state at the first sample.
     pub start: Start,
@@ -207,7 +207,7 @@ impl Experiment {
             t,
             input,
             channels: self.channels.iter().map(|(c, v)| (*c, kept(v))).collect(),
-            conditions: self.conditions,
+            conditions: self.conditions.clone(),
         })
     }
 

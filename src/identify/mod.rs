@@ -236,7 +236,7 @@ pub fn identify(
         exps.iter()
             .zip(found)
             .map(|(e, f)| Experiment {
-                conditions: f.conditions,
+                conditions: f.conditions.clone(),
                 ..e.clone()
             })
             .collect()
@@ -246,9 +246,14 @@ pub fn identify(
     // parameters: a device 20 % off the guess rests elsewhere): the first fit is under the
     // records' conditions as they come (at rest, unless found before)
     let first = conditions::Choice {
-        lag: Some(choice.lag.unwrap_or(0.0)),
+        lag: match choice.lag {
+            conditions::LagChoice::Estimate => conditions::LagChoice::Stated(0.0),
+            asked => asked,
+        },
         start: match choice.start {
-            conditions::StartChoice::Auto => conditions::StartChoice::Kept,
+            conditions::StartChoice::Auto | conditions::StartChoice::Refined => {
+                conditions::StartChoice::Kept
+            }
             stated => stated,
         },
     };
@@ -259,7 +264,12 @@ pub fn identify(
     // transient the parameters would bend to): conditions and fit alternate until the
     // conditions stand still
     let mut settled = Vec::new();
-    for _ in 0..CONDITION_ROUNDS {
+    // a refinement starts from conditions found before: one round adds the model's own states
+    let rounds = match choice.start {
+        conditions::StartChoice::Refined => 1,
+        _ => CONDITION_ROUNDS,
+    };
+    for _ in 0..rounds {
         let all: Vec<Experiment> = est.iter().chain(&val).cloned().collect();
         settled = found(&id.params, &all, choice)?;
         let moved = settled

@@ -355,27 +355,70 @@ impl Platform {
     }
 
     /// A state on the slow manifold (src/model/model.md, "A start mid-run"): the actuators at
-    /// angles `theta`, (θ, l_p) on the invariant curve, p = 0, and every other state (the
-    /// charges, the effects' states) settled at command `u`: ẋ = 0 for those states with the
-    /// mechanics held. What a record that starts mid-run starts from: the angles move on the
-    /// slow time scale (tens of ms to 0.4 s), the rest relaxes in ns (the charges, the
-    /// momentum) or follows the angle and the command (creep, amplifier, trapped charge).
-    pub fn settled_state(&self, theta: [f64; 3], u: [f64; 3]) -> Result<Vec<f64>, ModelError> {
+    /// angles `theta`, (θ, l_p) on the invariant curve, p = 0, the effects' states at `slow`
+    /// (each actuator's extra states in block order, actuator after actuator) or, where `slow`
+    /// does not give them all, settled with the rest: every other state (the charges, the
+    /// effects' states) at ẋ = 0 at command `u` with the mechanics held. What a record that
+    /// starts mid-run starts from: the angles move on the slow time scale (tens of ms to
+    /// 0.4 s), the charges relax in ns; the effects' states follow the angle and the command
+    /// (creep, amplifier, trapped charge) slowly enough to stand elsewhere than settled when
+    /// the device was driven before.
+    pub fn settled_state(
+        &self,
+        theta: [f64; 3],
+        slow: &[f64],
+        u: [f64; 3],
+    ) -> Result<Vec<f64>, ModelError> {
         let blocks = self.each(|i, a| {
             let t = theta[i];
             Ok([t, a.l_p_on_curve(t)?, 0.0, 0.0, 0.0])
         })?;
         let mut x = self.with_effects_at_rest(&blocks);
+        let extras = self.nb - actuator::N;
+        let given = slow.len() == 3 * extras && extras > 0;
+        if given {
+            for (i, block) in slow.chunks(extras).enumerate() {
+                x[self.nb * i + actuator::N..self.nb * (i + 1)].copy_from_slice(block);
+            }
+        }
+        let settles = |k: usize| {
+            let j = k % self.nb;
+            j > actuator::P && (j < actuator::N || !given)
+        };
+        self.settle(&mut x, u, settles)?;
+        Ok(x)
+    }
+
+    /// Number of the effects' states, over the three actuators.
+    pub fn n_effect_states(&self) -> usize {
+        3 * (self.nb - actuator::N)
+    }
+
+    /// The effects' states of `x`, each actuator's in block order, actuator after actuator:
+    /// the `slow` of [`Platform::settled_state`].
+    pub fn effect_states(&self, x: &[f64]) -> Vec<f64> {
+        (0..3)
+            .flat_map(|i| &self.block(x, i)[actuator::N..])
+            .copied()
+            .collect()
+    }
+
+    /// Newton on the states `settles` picks, to ẋ = 0 for them at command `u` with the others
+    /// held, in the states' scaled coordinates; a direction that does not move ẋ (a
+    /// hysteretic state that does not relax) keeps its value.
+    fn settle(
+        &self,
+        x: &mut [f64],
+        u: [f64; 3],
+        settles: impl Fn(usize) -> bool,
+    ) -> Result<(), ModelError> {
         let n = x.len();
-        let mechanical = |k: usize| k % self.nb <= actuator::P;
-        let free: Vec<usize> = (0..n).filter(|&k| !mechanical(k)).collect();
+        let free: Vec<usize> = (0..n).filter(|&k| settles(k)).collect();
         let scale = self.state_scales();
         let (mut f, mut jac) = (vec![0.0; n], vec![0.0; n * n]);
-        // Newton on the settled states, scaled by their sizes; a direction that does not move
-        // ẋ (a hysteretic state that does not relax) keeps its rest value
         for _ in 0..SETTLE_NEWTON {
-            self.rhs(&x, u, &mut f)?;
-            self.jacobian(&x, u, &mut jac)?;
+            self.rhs(x, u, &mut f)?;
+            self.jacobian(x, u, &mut jac)?;
             let m = free.len();
             let a = nalgebra::DMatrix::from_fn(m, m, |r, c| {
                 jac[free[c] * n + free[r]] * scale[free[c]] / scale[free[r]]
@@ -393,7 +436,7 @@ impl Platform {
                 break;
             }
         }
-        Ok(x)
+        Ok(())
     }
 
     /// Where [`Platform::rest_state`] starts: each actuator at its own U = 0 equilibrium, as if
@@ -506,7 +549,7 @@ pub(crate) mod tests {
         let p = platform();
         let rest = p.rest_state().unwrap();
         let theta = [0, 1, 2].map(|i| rest[i * actuator::N]);
-        let settled = p.settled_state(theta, [0.0; 3]).unwrap();
+        let settled = p.settled_state(theta, &[], [0.0; 3]).unwrap();
         for (k, (a, b)) in settled.iter().zip(&rest).enumerate() {
             assert!(
                 (a - b).abs() <= 1e-12 * p.state_scales()[k],
@@ -519,7 +562,7 @@ pub(crate) mod tests {
         params.set("tau_v", 0.5).unwrap();
         let p = Platform::new(params).unwrap();
         let u = [40.0, 55.0, 20.0];
-        let x = p.settled_state([0.004, 0.008, 0.002], u).unwrap();
+        let x = p.settled_state([0.004, 0.008, 0.002], &[], u).unwrap();
         let mut dx = vec![0.0; x.len()];
         p.rhs(&x, u, &mut dx).unwrap();
         let scales = p.state_scales();
@@ -538,6 +581,36 @@ pub(crate) mod tests {
             assert!((at("U_amp") - u[i]).abs() < 1e-9, "{}", at("U_amp"));
             assert!((at("z_v") - at("theta")).abs() < 1e-15);
         }
+    }
+
+    #[test]
+    fn a_settled_state_keeps_the_effects_states_it_is_given() {
+        let mut params = Params::default();
+        params.set("tau_a", 0.02).unwrap();
+        params.set("k_v", 0.1).unwrap();
+        params.set("tau_v", 0.5).unwrap();
+        let p = Platform::new(params).unwrap();
+        let (theta, u) = ([0.004, 0.008, 0.002], [40.0, 55.0, 20.0]);
+        let settled = p.settled_state(theta, &[], u).unwrap();
+        // the amplifier behind its command, the creep behind its angle
+        let slow: Vec<f64> = p
+            .effect_states(&settled)
+            .iter()
+            .enumerate()
+            .map(|(k, v)| v * (0.5 + 0.1 * k as f64))
+            .collect();
+        let x = p.settled_state(theta, &slow, u).unwrap();
+        assert_eq!(p.effect_states(&x), slow);
+        let mut dx = vec![0.0; x.len()];
+        p.rhs(&x, u, &mut dx).unwrap();
+        let scales = p.state_scales();
+        for (k, name) in p.state_names().iter().enumerate() {
+            if name.starts_with('Q') {
+                assert!(dx[k].abs() <= 1e-3 * scales[k], "{name}: {:e}", dx[k]);
+            }
+        }
+        // a start that does not give them all settles them
+        assert_eq!(p.settled_state(theta, &slow[1..], u).unwrap(), settled);
     }
 
     /// A state away from rest with charges, momentum and a zipped electrode.

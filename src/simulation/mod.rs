@@ -162,21 +162,23 @@ const PRE_RUN: f64 = 0.05;
 const PRE_RUN_STEP: f64 = 1e-3;
 
 /// Where a run starts (src/identify/identify.md, "Records that start mid-run").
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq)]
 pub enum Start {
     /// The rest state at U = 0, the command 0 before the run.
     Rest,
-    /// Mid-run: the actuators at these angles [rad] on the slow manifold
-    /// ([`Platform::settled_state`]) at the run's first command, which held before the run.
-    Settled([f64; 3]),
+    /// Mid-run, on the slow manifold at the run's first command, which held before the run
+    /// ([`Platform::settled_state`]): the actuators at angles `theta` [rad], the effects'
+    /// states at `slow` (each actuator's in block order), settled with the charges where
+    /// `slow` does not give them all.
+    Settled { theta: [f64; 3], slow: Vec<f64> },
 }
 
 impl Start {
     /// The state it names for `model`, whose first command is `u0`.
     pub fn state(&self, model: &Platform, u0: [f64; 3]) -> Result<Vec<f64>, ModelError> {
-        match *self {
+        match self {
             Start::Rest => model.rest_state(),
-            Start::Settled(theta) => model.settled_state(theta, u0),
+            Start::Settled { theta, slow } => model.settled_state(*theta, slow, u0),
         }
     }
 }
@@ -225,7 +227,7 @@ impl Simulator {
         let u0 = input.value(t0);
         let x0 = start.state(&model, u0)?;
         let mut sim = Simulator::from_state(model, t0, &x0, rtol)?;
-        if let Start::Settled(_) = start {
+        if let Start::Settled { .. } = start {
             let slope = input.value(t0 + PRE_RUN_STEP);
             let steps = (PRE_RUN / PRE_RUN_STEP) as usize;
             sim.history = std::iter::once((f64::NEG_INFINITY, u0))

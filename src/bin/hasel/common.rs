@@ -4,7 +4,7 @@
 use std::path::PathBuf;
 
 use hasel_fmu::identify::Experiment;
-use hasel_fmu::identify::conditions::{Choice, StartChoice};
+use hasel_fmu::identify::conditions::{Choice, LagChoice, StartChoice};
 use hasel_fmu::identify::synth::Columns;
 use hasel_fmu::io::{input_file, params_file};
 use hasel_fmu::model::Params;
@@ -54,9 +54,9 @@ impl ConditionArgs {
             file => StartChoice::Heights(params_file::read_heights(file.as_ref(), params)?),
         };
         let lag = match self.lag.as_str() {
-            "estimate" => None,
+            "estimate" => LagChoice::Estimate,
             text => match text.parse::<f64>() {
-                Ok(v) if v.is_finite() && v >= 0.0 => Some(v),
+                Ok(v) if v.is_finite() && v >= 0.0 => LagChoice::Stated(v),
                 _ => {
                     return Err(Error::flag(
                         "lag",

@@ -90,7 +90,12 @@ pub fn run(
                 // drawn per case, apart from the device's seed
                 let draw = (total as u64).wrapping_mul(7919).wrapping_add(seed);
                 let p = hidden::Protocol::draw(draw);
-                protocol = format!("{} {} ms", p.name(), p.dt * 1e3);
+                protocol = format!(
+                    "{} {} ms{}",
+                    p.name(),
+                    p.dt * 1e3,
+                    if p.tip { " tip" } else { "" }
+                );
                 case = case.with_protocol(p);
                 // the draw's top bit after a multiplicative hash: its parity follows
                 // the case count's and the seed's, which alternate together
@@ -99,7 +104,7 @@ pub fn run(
                     protocol += " mid-run";
                 }
             }
-            let exps = case.experiments(columns, 6.0, seed)?;
+            let exps = case.experiments(columns, seed)?;
             let d = diagnose::diagnose(&Params::default(), exps, &Options::default())?;
             let got = d.answer();
             let ok = right(truth, &d);
