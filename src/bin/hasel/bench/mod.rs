@@ -46,8 +46,8 @@ pub struct Args {
     #[arg(long)]
     artifacts: bool,
     /// With --diagnose: record every case with a lab protocol drawn at random (staircase,
-    /// chirp, two voltage levels or the sines; 0.5, 1 or 2 ms; every other case from 1.3 s into
-    /// the drive) and print the score per protocol
+    /// chirp, two voltage levels or the sines; 0.5, 1 or 2 ms; 1-4 records of 3-20 s, a quarter
+    /// of them of the tip; about half from 1.3 s into the drive) and print the score per protocol
     #[arg(long)]
     protocols: bool,
 }
