@@ -128,6 +128,19 @@ fn preload_is_named() {
 }
 
 #[test]
+fn an_effect_is_named_from_a_single_record() {
+    // nothing held out: the record is its own held-out one (it was judged on no fit at all)
+    let mut one = hidden::Protocol::PAPER;
+    one.records = 1;
+    let case = hidden::hide(Truth::Effect(Effect::Coupling), 1)
+        .unwrap()
+        .with_protocol(one);
+    let d = diagnose_hidden(case, Columns::Heights, 1);
+    assert_eq!(d.experiments.len(), 1);
+    assert_named(Effect::Coupling, &d);
+}
+
+#[test]
 fn stiffening_is_named_from_the_tip_alone() {
     // the paper's laser: tip X and Y only, the heave unobserved
     named_from(Truth::Effect(Effect::Stiffening), Columns::TipXy, 1);

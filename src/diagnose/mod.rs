@@ -460,7 +460,8 @@ fn held_out_gain(
     before: &Identification,
     after: &Identification,
 ) -> (f64, f64) {
-    let (fb, fa) = if held.is_empty() {
+    // a single record is its own held-out one (`held_or_estimation`)
+    let (fb, fa) = if before.validation.is_empty() {
         (&before.estimation, &after.estimation)
     } else {
         (&before.validation, &after.validation)

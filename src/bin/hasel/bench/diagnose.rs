@@ -1,7 +1,7 @@
 //! `hasel bench --diagnose`: the missing-effect workflow on data with hidden mechanisms (each
 //! effect of the library in another form, no effect, a mechanism outside the library, two
-//! effects at once), two 6 s experiments at 1 ms each, optionally recorded as lab data
-//! (artifacts on top); prints every case, the confusion matrix, the held-out fits against the
+//! effects at once), two 6 s experiments at 1 ms each or a lab protocol drawn per case,
+//! optionally recorded as lab data (artifacts on top); prints every case, the confusion matrix, the held-out fits against the
 //! noise floor, the spurious second effects, the share of two-effect cases with both named and
 //! where the time goes.
 
@@ -29,11 +29,17 @@ fn right(t: Truth, d: &diagnose::Diagnosis) -> bool {
     }
 }
 
-/// The largest distance of a held-out fit below its noise floor [points].
+/// The largest distance of a held-out fit below its noise floor [points]; of the estimation
+/// record's where there is no other.
 fn worst_gap(d: &diagnose::Diagnosis) -> f64 {
-    d.fits.floor[1..]
+    let (floors, fits) = if d.last.validation.is_empty() {
+        (&d.fits.floor[..1], &d.last.estimation)
+    } else {
+        (&d.fits.floor[1..], &d.last.validation)
+    };
+    floors
         .iter()
-        .zip(&d.last.validation)
+        .zip(fits)
         .flat_map(|(floor, f)| {
             f.fits
                 .iter()
@@ -50,11 +56,16 @@ pub fn run(
     protocols: bool,
 ) -> Result<(), Error> {
     say!(
-        "diagnosis of hidden mechanisms: {seeds} seed(s) per case, {columns:?} data{}, two 6 s experiments at 1 ms (3pi and 11 rad/s), target <= 30 s per diagnosis, typical <= 10 s (issue #11)",
+        "diagnosis of hidden mechanisms: {seeds} seed(s) per case, {columns:?} data{}, {}, target <= 30 s per diagnosis, typical <= 10 s (issue #11)",
         if artifacts {
             " with lab artifacts (sensor lag, resolution, outliers, dropouts)"
         } else {
             ""
+        },
+        if protocols {
+            "a lab protocol drawn per case"
+        } else {
+            "two 6 s experiments at 1 ms (3pi and 11 rad/s)"
         }
     );
     let mut times = Vec::new();
@@ -135,10 +146,11 @@ pub fn run(
                 effect_right += ok as usize;
             }
             let (before, after) = (&d.fits.before, &d.fits.after);
+            let single = d.after.len() == 1;
             let floor: Vec<String> = d
                 .after
                 .iter()
-                .filter(|x| x.experiment != d.estimation)
+                .filter(|x| single || x.experiment != d.estimation)
                 .map(|x| format!("{:.1}", 100.0 * x.excess))
                 .collect();
             let forms: Vec<&str> = d.forms.iter().map(|f| f.name).collect();
