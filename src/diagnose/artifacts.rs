@@ -5,6 +5,7 @@
 
 use super::Error;
 use crate::identify::Experiment;
+use crate::identify::fit::span;
 use crate::identify::synth::{Normal, Sensor};
 
 /// The artifacts of one case.
@@ -62,11 +63,7 @@ impl Artifacts {
         let mut out = exp.clone();
         let n = exp.t.len();
         for (_, y) in out.channels.iter_mut() {
-            let (lo, hi) = y
-                .iter()
-                .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), v| {
-                    (l.min(*v), h.max(*v))
-                });
+            let (lo, hi) = span(y.iter().copied());
             let sigma = noise * (hi - lo);
             let (a, b) = self.outlier_sigmas;
             for v in y.iter_mut() {

@@ -7,7 +7,7 @@
 use nalgebra::DMatrix;
 
 use super::experiment::{Channel, Conditions, Experiment};
-use super::fit::{noise_level, robust_sigma};
+use super::fit::{noise_level, robust_sigma, span};
 use super::{Error, lm, simulate};
 use crate::model::{Params, Platform};
 use crate::simulation::{SimError, Start};
@@ -165,11 +165,7 @@ fn starts_mid_run(params: &Params, exp: &Experiment, rtol: f64) -> Result<bool, 
             .collect();
         let first = off[0];
         let fit_sigma = robust_sigma(&mut off);
-        let (lo, hi) = y
-            .iter()
-            .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), v| {
-                (l.min(*v), h.max(*v))
-            });
+        let (lo, hi) = span(y.iter().copied());
         let sigma = noise_level(&exp.t, y).max(fit_sigma);
         first > (START_SIGMAS * sigma).max(START_SHARE * (hi - lo))
     }))

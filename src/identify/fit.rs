@@ -56,6 +56,15 @@ pub fn noise_level(t: &[f64], y: &[f64]) -> f64 {
     (d.iter().map(|v| v * v).sum::<f64>() / d.len() as f64).sqrt()
 }
 
+/// The smallest and the largest of `values` (∞ and −∞ where there are none).
+pub fn span(values: impl IntoIterator<Item = f64>) -> (f64, f64) {
+    values
+        .into_iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), v| {
+            (lo.min(v), hi.max(v))
+        })
+}
+
 /// A normal σ from absolute deviations: 1.4826 × their median (reorders `abs`).
 pub fn robust_sigma(abs: &mut [f64]) -> f64 {
     let mid = abs.len() / 2;

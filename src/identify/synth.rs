@@ -188,11 +188,7 @@ pub fn synthesize(spec: &Spec) -> Result<(Vec<&'static str>, Vec<Vec<f64>>), Err
     let mut rng = Normal::new(spec.seed);
     for (j, _) in channels.iter().enumerate() {
         let col = 4 + j;
-        let (lo, hi) = rows
-            .iter()
-            .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), r| {
-                (l.min(r[col]), h.max(r[col]))
-            });
+        let (lo, hi) = super::fit::span(rows.iter().map(|r| r[col]));
         let sigma = spec.noise * (hi - lo);
         let quantum = spec.sensor.quantum * (hi - lo);
         let (a, f, phase) = spec.vibration.unwrap_or((0.0, 0.0, 0.0));

@@ -4,6 +4,7 @@
 
 use std::path::PathBuf;
 
+use hasel_fmu::identify::fit::span;
 use hasel_fmu::io::csv::{self, Table};
 use hasel_fmu::model::Platform;
 use hasel_fmu::model::kinematics::Inverse;
@@ -80,8 +81,8 @@ pub fn run(a: Args) -> Result<(), Error> {
             points: unreachable,
         });
     }
-    let (h_min, h_max) = range(rows.iter().flat_map(|r| r[1..4].to_vec()));
-    let (u_min, u_max) = range(rows.iter().flat_map(|r| r[4..7].to_vec()));
+    let (h_min, h_max) = span(rows.iter().flat_map(|r| r[1..4].to_vec()));
+    let (u_min, u_max) = span(rows.iter().flat_map(|r| r[4..7].to_vec()));
     let n = rows.len();
     csv::write_atomic(&a.out, &["t", "h1", "h2", "h3", "U1", "U2", "U3"], &rows)?;
     say!(
@@ -94,10 +95,4 @@ pub fn run(a: Args) -> Result<(), Error> {
         u_max
     );
     Ok(())
-}
-
-fn range(values: impl Iterator<Item = f64>) -> (f64, f64) {
-    values.fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), v| {
-        (lo.min(v), hi.max(v))
-    })
 }

@@ -3,6 +3,7 @@
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
+use hasel_fmu::identify::fit::span;
 use hasel_fmu::io::csv::Table;
 use hasel_fmu::io::{params_file, trajectory};
 use hasel_fmu::model::Platform;
@@ -128,12 +129,7 @@ pub fn run(a: Args) -> Result<(), Error> {
     // strokes over the second half of the run, past the start-up transient
     let steady = &samples[samples.len() / 2..];
     let range = |f: &dyn Fn(&Sample) -> f64| {
-        let (lo, hi) = steady
-            .iter()
-            .map(f)
-            .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), v| {
-                (l.min(v), h.max(v))
-            });
+        let (lo, hi) = span(steady.iter().map(f));
         (hi - lo) * 1e6
     };
     say!(
