@@ -1,5 +1,5 @@
-//! Random FMI 2.0 call sequences against the FMU's C entry points, as an importer would make
-//! them, right and wrong: two instances (Co-Simulation or Model Exchange), NULL pointers,
+//! Random FMI 2.0 call sequences against an FMU's C entry points (HaselPlatform's; as target
+//! inverse_calls, HaselInverse's), as an importer would make them, right and wrong: two instances (Co-Simulation or Model Exchange), NULL pointers,
 //! unknown value references, wrong array sizes, NaN and infinite values, calls in the wrong
 //! state, FMU states passed between instances, serialized states truncated or corrupted (also
 //! with a recomputed checksum, so the decoder behind it is reached). The sequence keeps only
@@ -18,8 +18,8 @@ use std::ptr::{null, null_mut};
 
 use arbitrary::Arbitrary;
 use common::{Len, Real, Vr, Who, damage};
-use hasel_fmu::fmu::pack::{guid, platform};
-use hasel_fmu::fmu::variables::{Slot, rows};
+use hasel_fmu::fmi_common::model_api::FmuCore;
+use hasel_fmu::fmu::pack::guid;
 use hasel_fmu::model::Params;
 use libfuzzer_sys::fuzz_target;
 
@@ -307,6 +307,13 @@ enum Call {
 
 const STATE_SLOTS: usize = 4;
 
+// The FMU under test: HaselPlatform, or with the feature `inverse` (target inverse_calls) the
+// stateless HaselInverse, whose functions the library's `inverse-fmu` build exports instead.
+#[cfg(not(feature = "inverse"))]
+use hasel_fmu::fmu::{hasel_core::HaselCore as Core, pack::platform as spec};
+#[cfg(feature = "inverse")]
+use hasel_fmu::fmu::inverse::{InverseCore as Core, spec};
+
 /// What the sequence holds between calls: the instances, their simulated time, FMU states.
 struct World {
     instances: [Component; 2],
@@ -333,11 +340,8 @@ impl World {
                 step_finished: None,
                 environment: null_mut(),
             },
-            guid: CString::new(guid(&platform(&Params::default()))).unwrap(),
-            states_expected: rows()
-                .iter()
-                .filter(|r| matches!(r.slot, Slot::State { .. }))
-                .count(),
+            guid: CString::new(guid(&spec(&Params::default()))).unwrap(),
+            states_expected: Core::model_structure().derivatives.len(),
         }
     }
 

@@ -1,0 +1,7 @@
+//! Fuzzes the input files of `simulate --input` (CSV), with the interpolation picked by the first byte: the check of tests/fuzz/checks.rs, which tests/fuzz_replay.rs replays.
+#![no_main]
+
+#[path = "../checks.rs"]
+mod checks;
+
+libfuzzer_sys::fuzz_target!(|data: &[u8]| checks::csv_input(data));

@@ -1,0 +1,7 @@
+//! Fuzzes parameter files (TOML, `--params`): the check of tests/fuzz/checks.rs, which tests/fuzz_replay.rs replays.
+#![no_main]
+
+#[path = "../checks.rs"]
+mod checks;
+
+libfuzzer_sys::fuzz_target!(|data: &[u8]| checks::params_toml(data));
