@@ -26,8 +26,11 @@ use hasel_fmu::uncertainty::Posterior;
 /// The file name every reader is given, which each error must name first.
 const NAME: &str = "fuzz.in";
 
+/// A check: the fuzzer's bytes in, a panic for a broken promise.
+pub type Check = fn(&[u8]);
+
 /// The fuzz targets and their checks, for the replay.
-pub const TARGETS: &[(&str, fn(&[u8]))] = &[
+pub const TARGETS: &[(&str, Check)] = &[
     ("csv_input", csv_input),
     ("csv_experiment", csv_experiment),
     ("params_toml", params_toml),

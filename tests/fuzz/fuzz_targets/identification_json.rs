@@ -1,6 +1,9 @@
-//! Fuzzes `identification.json` (`simulate --uncertainty`, the studies): the check of tests/fuzz/checks.rs, which tests/fuzz_replay.rs replays.
+//! Fuzzes `identification.json` (`simulate --uncertainty`, the studies): the check of
+//! tests/fuzz/checks.rs, which tests/fuzz_replay.rs replays.
 #![no_main]
 
+// each target uses one check of the module
+#[allow(dead_code)]
 #[path = "../checks.rs"]
 mod checks;
 
