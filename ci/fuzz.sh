@@ -9,7 +9,8 @@
 # A crash, a broken promise, a memory error, a leak, an input slower than -timeout or an
 # allocation beyond -malloc_limit_mb stops it with the reproducing input saved under
 # tests/fuzz/artifacts/<target>/. After a clean campaign the target's corpus is minimized
-# (`cargo fuzz cmin`); tests/fuzz_replay.rs replays the committed corpora in every `cargo test`.
+# (libFuzzer's -merge=1); tests/fuzz_replay.rs replays the committed corpora in every
+# `cargo test`.
 #
 #   bash ci/fuzz.sh [SECONDS] [TARGET...]   (default 300 s each, all targets; prints per target
 #                                           the executions, coverage (cov, ft) and corpus size)
@@ -57,7 +58,12 @@ for target in "${TARGETS[@]}"; do
         exit 1
     fi
     echo "fuzz $target: no crash, no broken promise, no memory error, no leak, no hang in $SECONDS_TO_RUN s"
-    nice -n 19 cargo +nightly fuzz cmin "${FUZZ[@]}" "${features[@]}" "$target" "$corpus" \
-        -- -timeout="$timeout" -rss_limit_mb=1024 2>&1 | grep -E 'MERGE-OUTER: [0-9]+ new files' || true
+    # minimized by the binary just run (libFuzzer's -merge=1, what `cargo fuzz cmin` does):
+    # `cargo fuzz cmin` builds with other settings than `run` and rebuilt the library each time
+    bin="tests/fuzz/target/x86_64-unknown-linux-gnu/release/$target"
+    rm -rf "$corpus.min" && mkdir "$corpus.min"
+    nice -n 19 "$bin" -merge=1 -timeout="$timeout" -rss_limit_mb=1024 "$corpus.min" "$corpus" \
+        >"out/cmin-$target.log" 2>&1
+    rm -rf "$corpus" && mv "$corpus.min" "$corpus"
     echo "corpus $target: $(ls "$corpus" | wc -l) files, $(du -sk "$corpus" | cut -f1) KB"
 done
