@@ -1,15 +1,30 @@
 #!/usr/bin/env bash
-# The sequence fuzzer of the FMU's C entry points (tests/fuzz): libFuzzer through cargo-fuzz,
-# nightly Rust, AddressSanitizer with leak detection. Random FMI call sequences with random
-# arguments run for a bounded time; a crash, a memory error, a leak or a call slower than the
-# per-sequence bound stops it with the reproducing input saved under tests/fuzz/artifacts/.
+# The fuzz campaigns (tests/fuzz): libFuzzer through cargo-fuzz, nightly Rust, AddressSanitizer
+# with leak detection, one campaign per target for a bounded time:
+#   - the FMI call sequences of every FMU the project builds: fmi2_calls, fmi3_calls (the
+#     platform's FMI 2.0 and 3.0 builds) and inverse_calls (HaselInverse's FMI 2.0 build);
+#   - every reader of a user's file (tests/fuzz/checks.rs): csv_input, csv_experiment,
+#     params_toml, heights_toml, identification_json, and the serialized FMU states fed to the
+#     deserializers directly, fmi2_state and fmi3_state.
+# A crash, a broken promise, a memory error, a leak, an input slower than -timeout or an
+# allocation beyond -malloc_limit_mb stops it with the reproducing input saved under
+# tests/fuzz/artifacts/<target>/. After a clean campaign the target's corpus is minimized
+# (libFuzzer's -merge=1); tests/fuzz_replay.rs replays the committed corpora in every
+# `cargo test`.
 #
-#   bash ci/fuzz.sh [SECONDS]   (default 300; prints what it ran: sequences, coverage, corpus)
+#   bash ci/fuzz.sh [SECONDS] [TARGET...]   (default 300 s each, all targets; prints per target
+#                                           the executions, coverage (cov, ft) and corpus size)
 #
-# Not part of ci/test.sh: the instrumented nightly build alone takes minutes. What it finds
-# becomes a regression test of the normal suite (src/fmi2/tests, tests/python/test_fmu_misuse.py).
+# Not part of ci/test.sh: the instrumented nightly builds alone take minutes. What a campaign
+# finds becomes a regression test of the normal suite.
 source "$(dirname "${BASH_SOURCE[0]}")/lib.sh"
 SECONDS_TO_RUN="${1:-300}"
+shift || true
+TARGETS=("$@")
+if [ ${#TARGETS[@]} -eq 0 ]; then
+    TARGETS=(csv_input csv_experiment params_toml heights_toml identification_json fmi2_state
+        fmi3_state fmi2_calls fmi3_calls inverse_calls)
+fi
 mkdir -p out
 if ! rustup toolchain list | grep -q '^nightly'; then
     step "rustup toolchain install nightly (cargo-fuzz needs -Z sanitizer flags)"
@@ -19,18 +34,36 @@ if ! command -v cargo-fuzz >/dev/null 2>&1; then
     step "cargo install cargo-fuzz"
     cargo install -q --locked cargo-fuzz@0.13.2
 fi
-FUZZ=(cargo +nightly fuzz run --fuzz-dir tests/fuzz --release --debug-assertions)
-# each target with the library build whose C functions it calls
-for target in fmi2_calls fmi3_calls; do
+FUZZ=(--fuzz-dir tests/fuzz --release --debug-assertions)
+for target in "${TARGETS[@]}"; do
+    # the library build whose C functions a call-sequence target calls; the bounds per input:
+    # a sequence may simulate (20 s), a reader of a few kilobytes may not take long (5 s); no
+    # input may make one allocation above 256 MB or hold more than 1 GB
     features=()
-    if [ "$target" = fmi3_calls ]; then features=(--features fmi3); fi
+    timeout=5
+    case "$target" in
+        fmi2_calls) timeout=20 ;;
+        fmi3_calls) features=(--features fmi3); timeout=20 ;;
+        inverse_calls) features=(--features inverse); timeout=20 ;;
+    esac
     step "fuzz $target for $SECONDS_TO_RUN s (libFuzzer, AddressSanitizer, leak detection)"
-    mkdir -p "tests/fuzz/corpus/$target"
-    "${FUZZ[@]}" "${features[@]}" "$target" -- -max_total_time="$SECONDS_TO_RUN" -timeout=20 -detect_leaks=1 \
-        -print_final_stats=1 2>&1 | tee "out/fuzz-$target.log" | grep -E '^(#[0-9]+.*(DONE|pulse)|stat::|==[0-9]+==ERROR|SUMMARY|artifact_prefix|Test unit written)' || true
-    if grep -qE '==[0-9]+==ERROR|^SUMMARY|Test unit written|deadly signal' "out/fuzz-$target.log"; then
+    corpus="tests/fuzz/corpus/$target"
+    mkdir -p "$corpus"
+    nice -n 19 cargo +nightly fuzz run "${FUZZ[@]}" "${features[@]}" "$target" -- \
+        -max_total_time="$SECONDS_TO_RUN" -timeout="$timeout" -rss_limit_mb=1024 \
+        -malloc_limit_mb=256 -detect_leaks=1 -print_final_stats=1 2>&1 | tee "out/fuzz-$target.log" |
+        grep -E '^(#[0-9]+.*(DONE|pulse)|stat::|==[0-9]+==ERROR|SUMMARY|artifact_prefix|Test unit written)' || true
+    if grep -qE '==[0-9]+==ERROR|^SUMMARY|Test unit written|deadly signal|panicked at' "out/fuzz-$target.log"; then
         echo "fuzz $target FOUND A PROBLEM: see out/fuzz-$target.log and tests/fuzz/artifacts/$target/"
         exit 1
     fi
-    echo "fuzz $target: no crash, no memory error, no leak, no hang in $SECONDS_TO_RUN s"
+    echo "fuzz $target: no crash, no broken promise, no memory error, no leak, no hang in $SECONDS_TO_RUN s"
+    # minimized by the binary just run (libFuzzer's -merge=1, what `cargo fuzz cmin` does):
+    # `cargo fuzz cmin` builds with other settings than `run` and rebuilt the library each time
+    bin="tests/fuzz/target/x86_64-unknown-linux-gnu/release/$target"
+    rm -rf "$corpus.min" && mkdir "$corpus.min"
+    nice -n 19 "$bin" -merge=1 -timeout="$timeout" -rss_limit_mb=1024 "$corpus.min" "$corpus" \
+        >"out/cmin-$target.log" 2>&1
+    rm -rf "$corpus" && mv "$corpus.min" "$corpus"
+    echo "corpus $target: $(ls "$corpus" | wc -l) files, $(du -sk "$corpus" | cut -f1) KB"
 done

@@ -9,7 +9,7 @@ step "formatting and lints (cargo fmt --check, cargo clippy -D warnings)"
 cargo fmt --check
 cargo clippy -q --release --all-targets -- -D warnings
 build_fmu
-step "Rust tests"
+step "Rust tests (tests/fuzz_replay.rs replays the committed fuzz corpora, tests/fuzz/corpus)"
 cargo test --release --all-targets
 ensure_fmi_sim
 step "Python tests of the packed FMU"

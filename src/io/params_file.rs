@@ -105,12 +105,18 @@ fn numbers(path: &Path, text: &str) -> Result<Vec<(String, f64, usize)>, FileErr
 pub fn read_heights(path: &Path, params: &Params) -> Result<[f64; 3], FileError> {
     let text = std::fs::read_to_string(path)
         .map_err(|e| FileError::new(path, format!("cannot read: {e}")))?;
+    parse_heights(path, &text, params)
+}
+
+/// The heights of the start file `text` (the contents of `path`); `pub` for the fuzz target
+/// and its replay (tests/fuzz), which feed it text without a file.
+pub fn parse_heights(path: &Path, text: &str, params: &Params) -> Result<[f64; 3], FileError> {
     let mut h = [None; 3];
-    for (key, v, at) in numbers(path, &text)? {
+    for (key, v, at) in numbers(path, text)? {
         let Some(i) = ["h1", "h2", "h3"].iter().position(|k| *k == key) else {
             return Err(located(
                 path,
-                &text,
+                text,
                 at,
                 Some(&key),
                 format!("unknown key '{key}': a start file gives h1, h2 and h3 [m]"),
@@ -119,7 +125,7 @@ pub fn read_heights(path: &Path, params: &Params) -> Result<[f64; 3], FileError>
         if !(v.is_finite() && v.abs() < 0.5 * params.lv) {
             return Err(located(
                 path,
-                &text,
+                text,
                 at,
                 Some(&key),
                 format!(

@@ -57,6 +57,11 @@ pub enum InputError {
     },
     #[error("sample {sample}: voltages {u:?} are not finite")]
     VoltageNotFinite { sample: usize, u: [f64; 3] },
+    /// Voltages or time steps so far out of range that the interpolation's slope overflows.
+    #[error(
+        "sample {sample}: the voltages change faster than a number can hold (slope {slope:?} V/s)"
+    )]
+    SlopeNotFinite { sample: usize, slope: [f64; 3] },
 }
 
 /// Samples `u[k]` at strictly increasing `t[k]`, with the knot slopes of the interpolation.
@@ -175,6 +180,22 @@ impl Input {
                 .collect(),
             Interpolation::ZeroOrderHold | Interpolation::Linear => Vec::new(),
         };
+        // found by fuzzing (tests/fuzz, csv_input): voltages near f64::MAX, or a large change
+        // over a tiny time step, gave NaN between and at the samples
+        let secants =
+            (1..t.len()).map(|k| [0, 1, 2].map(|i| (u[k][i] - u[k - 1][i]) / (t[k] - t[k - 1])));
+        if let Some((k, slope)) = secants
+            .chain(slopes.iter().copied())
+            .enumerate()
+            .find(|(_, m)| !m.iter().all(|v| v.is_finite()))
+        {
+            let sample = if k < t.len() - 1 {
+                k + 1
+            } else {
+                k + 1 - t.len()
+            };
+            return Err(InputError::SlopeNotFinite { sample, slope });
+        }
         Ok(Input::Sampled(Samples {
             t,
             u,
@@ -532,5 +553,40 @@ mod tests {
             .to_string()
             .contains("not finite")
         );
+    }
+
+    /// Found by fuzzing (tests/fuzz, csv_input): finite samples whose interpolation overflows.
+    #[test]
+    fn an_interpolation_that_overflows_is_refused() {
+        let t = vec![0.0, 1.0, 2.0, 3.0];
+        let huge = vec![
+            [1e308, 0.0, 0.0],
+            [-1e308, 0.0, 0.0],
+            [1e308, 0.0, 0.0],
+            [0.0; 3],
+        ];
+        let steep = vec![[0.0; 3], [0.0, 1e10, 0.0], [0.0; 3], [0.0; 3]];
+        let tiny = vec![0.0, 1e-300, 1.0, 2.0];
+        for how in [
+            Interpolation::ZeroOrderHold,
+            Interpolation::Linear,
+            Interpolation::Pchip,
+            Interpolation::Spline,
+            Interpolation::Measured,
+        ] {
+            let e = Input::sampled(t.clone(), huge.clone(), how).unwrap_err();
+            assert!(
+                e.to_string()
+                    .starts_with("sample 1: the voltages change faster"),
+                "{e}"
+            );
+            let e = Input::sampled(tiny.clone(), steep.clone(), how).unwrap_err();
+            assert!(
+                e.to_string()
+                    .starts_with("sample 1: the voltages change faster"),
+                "{e}"
+            );
+            assert!(Input::sampled(t.clone(), steep.clone(), how).is_ok());
+        }
     }
 }

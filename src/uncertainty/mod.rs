@@ -126,7 +126,17 @@ impl Posterior {
             message: m,
         };
         let text = std::fs::read_to_string(path).map_err(|e| fail(format!("cannot read: {e}")))?;
-        let json: Value = serde_json::from_str(&text).map_err(|e| {
+        Posterior::parse(path, &text)
+    }
+
+    /// The posterior of the JSON `text` (the contents of `path`); `pub` for the fuzz target and
+    /// its replay (tests/fuzz), which feed it text without a file.
+    pub fn parse(path: &Path, text: &str) -> Result<Posterior, UncertaintyError> {
+        let fail = |m: String| UncertaintyError::Identification {
+            path: path.to_path_buf(),
+            message: m,
+        };
+        let json: Value = serde_json::from_str(text).map_err(|e| {
             fail(format!(
                 "not JSON ({e}): expected the identification.json of `hasel identify`"
             ))

@@ -2,6 +2,9 @@
 //! chooses (reals, value references, array lengths, which instance) and their meaning.
 
 use arbitrary::Arbitrary;
+#[cfg(feature = "inverse")]
+use hasel_fmu::fmu::inverse::variables::rows;
+#[cfg(not(feature = "inverse"))]
 use hasel_fmu::fmu::variables::rows;
 use sha2::{Digest, Sha256};
 
