@@ -16,11 +16,10 @@ FMU3_LIB="$FMU3_TARGET_DIR/$FMU_TARGET/release/libhasel_fmu.so"
 
 step() { printf '\n== %s\n' "$*"; }
 
-ensure_apt() {
-    # libclang-dev: bindgen of the `fmi` crate (Rust import test) and of sundials-sys; libtbb12:
-    # ecospy; libsundials-dev: native CVODE in hasel bench's `compare` feature
+# Installs those of the Debian packages named that are missing.
+ensure_packages() {
     local missing=()
-    for pkg in libclang-dev libtbb12 libsundials-dev; do
+    for pkg in "$@"; do
         dpkg -s "$pkg" >/dev/null 2>&1 || missing+=("$pkg")
     done
     if ((${#missing[@]})); then
@@ -28,6 +27,12 @@ ensure_apt() {
         apt-get update -qq
         DEBIAN_FRONTEND=noninteractive apt-get install -y -qq "${missing[@]}" >/dev/null
     fi
+}
+
+ensure_apt() {
+    # libclang-dev: bindgen of the `fmi` crate (Rust import test) and of sundials-sys; libtbb12:
+    # ecospy; libsundials-dev: native CVODE in hasel bench's `compare` feature
+    ensure_packages libclang-dev libtbb12 libsundials-dev
 }
 
 ensure_venv() {
@@ -60,15 +65,16 @@ ensure_fmi_sim() {
 }
 
 # A cdylib built with other features needs a target folder of its own (its file name would
-# clash); seeded once from the main build's artifacts, so that only this crate compiles again,
-# not its dependencies (a cold build of them takes minutes on two cores).
+# clash); seeded once from the build of the same target in folder FROM (default: the main
+# build's), so that only this crate compiles again, not its dependencies (a cold build of them
+# takes minutes on two cores).
 seed_target_dir() {
-    local dir="$1"
-    if [ ! -d "$dir/$FMU_TARGET" ] && [ -d "target/$FMU_TARGET" ]; then
+    local dir="$1" from="${2:-target}" triple="${3:-$FMU_TARGET}"
+    if [ ! -d "$dir/$triple" ] && [ -d "$from/$triple" ]; then
         mkdir -p "$dir/release"
-        cp -a "target/$FMU_TARGET" "$dir/"
+        cp -a "$from/$triple" "$dir/"
         for sub in build deps .fingerprint; do
-            if [ -d "target/release/$sub" ]; then cp -a "target/release/$sub" "$dir/release/"; fi
+            if [ -d "$from/release/$sub" ]; then cp -a "$from/release/$sub" "$dir/release/"; fi
         done
     fi
 }
@@ -100,4 +106,120 @@ build_fmu() {
     seed_target_dir "$INVERSE_TARGET_DIR"
     zigbuild_fmu_lib --features inverse-fmu --target-dir "$INVERSE_TARGET_DIR"
     ./target/release/hasel fmu --model inverse --lib "$INVERSE_LIB"
+}
+
+# ---- the other platforms' libraries (ci/platforms.sh): Windows x86_64, macOS x86_64 and arm64 ----
+#
+# Debian's rustc 1.96 (rustc-web) with the standard library's sources of the same version
+# (rust-web-src) builds std for each target from source (-Zbuild-std; RUSTC_BOOTSTRAP lets the
+# stable compiler take the flag); rustup's toolchain stays the default for everything else.
+# Windows links with mingw-w64, macOS with LLVM's ld64.lld against stubs of libSystem.
+WINDOWS_TARGET=x86_64-pc-windows-gnu
+MAC_TARGETS=(x86_64-apple-darwin aarch64-apple-darwin)
+CROSS_DIR="$ROOT/target/cross"
+# the feature sets of the three FMU libraries, each built in a folder of its own under CROSS_DIR
+declare -A CROSS_FEATURES=([fmi2]="" [fmi3]="--features fmi3" [inverse]="--features inverse-fmu")
+# the linker's stub libraries and rust-objcopy for macOS, made by darwin_sdk
+DARWIN_SDK="$CROSS_DIR/darwin-sdk"
+LLVM_BIN=/usr/lib/llvm-16/bin
+
+ensure_cross_tools() {
+    ensure_packages rustc-web cargo-web rust-web-src libstd-rust-web-dev gcc-mingw-w64-x86-64 lld-16 llvm-16
+    local version
+    version="$(/usr/bin/rustc --version | cut -d' ' -f2)"
+    if [ ! -d "/usr/src/rustc-$version/library" ]; then
+        echo "Debian's rustc is $version but /usr/src has no standard library sources of it (rust-web-src)" >&2
+        return 1
+    fi
+}
+
+# What tests/python/test_windows.py runs the Windows DLLs with: Wine (64-bit) and gcc (the
+# Linux build of the same test importer); mingw-w64 comes with ensure_cross_tools.
+ensure_wine() {
+    ensure_packages wine wine64 gcc
+}
+
+# The stubs ld64.lld links the macOS libraries against, made from the libSystem.tbd of PyPI's
+# ziglang (installed into the venv by ci/requirements.txt): a text description of
+# /usr/lib/libSystem.B.dylib's exports. Its arm64 entries are for arm64e (the pointer-
+# authenticating ABI of Apple's own binaries); ours are plain arm64, so they are renamed.
+# libc, libm and libiconv (asked for by the libc crate) resolve to libSystem on macOS too. Also
+# rust-objcopy, which rustc runs to strip a macOS binary: LLVM's objcopy, under that name.
+darwin_sdk() {
+    local tbd
+    tbd="$(find "$VENV/lib" -path '*/ziglang/lib/libc/darwin/libSystem.tbd' | head -n 1)"
+    if [ -z "$tbd" ]; then
+        echo "no libSystem.tbd in the venv's ziglang package (ci/requirements.txt)" >&2
+        return 1
+    fi
+    mkdir -p "$DARWIN_SDK"
+    sed -E 's/arm64e(\.x1)?-/arm64-/g' "$tbd" > "$DARWIN_SDK/libSystem.tbd"
+    for lib in libc libm libiconv; do ln -sf libSystem.tbd "$DARWIN_SDK/$lib.tbd"; done
+    ln -sf "$LLVM_BIN/llvm-objcopy" "$DARWIN_SDK/rust-objcopy"
+}
+
+# cross_cargo TRIPLE SET: builds the FMU library of feature set SET (fmi2, fmi3, inverse) for
+# TRIPLE in CROSS_DIR/SET, at opt-level 2 as the Linux one (zigbuild_fmu_lib says why).
+cross_cargo() {
+    local triple="$1" set="$2"
+    local upper="${triple^^}"
+    upper="${upper//-/_}"
+    local env=(RUSTC=/usr/bin/rustc RUSTC_BOOTSTRAP=1 CARGO_PROFILE_RELEASE_OPT_LEVEL=2)
+    case "$triple" in
+        *-windows-gnu) env+=("CARGO_TARGET_${upper}_LINKER=x86_64-w64-mingw32-gcc") ;;
+        *-apple-darwin) env+=("CARGO_TARGET_${upper}_LINKER=$LLVM_BIN/ld64.lld"
+            "CARGO_TARGET_${upper}_RUSTFLAGS=-Clinker-flavor=ld64.lld -Clink-arg=-L$DARWIN_SDK -Clink-arg=-lSystem"
+            "PATH=$DARWIN_SDK:$PATH") ;;
+    esac
+    if [ "$set" != fmi2 ]; then seed_target_dir "$CROSS_DIR/$set" "$CROSS_DIR/fmi2" "$triple"; fi
+    # shellcheck disable=SC2086 # the feature flags split into words
+    env "${env[@]}" nice -n 10 /usr/bin/cargo build -q --release --lib --target "$triple" \
+        -Zbuild-std=std,panic_unwind --target-dir "$CROSS_DIR/$set" ${CROSS_FEATURES[$set]}
+}
+
+# cross_lib TRIPLE SET: the library cross_cargo built.
+cross_lib() {
+    case "$1" in
+        *-windows-gnu) echo "$CROSS_DIR/$2/$1/release/hasel_fmu.dll" ;;
+        *) echo "$CROSS_DIR/$2/$1/release/libhasel_fmu.dylib" ;;
+    esac
+}
+
+# darwin_universal SET: the universal macOS library of both architectures (FMI 2.0's darwin64).
+darwin_universal() {
+    local out="$CROSS_DIR/$1/universal/libhasel_fmu.dylib"
+    mkdir -p "$(dirname "$out")"
+    "$LLVM_BIN/llvm-lipo" -create "$(cross_lib "${MAC_TARGETS[0]}" "$1")" \
+        "$(cross_lib "${MAC_TARGETS[1]}" "$1")" -output "$out"
+    echo "$out"
+}
+
+# Builds the three FMU libraries for Windows and both macOS architectures (the Linux ones and the
+# hasel command come from build_fmu) and packs the three FMUs with every platform's binary.
+build_platforms() {
+    ensure_cross_tools
+    ensure_venv
+    darwin_sdk
+    local triple set
+    for triple in "$WINDOWS_TARGET" "${MAC_TARGETS[@]}"; do
+        for set in fmi2 fmi3 inverse; do
+            step "build the $set library for $triple (Debian's rustc, std from source)"
+            timed cross_cargo "$triple" "$set"
+        done
+    done
+    step "pack fmu/HaselPlatform.fmu and fmu/HaselPlatform-fmi3.fmu for Linux, Windows and macOS"
+    ./target/release/hasel fmu \
+        --lib "$FMU_LIB" --lib "$(cross_lib "$WINDOWS_TARGET" fmi2)" --lib "$(darwin_universal fmi2)" \
+        --lib-fmi3 "$FMU3_LIB" --lib-fmi3 "$(cross_lib "$WINDOWS_TARGET" fmi3)" \
+        --lib-fmi3 "$(cross_lib "${MAC_TARGETS[0]}" fmi3)" --lib-fmi3 "$(cross_lib "${MAC_TARGETS[1]}" fmi3)"
+    step "pack fmu/HaselInverse.fmu for Linux, Windows and macOS"
+    ./target/release/hasel fmu --model inverse \
+        --lib "$INVERSE_LIB" --lib "$(cross_lib "$WINDOWS_TARGET" inverse)" --lib "$(darwin_universal inverse)"
+}
+
+# Runs a command and prints how long it took.
+timed() {
+    local start=$SECONDS
+    "$@"
+    echo "   ($((SECONDS - start)) s)"
 }

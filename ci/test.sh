@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Every test: self-containment, formatting and lints, the Rust suite, then the packed FMU
-# through fmpy, fmutool, libcosimpy, ecospy, fmi-sim (installed by ci/lib.sh) and ctypes.
+# through fmpy, fmutool, libcosimpy, ecospy, fmi-sim (installed by ci/lib.sh) and ctypes, and
+# the FMUs' Windows (under Wine) and macOS (inspected) binaries, cross-built as ci/platforms.sh does.
 source "$(dirname "${BASH_SOURCE[0]}")/lib.sh"
 step "the repository refers to nothing outside it (ci/self_contained.py)"
 python3 ci/self_contained.py
@@ -9,6 +10,8 @@ step "formatting and lints (cargo fmt --check, cargo clippy -D warnings)"
 cargo fmt --check
 cargo clippy -q --release --all-targets -- -D warnings
 build_fmu
+build_platforms
+ensure_wine
 step "Rust tests"
 cargo test --release --all-targets
 step "the library-solver comparison of hasel bench compiles lint-free (feature compare, diffsol)"

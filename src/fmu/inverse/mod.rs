@@ -17,7 +17,7 @@ use super::model_info_of;
 use super::pack::Spec;
 use crate::fmi_common::model_api::FmuCore;
 
-/// `modelIdentifier` and the shared library's name in `binaries/linux64/`.
+/// `modelIdentifier` and the shared libraries' name in `binaries/<platform>/`.
 pub const MODEL_IDENTIFIER: &str = "HaselInverse";
 
 /// The model-level data of `modelDescription.xml` (no solver: the tolerance is the platform's

@@ -1,0 +1,162 @@
+"""The FMUs' Windows binaries, inspected and run.
+
+Inspected: each DLL (win64 in the FMI 2.0 FMUs, x86_64-windows in the FMI 3.0 one) exports exactly
+the FMI functions of its version and imports only Windows' own DLLs.
+
+Run: tests/windows/cosim.c, a co-simulation importer in C, is built twice, with mingw-w64 for
+Windows and with gcc for Linux. The Windows program loads the FMU's DLL under Wine (Debian's
+wine64; a test-only stand-in for bcryptprimitives.dll, which Wine 8.0 lacks, sits beside it), the
+Linux program the FMU's .so. Each calls the library wrongly first (NULLs, wrong states, a wrong
+GUID or token, bytes that are no FMU state: errors, logged, no crash), then runs 2 s of the paper's
+excitation at 1 ms steps with a replay from the FMU state and from its serialized bytes (bit for
+bit), and prints the outputs. The resources are read from a folder whose name needs
+percent-encoding in a URI ("my fmü"), with a changed parameter: the GUID or token given is that
+of the changed parameter, so an instance is made only if the library found and read the file.
+
+The two platforms' outputs agree within 1e-12 m (the heights are ~1e-3 m). Not bit for bit: under
+Wine the DLL's sin, exp and pow are msvcrt's (Wine's own implementation), and the test program's
+excitation uses them too; glibc's may round the last bit differently. The solver is deterministic
+and smooth in its inputs, so a last-bit difference stays near the rounding level unless a step
+size decision flips; measured here the largest difference was printed by the test (README, "The
+FMU").
+"""
+import os
+import pathlib
+import re
+import shutil
+import struct
+import subprocess
+import zipfile
+
+import pytest
+from test_binary import FMI2_FUNCTIONS, FMI3_FUNCTIONS
+
+ROOT = pathlib.Path(__file__).resolve().parents[2]
+SOURCES = ROOT / "tests" / "windows"
+MINGW = "x86_64-w64-mingw32-gcc"
+# what the DLLs may import: the Windows API sets and system DLLs Rust's standard library uses
+SYSTEM_DLLS = {
+    "kernel32.dll", "msvcrt.dll", "ntdll.dll", "userenv.dll", "ws2_32.dll", "bcryptprimitives.dll",
+    "advapi32.dll", "api-ms-win-core-synch-l1-2-0.dll",
+}
+TOLERANCE = 1e-12  # m
+
+
+def need(tool):
+    path = shutil.which(tool)
+    if not path:
+        pytest.fail(f"{tool} is missing: `bash ci/test.sh` installs it (ci/lib.sh, ensure_wine)")
+    return path
+
+
+def dll_of(fmu, folder, tmp_path_factory):
+    with zipfile.ZipFile(fmu) as z:
+        member = next((n for n in z.namelist() if n.startswith(f"binaries/{folder}/")), None)
+        if member is None:
+            pytest.fail(f"{fmu} has no binaries/{folder}/: build the FMUs with `bash ci/platforms.sh`")
+        return pathlib.Path(z.extract(member, tmp_path_factory.mktemp("dll")))
+
+
+@pytest.fixture(scope="module", params=["HaselPlatform 2.0", "HaselPlatform 3.0", "HaselInverse 2.0"])
+def dll(request, tmp_path_factory):
+    fixture, folder = {
+        "HaselPlatform 2.0": ("fmu_path", "win64"),
+        "HaselPlatform 3.0": ("fmu3_path", "x86_64-windows"),
+        "HaselInverse 2.0": ("inverse_fmu_path", "win64"),
+    }[request.param]
+    return dll_of(request.getfixturevalue(fixture), folder, tmp_path_factory), folder
+
+
+def pe_tables(path):
+    """The DLLs `path` imports and the names it exports (objdump of mingw-w64's binutils)."""
+    text = subprocess.run([need("x86_64-w64-mingw32-objdump"), "-p", str(path)], capture_output=True,
+                          text=True, check=True).stdout
+    imports = {m.lower() for m in re.findall(r"DLL Name: (\S+)", text)}
+    exports = set(re.findall(r"^\s+\[\s*\d+\] (\w+)$", text.split("[Ordinal/Name Pointer] Table")[1],
+                             re.MULTILINE))
+    return imports, exports
+
+
+def test_the_dll_exports_exactly_the_fmi_functions_and_imports_only_windows(dll):
+    path, folder = dll
+    imports, exports = pe_tables(path)
+    expected = FMI3_FUNCTIONS if folder == "x86_64-windows" else FMI2_FUNCTIONS
+    assert exports == expected, (exports - expected, expected - exports)
+    assert imports and imports <= SYSTEM_DLLS, imports - SYSTEM_DLLS
+
+
+@pytest.fixture(scope="module")
+def programs(tmp_path_factory):
+    """cosim.exe with the bcryptprimitives.dll stand-in beside it, and the Linux cosim."""
+    out = tmp_path_factory.mktemp("cosim")
+    flags = ["-std=c11", "-O2", "-Wall", "-Wextra", "-Werror"]
+    subprocess.run([need(MINGW), *flags, "-o", out / "cosim.exe", SOURCES / "cosim.c"], check=True)
+    subprocess.run([need(MINGW), *flags, "-shared", "-o", out / "bcryptprimitives.dll",
+                    SOURCES / "bcryptprimitives.c", "-ladvapi32"], check=True)
+    subprocess.run([need("gcc"), *flags, "-o", out / "cosim", SOURCES / "cosim.c", "-ldl", "-lm"], check=True)
+    return out
+
+
+@pytest.fixture(scope="module")
+def wine_env(tmp_path_factory):
+    need("wine")
+    return {**os.environ, "WINEPREFIX": str(tmp_path_factory.mktemp("wineprefix")), "WINEDEBUG": "-all"}
+
+
+def windows_path(path):
+    """The path as Wine's Windows programs see it: drive Z: is the Linux root."""
+    return "Z:" + str(path).replace("/", "\\")
+
+
+def run(cmd, env=None):
+    p = subprocess.run([str(c) for c in cmd], capture_output=True, text=True, env=env, timeout=300)
+    assert p.returncode == 0 and "all checks passed" in p.stdout, p.stdout[-3000:] + p.stderr[-3000:]
+    assert "ok replay" in p.stdout, p.stdout[-3000:]
+    misuse = [line for line in p.stdout.splitlines() if line.startswith("ok misuse")]
+    assert len(misuse) >= 7, misuse
+    return p.stdout
+
+
+def outputs(stdout):
+    """The printed rows: time and the six outputs, each decoded from the hexadecimal bits."""
+    rows = [[struct.unpack("<d", bytes.fromhex(h)[::-1])[0] for h in line.split()[1:]]
+            for line in stdout.splitlines() if line.startswith("y ")]
+    assert len(rows) == 2000 and all(len(r) == 7 for r in rows)
+    return rows
+
+
+@pytest.mark.parametrize("version", ["2", "3"])
+def test_the_windows_dll_runs_under_wine_as_the_linux_library_runs(version, programs, wine_env, fmu_path,
+                                                                  fmu3_path, hasel_path, tmp_path):
+    fmu = fmu_path if version == "2" else fmu3_path
+    folder = tmp_path / "my fmü"
+    with zipfile.ZipFile(fmu) as z:
+        z.extractall(folder)
+    binaries = {"2": ("linux64", "win64"), "3": ("x86_64-linux", "x86_64-windows")}[version]
+    so, dll = (next((folder / "binaries" / b).iterdir()) for b in binaries)
+    params = folder / "resources" / "parameters.toml"
+    text, n = re.subn(r"(?m)^Kb_1 = \S+", "Kb_1 = 0.31", params.read_text())
+    assert n == 1
+    params.write_text(text)
+    description = subprocess.run([hasel_path, "describe", "--fmi", version, "--params", params],
+                                 capture_output=True, text=True, check=True).stdout
+    key = "guid" if version == "2" else "instantiationToken"
+    token = re.search(rf'{key}="([^"]+)"', description)[1]
+    packed = re.search(rf'{key}="([^"]+)"', (folder / "modelDescription.xml").read_text())[1]
+    assert token != packed  # only a library that read the changed parameter accepts it
+    resources = folder / "resources"
+    if version == "2":
+        linux_location = resources.as_uri()
+        windows_location = pathlib.PureWindowsPath(windows_path(resources)).as_uri()
+        assert "%20" in windows_location and "%C3%BC" in windows_location
+    else:
+        linux_location, windows_location = f"{resources}/", windows_path(resources) + "\\"
+    linux = outputs(run([programs / "cosim", version, so, token, linux_location]))
+    windows = outputs(run(["wine", programs / "cosim.exe", version, windows_path(dll), token, windows_location],
+                          env=wine_env))
+    assert [r[0] for r in windows] == [r[0] for r in linux]
+    worst = max(abs(a - b) for rl, rw in zip(linux, windows) for a, b in zip(rl[1:], rw[1:]))
+    peak = max(abs(v) for r in linux for v in r[1:4])
+    print(f"FMI {version}.0: Windows under Wine vs Linux, largest output difference {worst:.3g} m "
+          f"(heights up to {peak:.3g} m)")
+    assert worst <= TOLERANCE
