@@ -159,7 +159,8 @@ darwin_sdk() {
 }
 
 # cross_cargo TRIPLE SET: builds the FMU library of feature set SET (fmi2, fmi3, inverse) for
-# TRIPLE in CROSS_DIR/SET, at opt-level 2 as the Linux one (zigbuild_fmu_lib says why).
+# TRIPLE in CROSS_DIR/SET, at opt-level 2 as the Linux one (zigbuild_fmu_lib says why), without
+# the feature tools, which only the hasel command needs.
 cross_cargo() {
     local triple="$1" set="$2"
     local upper="${triple^^}"
@@ -174,7 +175,7 @@ cross_cargo() {
     if [ "$set" != fmi2 ]; then seed_target_dir "$CROSS_DIR/$set" "$CROSS_DIR/fmi2" "$triple"; fi
     # shellcheck disable=SC2086 # the feature flags split into words
     env "${env[@]}" nice -n 10 /usr/bin/cargo build -q --release --lib --target "$triple" \
-        -Zbuild-std=std,panic_unwind --target-dir "$CROSS_DIR/$set" ${CROSS_FEATURES[$set]}
+        -Zbuild-std=std,panic_unwind --target-dir "$CROSS_DIR/$set" --no-default-features ${CROSS_FEATURES[$set]}
 }
 
 # cross_lib TRIPLE SET: the library cross_cargo built.
@@ -194,27 +195,58 @@ darwin_universal() {
     echo "$out"
 }
 
-# Builds the three FMU libraries for Windows and both macOS architectures (the Linux ones and the
-# hasel command come from build_fmu) and packs the three FMUs with every platform's binary.
-build_platforms() {
+# cross_libs SET FLAG: `hasel fmu` arguments (FLAG FILE ...) for the libraries of feature set SET
+# built for other platforms, whichever are there: Windows's, and macOS's (for FMI 2.0, FLAG --lib,
+# one universal library of both architectures; for FMI 3.0 one each).
+cross_libs() {
+    local set="$1" flag="$2" win mac=()
+    win="$(cross_lib "$WINDOWS_TARGET" "$set")"
+    if [ -f "$win" ]; then printf '%s\n' "$flag" "$win"; fi
+    for triple in "${MAC_TARGETS[@]}"; do
+        if [ -f "$(cross_lib "$triple" "$set")" ]; then mac+=("$(cross_lib "$triple" "$set")"); fi
+    done
+    if ((${#mac[@]} == 2)); then
+        if [ "$flag" = --lib ]; then
+            printf '%s\n' "$flag" "$(darwin_universal "$set")"
+        else
+            printf '%s\n' "$flag" "${mac[0]}" "$flag" "${mac[1]}"
+        fi
+    fi
+}
+
+# cross_build SET TRIPLE...: builds the library of feature set SET for each TRIPLE.
+cross_build() {
+    local set="$1" triple
+    shift
     ensure_cross_tools
     ensure_venv
     darwin_sdk
-    local triple set
-    for triple in "$WINDOWS_TARGET" "${MAC_TARGETS[@]}"; do
-        for set in fmi2 fmi3 inverse; do
-            step "build the $set library for $triple (Debian's rustc, std from source)"
-            timed cross_cargo "$triple" "$set"
-        done
+    for triple in "$@"; do
+        step "build the $set library for $triple (Debian's rustc, std from source)"
+        timed cross_cargo "$triple" "$set"
     done
-    step "pack fmu/HaselPlatform.fmu and fmu/HaselPlatform-fmi3.fmu for Linux, Windows and macOS"
-    ./target/release/hasel fmu \
-        --lib "$FMU_LIB" --lib "$(cross_lib "$WINDOWS_TARGET" fmi2)" --lib "$(darwin_universal fmi2)" \
-        --lib-fmi3 "$FMU3_LIB" --lib-fmi3 "$(cross_lib "$WINDOWS_TARGET" fmi3)" \
-        --lib-fmi3 "$(cross_lib "${MAC_TARGETS[0]}" fmi3)" --lib-fmi3 "$(cross_lib "${MAC_TARGETS[1]}" fmi3)"
-    step "pack fmu/HaselInverse.fmu for Linux, Windows and macOS"
-    ./target/release/hasel fmu --model inverse \
-        --lib "$INVERSE_LIB" --lib "$(cross_lib "$WINDOWS_TARGET" inverse)" --lib "$(darwin_universal inverse)"
+}
+
+# Packs the three FMUs with the Linux libraries of build_fmu and every other platform's that
+# cross_build made; `hasel fmu` says which went where.
+pack_platforms() {
+    local v2 v3 inverse
+    mapfile -t v2 < <(cross_libs fmi2 --lib)
+    mapfile -t v3 < <(cross_libs fmi3 --lib-fmi3)
+    mapfile -t inverse < <(cross_libs inverse --lib)
+    step "pack fmu/HaselPlatform.fmu and fmu/HaselPlatform-fmi3.fmu with every platform's library built"
+    ./target/release/hasel fmu --lib "$FMU_LIB" "${v2[@]}" --lib-fmi3 "$FMU3_LIB" "${v3[@]}"
+    step "pack fmu/HaselInverse.fmu with every platform's library built"
+    ./target/release/hasel fmu --model inverse --lib "$INVERSE_LIB" "${inverse[@]}"
+}
+
+# ci/platforms.sh: the three FMU libraries for Windows and both macOS architectures, packed.
+build_platforms() {
+    local set
+    for set in fmi2 fmi3 inverse; do
+        cross_build "$set" "$WINDOWS_TARGET" "${MAC_TARGETS[@]}"
+    done
+    pack_platforms
 }
 
 # Runs a command and prints how long it took.
