@@ -4,9 +4,11 @@
 //! around the core. Beside it the HaselInverse FMU for feedforward ([`inverse`]), served by the
 //! same shell from a build of the library with the feature `inverse-fmu`.
 
+#[cfg(feature = "tools")]
 pub mod binary;
 pub mod hasel_core;
 pub mod inverse;
+#[cfg(feature = "tools")]
 pub mod pack;
 pub mod structure;
 pub mod variables;

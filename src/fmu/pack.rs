@@ -1,17 +1,19 @@
 //! Packs an FMU archive, FMI 2.0 or 3.0: `modelDescription.xml`, the shared library of each
 //! platform built (`binaries/linux64/<modelIdentifier>.so`, FMI 3.0:
 //! `binaries/x86_64-linux/...`, and the others of [`super::binary`]), `documentation/index.html` and `resources/parameters.toml`, all generated from one variable
-//! table and one parameter set: the platform's ([`platform`]) or the inverse's
-//! ([`super::inverse::spec`], FMI 2.0 only).
+//! table and one parameter set: the platform's ([`platform`]) or the inverse's ([`inverse`],
+//! FMI 2.0 only). Only the `hasel` command packs (feature `tools`): the FMU libraries have none
+//! of this.
 
 use std::io::Write;
 use std::path::Path;
 
 use super::binary::{Platform, platform_of};
+use super::inverse::{self as inverse_fmu, InverseCore};
 use super::structure::model_structure;
 use super::variables::variables;
 use super::{RESOURCE_PARAMS, model_info};
-use crate::fmi_common::model_api::ModelStructure;
+use crate::fmi_common::model_api::{FmuCore, ModelStructure};
 use crate::fmi_common::variables::{Causality, ModelInfo, Variable};
 use crate::fmi2::model_description::{guid_for, model_description_xml};
 use crate::fmi3::model_description as fmi3_description;
@@ -46,6 +48,25 @@ pub fn platform(params: &Params) -> Spec {
                 an effect that is off keeps its state at 0); the transport delay tau_d needs \
                 Co-Simulation. Directional derivatives (both interfaces) come from the model's \
                 analytic Jacobian. The simulation starts from the U = 0 equilibrium under gravity.",
+    }
+}
+
+/// The HaselInverse FMU with the start values `params`: what `hasel fmu --model inverse` packs.
+pub fn inverse(params: &Params) -> Spec {
+    Spec {
+        info: inverse_fmu::model_info(),
+        variables: inverse_fmu::variables::variables(params),
+        structure: InverseCore::model_structure(),
+        about: "The inverse of the HaselPlatform FMU, for feedforward: each communication step \
+                maps the inputs held over it (the antenna tip's x and y and the platform's mean \
+                height, which x and y leave open) to the actuator heights by the inverse \
+                kinematics from X and Y (Newton on the forward kinematics), and to the constant \
+                voltages that hold those heights at equilibrium (closed form: the height's angle, \
+                the film on its invariant curve, the torque balance with the charges of the DC \
+                circuit). The outputs at the end of a step are those of the inputs held over it; \
+                a tip it cannot reach (below the rest height, beyond the height where the input \
+                gain vanishes) makes the step return fmi2Discard with the reason logged. Its \
+                parameters are the platform's.",
     }
 }
 
@@ -289,12 +310,11 @@ mod tests {
     use crate::fmi_common::variables::check_variable_table;
     use crate::fmu::binary::Arch;
     use crate::fmu::binary::tests::header;
-    use crate::fmu::inverse;
 
     /// Both FMUs at the default parameters.
     fn specs() -> [Spec; 2] {
         let p = Params::default();
-        [platform(&p), inverse::spec(&p)]
+        [platform(&p), inverse(&p)]
     }
 
     #[test]
@@ -319,9 +339,9 @@ mod tests {
     #[test]
     fn the_guid_follows_the_start_values() {
         let mut p = Params::default();
-        let g0 = [guid(&platform(&p)), guid(&inverse::spec(&p))];
+        let g0 = [guid(&platform(&p)), guid(&inverse(&p))];
         p.set("Kb_1", 0.31).unwrap();
-        for (spec, g0) in [platform(&p), inverse::spec(&p)].iter().zip(g0) {
+        for (spec, g0) in [platform(&p), inverse(&p)].iter().zip(g0) {
             assert_ne!(g0, guid(spec));
             assert!(model_description(spec).contains(&guid(spec)));
         }
@@ -461,9 +481,9 @@ mod tests {
             assert!(full.contains("<ModelExchange") && full.contains("<CoSimulation"));
             assert_eq!((count(&full, "true"), count(&full, "false")), (2, 0));
             // the inverse: Co-Simulation only, without them
-            let inverse = version.model_description(&inverse::spec(&p));
-            assert!(!inverse.contains("<ModelExchange") && inverse.contains("<CoSimulation"));
-            assert_eq!((count(&inverse, "true"), count(&inverse, "false")), (0, 1));
+            let inv = version.model_description(&inverse(&p));
+            assert!(!inv.contains("<ModelExchange") && inv.contains("<CoSimulation"));
+            assert_eq!((count(&inv, "true"), count(&inv, "false")), (0, 1));
         }
     }
 

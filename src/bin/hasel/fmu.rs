@@ -24,7 +24,7 @@ impl Model {
     fn spec(self, params: &Params) -> Spec {
         match self {
             Model::Platform => pack::platform(params),
-            Model::Inverse => inverse::spec(params),
+            Model::Inverse => pack::inverse(params),
         }
     }
 
