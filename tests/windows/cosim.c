@@ -29,13 +29,36 @@
 
 #ifdef _WIN32
 #include <windows.h>
+/* after windows.h, which it needs */
+#include <shellapi.h>
 typedef HMODULE Library;
-static Library open_library(const char *path) { return LoadLibraryA(path); }
+/* FMI strings are UTF-8 (the resource path included), so the arguments are taken as UTF-8 from
+ * the wide command line, not in the ANSI code page of main's argv, and paths are opened wide. */
+static char **utf8_arguments(int *argc) {
+    wchar_t **wide = CommandLineToArgvW(GetCommandLineW(), argc);
+    char **out = calloc((size_t)*argc + 1, sizeof(char *));
+    for (int i = 0; i < *argc; i++) {
+        int n = WideCharToMultiByte(CP_UTF8, 0, wide[i], -1, NULL, 0, NULL, NULL);
+        out[i] = malloc((size_t)n);
+        WideCharToMultiByte(CP_UTF8, 0, wide[i], -1, out[i], n, NULL, NULL);
+    }
+    LocalFree(wide);
+    return out;
+}
+static Library open_library(const char *path) {
+    wchar_t wide[4096];
+    if (!MultiByteToWideChar(CP_UTF8, 0, path, -1, wide, 4096)) return NULL;
+    return LoadLibraryW(wide);
+}
 static void *symbol(Library lib, const char *name) { return (void *)GetProcAddress(lib, name); }
 static void close_library(Library lib) { FreeLibrary(lib); }
 #else
 #include <dlfcn.h>
 typedef void *Library;
+static char **utf8_arguments(int *argc) {
+    (void)argc;
+    return NULL;
+}
 static Library open_library(const char *path) { return dlopen(path, RTLD_NOW | RTLD_LOCAL); }
 static void *symbol(Library lib, const char *name) { return dlsym(lib, name); }
 static void close_library(Library lib) { dlclose(lib); }
@@ -350,6 +373,8 @@ static int same_second_half(double (*first)[NY], double (*again)[NY]) {
 }
 
 int main(int argc, char **argv) {
+    char **utf8 = utf8_arguments(&argc);
+    if (utf8) argv = utf8;
     if (argc != 5 || (strcmp(argv[1], "2") && strcmp(argv[1], "3"))) {
         fprintf(stderr, "usage: cosim 2|3 LIBRARY GUID|TOKEN RESOURCE_URI|RESOURCE_PATH\n");
         return 2;
