@@ -117,8 +117,10 @@ build_fmu() {
 WINDOWS_TARGET=x86_64-pc-windows-gnu
 MAC_TARGETS=(x86_64-apple-darwin aarch64-apple-darwin)
 CROSS_DIR="$ROOT/target/cross"
-# the feature sets of the three FMU libraries, each built in a folder of its own under CROSS_DIR
-declare -A CROSS_FEATURES=([fmi2]="" [fmi3]="--features fmi3" [inverse]="--features inverse-fmu")
+# what is built, each in a folder of its own under CROSS_DIR: the three FMU libraries (without
+# the feature tools, which only the hasel command needs) and the hasel command
+declare -A CROSS_ARGS=([fmi2]="--lib --no-default-features" [fmi3]="--lib --no-default-features --features fmi3"
+    [inverse]="--lib --no-default-features --features inverse-fmu" [cli]="--bin hasel")
 # the linker's stub libraries and rust-objcopy for macOS, made by darwin_sdk
 DARWIN_SDK="$CROSS_DIR/darwin-sdk"
 LLVM_BIN=/usr/lib/llvm-16/bin
@@ -158,9 +160,9 @@ darwin_sdk() {
     ln -sf "$LLVM_BIN/llvm-objcopy" "$DARWIN_SDK/rust-objcopy"
 }
 
-# cross_cargo TRIPLE SET: builds the FMU library of feature set SET (fmi2, fmi3, inverse) for
-# TRIPLE in CROSS_DIR/SET, at opt-level 2 as the Linux one (zigbuild_fmu_lib says why), without
-# the feature tools, which only the hasel command needs.
+# cross_cargo TRIPLE SET: builds SET (the FMU library fmi2, fmi3 or inverse, or cli, the hasel
+# command) for TRIPLE in CROSS_DIR/SET, at opt-level 2 as the Linux library (zigbuild_fmu_lib
+# says why).
 cross_cargo() {
     local triple="$1" set="$2"
     local upper="${triple^^}"
@@ -173,9 +175,9 @@ cross_cargo() {
             "PATH=$DARWIN_SDK:$PATH") ;;
     esac
     if [ "$set" != fmi2 ]; then seed_target_dir "$CROSS_DIR/$set" "$CROSS_DIR/fmi2" "$triple"; fi
-    # shellcheck disable=SC2086 # the feature flags split into words
-    env "${env[@]}" nice -n 10 /usr/bin/cargo build -q --release --lib --target "$triple" \
-        -Zbuild-std=std,panic_unwind --target-dir "$CROSS_DIR/$set" --no-default-features ${CROSS_FEATURES[$set]}
+    # shellcheck disable=SC2086 # the arguments split into words
+    env "${env[@]}" nice -n 10 /usr/bin/cargo build -q --release --target "$triple" \
+        -Zbuild-std=std,panic_unwind --target-dir "$CROSS_DIR/$set" ${CROSS_ARGS[$set]}
 }
 
 # cross_lib TRIPLE SET: the library cross_cargo built.
@@ -214,7 +216,7 @@ cross_libs() {
     fi
 }
 
-# cross_build SET TRIPLE...: builds the library of feature set SET for each TRIPLE.
+# cross_build SET TRIPLE...: builds SET (cross_cargo) for each TRIPLE.
 cross_build() {
     local set="$1" triple
     shift
@@ -222,7 +224,7 @@ cross_build() {
     ensure_venv
     darwin_sdk
     for triple in "$@"; do
-        step "build the $set library for $triple (Debian's rustc, std from source)"
+        step "build $set for $triple (Debian's rustc, std from source)"
         timed cross_cargo "$triple" "$set"
     done
 }
@@ -240,13 +242,15 @@ pack_platforms() {
     ./target/release/hasel fmu --model inverse --lib "$INVERSE_LIB" "${inverse[@]}"
 }
 
-# ci/platforms.sh: the three FMU libraries for Windows and both macOS architectures, packed.
+# ci/platforms.sh: the three FMU libraries for Windows and both macOS architectures, packed, and
+# the hasel command for Windows (target/cross/cli/x86_64-pc-windows-gnu/release/hasel.exe).
 build_platforms() {
     local set
     for set in fmi2 fmi3 inverse; do
         cross_build "$set" "$WINDOWS_TARGET" "${MAC_TARGETS[@]}"
     done
     pack_platforms
+    cross_build cli "$WINDOWS_TARGET"
 }
 
 # Runs a command and prints how long it took.
