@@ -11,6 +11,7 @@ use std::time::Duration;
 
 use hasel_fmu::diagnose::hidden::{self, Truth};
 use hasel_fmu::diagnose::{self, FIT_TOLERANCE, Options, Verdict, floor_fit};
+use hasel_fmu::identify::conditions::{Choice, StartChoice};
 use hasel_fmu::identify::synth::Columns;
 use hasel_fmu::model::{Effect, Params};
 
@@ -269,4 +270,74 @@ fn an_effect_is_named_on_lab_data() {
     let d = diagnose_hidden(case.clone(), Columns::Heights, 1);
     assert_named(Effect::Creep, &d);
     outliers_reported(&case, &d);
+}
+
+/// A diagnosis of heights with the records' conditions estimated: the start detected, the
+/// sensor's lag fitted (`--start auto --lag estimate`).
+fn diagnose_lab(case: hidden::Hidden, seed: u64) -> diagnose::Diagnosis {
+    let exps = case.experiments(Columns::Heights, T_END, seed).unwrap();
+    let opts = Options {
+        conditions: Choice {
+            start: StartChoice::Auto,
+            lag: None,
+        },
+        ..Options::default()
+    };
+    diagnose::diagnose(&Params::default(), exps, &opts).unwrap()
+}
+
+/// Twins of one device (issue: lab protocols): recorded from rest and `after` seconds into the
+/// drive, the same verdict, and the mid-run records' start found, not taken for rest.
+fn same_verdict_mid_run(truth: Truth, seed: u64, after: f64) -> [diagnose::Diagnosis; 2] {
+    let case = hidden::hide(truth, seed).unwrap();
+    let from_rest = diagnose_lab(case.clone(), seed);
+    let mid_run = diagnose_lab(case.mid_run(after), seed);
+    assert_eq!(
+        (from_rest.verdict, &from_rest.effects),
+        (mid_run.verdict, &mid_run.effects),
+        "{}: from rest {}, mid-run {}",
+        truth.name(),
+        from_rest.answer(),
+        mid_run.answer()
+    );
+    for f in &from_rest.base.conditions {
+        assert_eq!(f.start_how, "rest", "{}: {f:?}", truth.name());
+    }
+    for f in &mid_run.base.conditions {
+        assert_eq!(f.start_how, "detected mid-run, estimated", "{f:?}");
+    }
+    [from_rest, mid_run]
+}
+
+#[test]
+fn a_record_that_starts_mid_run_is_judged_as_from_rest() {
+    let [_, mid] = same_verdict_mid_run(Truth::Nothing, 1, 1.37);
+    assert_eq!(mid.verdict, Verdict::None);
+    // the start estimated where the device stood: within two noise σ of one sample of the
+    // noise-free record's first (the start is fitted to the whole transient, at rest velocity)
+    let mut clean = hidden::hide(Truth::Nothing, 1).unwrap().mid_run(1.37);
+    clean.noise = 0.0;
+    let truth = clean.experiments(Columns::Heights, T_END, 1).unwrap();
+    for ((f, e), noisy) in mid.base.conditions.iter().zip(&truth).zip(&mid.experiments) {
+        for (i, (c, y)) in e.channels.iter().enumerate() {
+            let sigma = diagnose::analysis::noise_level(&noisy.t, &noisy.channels[i].1);
+            assert!(
+                (f.heights[i] - y[0]).abs() < 2.0 * sigma,
+                "{}: {} at the start {:.2} um, truly {:.2} um",
+                f.experiment,
+                c.name(),
+                f.heights[i] * 1e6,
+                y[0] * 1e6
+            );
+        }
+    }
+}
+
+#[test]
+fn a_sensor_lag_neither_names_an_effect_nor_leaves_unexplained() {
+    let case = hidden::hide(Truth::Nothing, 2).unwrap();
+    for lag in [0.0, 3.2e-4] {
+        let d = diagnose_lab(case.clone().with_sensor_lag(lag), 2);
+        assert_eq!(d.verdict, Verdict::None, "lag {lag}: {}", d.answer());
+    }
 }

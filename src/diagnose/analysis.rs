@@ -2,6 +2,8 @@
 //! against the measurement noise, its harmonics of the drive, its drift, the time window where
 //! it is worst, and its correlation with the signals a missing effect would follow.
 
+use crate::identify::fit::departures;
+pub use crate::identify::fit::noise_level;
 use crate::identify::{Channel, Experiment};
 use crate::simulation::Sample;
 
@@ -38,30 +40,6 @@ pub struct Disagreement {
     /// Share of the residual power at frequencies that are not harmonics of the drive nor slow
     /// (below ω/2): structure no term driven by U can produce.
     pub off_harmonic: f64,
-}
-
-/// Each sample's departure from the straight line through its two neighbours, divided by the
-/// standard deviation that white noise of unit σ gives it: y_k − (w₀ y_{k−1} + w₁ y_{k+1}) with
-/// w₀ = h₁/(h₀+h₁), w₁ = h₀/(h₀+h₁) has variance σ² (1 + w₀² + w₁²). A smooth signal's departure
-/// at 1 ms is negligible, and uneven sampling (dropped rows) changes only the weights.
-fn departures(t: &[f64], y: &[f64]) -> Vec<f64> {
-    (1..y.len().saturating_sub(1))
-        .map(|k| {
-            let (h0, h1) = (t[k] - t[k - 1], t[k + 1] - t[k]);
-            let (w0, w1) = (h1 / (h0 + h1), h0 / (h0 + h1));
-            (y[k] - w0 * y[k - 1] - w1 * y[k + 1]) / (1.0 + w0 * w0 + w1 * w1).sqrt()
-        })
-        .collect()
-}
-
-/// Measurement noise σ from the departures of the samples from their neighbours' line (on an
-/// even grid, the second differences: their variance is 6 σ²).
-pub fn noise_level(t: &[f64], y: &[f64]) -> f64 {
-    let d = departures(t, y);
-    if d.is_empty() {
-        return 0.0;
-    }
-    (d.iter().map(|v| v * v).sum::<f64>() / d.len() as f64).sqrt()
 }
 
 /// A sample is an outlier when its departure from its neighbours' line exceeds this many

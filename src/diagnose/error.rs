@@ -23,6 +23,12 @@ pub enum Error {
     /// Hidden data asked for a pair of mechanisms that is not in the table.
     #[error("no two-mechanism case {0}")]
     NoPair(usize),
+    /// A candidate's refit ended above the model it contains, the effect neutral: a failed
+    /// fit, not evidence against the family (src/diagnose/diagnose.md, "Nested refits").
+    #[error(
+        "failed fit: it ended at a residual sum of squares of {rss:.6e}, above the {nested:.6e} of the model without the effect ({why})"
+    )]
+    AboveNested { rss: f64, nested: f64, why: String },
     /// The screening's least-squares projection could not be solved.
     #[error("{0}")]
     Projection(&'static str),

@@ -18,6 +18,7 @@ use crate::identify::Experiment;
 use crate::identify::synth::{self, Columns, DATA_RTOL, Normal, Sensor, Spec};
 use crate::model::Params;
 use crate::model::effects::{ChargeDrift, Creep, DriftSite, Effect, HysteresisLaw, PreloadLaw};
+use crate::simulation::input::PAPER_PHASES;
 use crate::simulation::{Input, InputError, Interpolation};
 
 /// What the data hide.
@@ -148,6 +149,12 @@ pub struct Hidden {
     pub ripple: Option<(f64, f64, f64)>,
     /// What lab data add on top (`src/diagnose/artifacts.rs`), if any.
     pub artifacts: Option<Artifacts>,
+    /// When the logger starts after the drive [s] (0: the records start at rest).
+    pub record_from: f64,
+    /// The sensor's first-order lag [s], where it is set apart from the artifacts' (0: theirs).
+    pub sensor_lag: f64,
+    /// The experiments' protocol (the paper's two sines unless drawn).
+    pub protocol: Protocol,
     /// The hidden mechanism and its values, in words.
     pub description: String,
 }
@@ -174,6 +181,9 @@ pub fn hide(truth: Truth, seed: u64) -> Result<Hidden, Error> {
         vibration: None,
         ripple: None,
         artifacts: None,
+        record_from: 0.0,
+        sensor_lag: 0.0,
+        protocol: Protocol::PAPER,
         description: String::new(),
     };
     let description = plant(&mut case, truth, &mut between)?;
@@ -465,7 +475,26 @@ impl Hidden {
         self
     }
 
-    /// The experiment of `input` recorded in `columns` every `dt` up to `t_end`, with this
+    /// This case recorded by a logger that starts `after` seconds into the drive: its records
+    /// start mid-run (the twin of a record from rest).
+    pub fn mid_run(mut self, after: f64) -> Hidden {
+        self.description = format!(
+            "{}; recorded from {after:.2} s into the drive",
+            self.description
+        );
+        self.record_from = after;
+        self
+    }
+
+    /// This case seen through a sensor with a first-order lag of `lag` seconds.
+    pub fn with_sensor_lag(mut self, lag: f64) -> Hidden {
+        self.description = format!("{}; sensor lag {:.2} ms", self.description, lag * 1e3);
+        self.sensor_lag = lag;
+        self
+    }
+
+    /// The experiment of `input` recorded in `columns` every `dt` up to `t_end` (from
+    /// `record_from`), with this
     /// case's parameters, hidden mechanism and noise (noise drawn from `seed`).
     pub fn spec(
         &self,
@@ -480,46 +509,153 @@ impl Hidden {
             (None, Some(r)) => Some(rippled(&input, r, t_end)?),
             (None, None) => None,
         };
+        let mut sensor = self.artifacts.as_ref().map_or(Sensor::IDEAL, |a| a.sensor);
+        if self.sensor_lag > 0.0 {
+            sensor.lag = self.sensor_lag;
+        }
         Ok(Spec {
             input,
             drive,
             vibration: self.vibration,
             params: self.params.clone(),
-            t_end,
+            t_end: self.record_from + t_end,
             dt,
             noise: self.noise,
-            sensor: self.artifacts.as_ref().map_or(Sensor::IDEAL, |a| a.sensor),
+            sensor,
             columns,
             seed,
             rtol: DATA_RTOL,
+            record_from: self.record_from,
         })
     }
 
-    /// The paper's two experiments of `t_end` seconds at 1 ms, named `w3pi.csv` and `w11.csv`.
+    /// This case recorded with `protocol`.
+    pub fn with_protocol(mut self, protocol: Protocol) -> Hidden {
+        self.description = format!("{}; {}", self.description, protocol.describe());
+        self.protocol = protocol;
+        self
+    }
+
+    /// The case's two experiments of `t_end` seconds (from `record_from` into the drive), the
+    /// estimation then the held-out one, in its protocol (the paper's: the 60 V sine at 3π and
+    /// 11 rad/s at 1 ms, named `w3pi.csv` and `w11.csv`).
     pub fn experiments(
         &self,
         columns: Columns,
         t_end: f64,
         seed: u64,
     ) -> Result<Vec<Experiment>, Error> {
-        OMEGAS
-            .iter()
-            .zip(["w3pi.csv", "w11.csv"])
-            .enumerate()
-            .map(|(k, (&omega, name))| {
+        let total = self.record_from + t_end;
+        let p = self.protocol;
+        (0..2)
+            .map(|k| {
                 let spec = self.spec(
-                    Input::sine(60.0, omega),
-                    t_end,
-                    1e-3,
+                    p.input(k, total)?,
+                    total,
+                    p.dt,
                     columns,
                     seed.wrapping_mul(31).wrapping_add(k as u64),
                 )?;
-                let exp = synth::experiment(&spec, name)?;
+                let exp = synth::experiment(&spec, &p.file_name(k))?;
                 match &self.artifacts {
                     Some(a) => a.apply(&exp, self.noise, k as u64),
                     None => Ok(exp),
                 }
             })
             .collect()
+    }
+}
+
+/// The kind of drive a lab records with (issue: lab protocols).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
+pub enum Drive {
+    /// The paper's 60 V sine, at 3π rad/s then 11 rad/s.
+    Sines,
+    /// Each actuator stepping between levels in 0–60 V every 0.3–0.8 s, held between steps.
+    Staircase,
+    /// A 60 V sine swept logarithmically in frequency, 2 → 20 rad/s, then 20 → 2 rad/s.
+    Chirp,
+    /// The sine at two voltage levels: 60 V at 3π rad/s, then 35 V at 11 rad/s.
+    Levels,
+}
+
+/// A protocol: the drive, the sampling interval, and the draw of its random parts.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Protocol {
+    pub drive: Drive,
+    /// Sample interval [s].
+    pub dt: f64,
+    seed: u64,
+}
+
+impl Protocol {
+    /// The paper's: two sines at 1 ms.
+    pub const PAPER: Protocol = Protocol {
+        drive: Drive::Sines,
+        dt: 1e-3,
+        seed: 0,
+    };
+
+    /// A protocol drawn from `seed`: any drive, sampled every 0.5, 1 or 2 ms.
+    pub fn draw(seed: u64) -> Protocol {
+        let mut rng = Normal::new(seed.wrapping_mul(0xD1B5_4A32_D192_ED03) ^ 0x0907_0C01);
+        let pick = |rng: &mut Normal, n: usize| ((rng.uniform() * n as f64) as usize).min(n - 1);
+        let drive =
+            [Drive::Sines, Drive::Staircase, Drive::Chirp, Drive::Levels][pick(&mut rng, 4)];
+        let dt = [5e-4, 1e-3, 2e-3][pick(&mut rng, 3)];
+        Protocol { drive, dt, seed }
+    }
+
+    pub fn name(&self) -> &'static str {
+        match self.drive {
+            Drive::Sines => "sines",
+            Drive::Staircase => "staircase",
+            Drive::Chirp => "chirp",
+            Drive::Levels => "levels",
+        }
+    }
+
+    /// In words, for the case's description.
+    pub fn describe(&self) -> String {
+        format!("{} sampled every {} ms", self.name(), self.dt * 1e3)
+    }
+
+    fn file_name(&self, k: usize) -> String {
+        match (self.drive, k) {
+            (Drive::Sines, 0) => "w3pi.csv".into(),
+            (Drive::Sines, _) => "w11.csv".into(),
+            (_, 0) => format!("{}_estimation.csv", self.name()),
+            _ => format!("{}_held_out.csv", self.name()),
+        }
+    }
+
+    /// The command of experiment `k` (0: estimation, 1: held out), `t_end` seconds long.
+    fn input(&self, k: usize, t_end: f64) -> Result<Input, InputError> {
+        match self.drive {
+            Drive::Sines => Ok(Input::sine(60.0, OMEGAS[k])),
+            Drive::Levels => Ok(Input::sine([60.0, 35.0][k], OMEGAS[k])),
+            Drive::Chirp => {
+                let (w0, w1): (f64, f64) = if k == 0 { (2.0, 20.0) } else { (20.0, 2.0) };
+                // phase of a logarithmic sweep: ∫ w0 (w1/w0)^(s/T) ds
+                let rate = (w1 / w0).ln() / t_end;
+                resampled(t_end, |t| {
+                    let phase = w0 * ((rate * t).exp() - 1.0) / rate;
+                    PAPER_PHASES.map(|phi| 60.0 * (phase + phi).sin())
+                })
+            }
+            Drive::Staircase => {
+                let mut rng = Normal::new(self.seed.wrapping_mul(0x51_7CC1_B727_220A) ^ k as u64);
+                let mut t = vec![0.0];
+                let mut u = vec![[0.0; 3]];
+                while t[t.len() - 1] < t_end {
+                    let hold = 0.3 + 0.5 * rng.uniform();
+                    // steps on the logger's clock: the command changes at a sample
+                    let next = ((t[t.len() - 1] + hold) / self.dt).round() * self.dt;
+                    t.push(next);
+                    u.push([0; 3].map(|_| 60.0 * rng.uniform()));
+                }
+                Input::sampled(t, u, Interpolation::ZeroOrderHold)
+            }
+        }
     }
 }

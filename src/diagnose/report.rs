@@ -8,7 +8,9 @@ use serde_json::{Map, Value, json};
 
 use super::analysis::Disagreement;
 use super::{Candidate, Diagnosis, Verdict, floor_fit, held_out_fits, remaining};
-use crate::identify::report::{fits_json, residual_series, round};
+use crate::identify::report::{
+    conditions_json, conditions_section, fits_json, residual_series, round,
+};
 use crate::io::file::{FileError, write_text_atomic};
 use crate::io::params_file;
 use crate::plot::{self, Panel, Series};
@@ -155,6 +157,7 @@ pub fn to_json(d: &Diagnosis) -> Value {
             "below_noise_floor": round(r.gap, 2),
             "where": r.describe(),
         })).collect::<Vec<_>>(),
+        "conditions": conditions_json(&d.base.conditions),
         "outliers": d.outliers.iter().map(|o| json!({
             "experiment": o.experiment,
             "output": o.channel.name(),
@@ -535,6 +538,7 @@ pub fn write(dir: &Path, d: &Diagnosis) -> Result<(), FileError> {
             let _ = writeln!(md, "- {}", r.describe());
         }
     }
+    conditions_section(&mut md, &d.base.conditions);
     if !d.outliers.is_empty() {
         let _ = writeln!(
             md,

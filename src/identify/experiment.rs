@@ -6,7 +6,7 @@ use std::path::{Path, PathBuf};
 
 use crate::io::csv::Table;
 use crate::io::file::FileError;
-use crate::simulation::{Input, Interpolation, Sample};
+use crate::simulation::{Input, Interpolation, Sample, Start};
 
 /// A measured output channel.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
@@ -54,10 +54,32 @@ pub struct Experiment {
     pub name: String,
     pub path: PathBuf,
     pub t: Vec<f64>,
-    /// The commanded voltages, replayed through a natural cubic spline (smooth, so the
-    /// integrator need not stop at every sample).
+    /// The commanded voltages, replayed as a measured command: a spline through each smooth run
+    /// of samples, held across a step (`Interpolation::Measured`).
     pub input: Input,
     pub channels: Vec<(Channel, Vec<f64>)>,
+    /// Where the device stood at the first sample and the sensor's lag: the rest state and
+    /// none as read, estimated by `identify::conditions`.
+    pub conditions: Conditions,
+}
+
+/// How a record was taken beyond its samples (src/identify/identify.md, "Records that start
+/// mid-run" and "Sensor lag").
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Conditions {
+    /// The state at the first sample.
+    pub start: Start,
+    /// The sensor's lag [s]: sample k holds the outputs at t_k − lag.
+    pub lag: f64,
+}
+
+impl Default for Conditions {
+    fn default() -> Self {
+        Conditions {
+            start: Start::Rest,
+            lag: 0.0,
+        }
+    }
 }
 
 impl Experiment {
@@ -139,7 +161,7 @@ impl Experiment {
             ));
         }
         let samples = (0..t.len()).map(|k| [u[0][k], u[1][k], u[2][k]]).collect();
-        let input = Input::sampled(t.clone(), samples, Interpolation::Spline)
+        let input = Input::sampled(t.clone(), samples, Interpolation::Measured)
             .map_err(|e| FileError::new(path, e.to_string()))?;
         let name = path.file_name().map_or_else(
             || path.display().to_string(),
@@ -151,6 +173,7 @@ impl Experiment {
             t,
             input,
             channels,
+            conditions: Conditions::default(),
         })
     }
 
@@ -176,7 +199,7 @@ impl Experiment {
             ));
         }
         let samples = t.iter().map(|&tk| self.input.value(tk)).collect();
-        let input = Input::sampled(t.clone(), samples, Interpolation::Spline)
+        let input = Input::sampled(t.clone(), samples, Interpolation::Measured)
             .map_err(|e| FileError::new(&self.path, e.to_string()))?;
         Ok(Experiment {
             name: self.name.clone(),
@@ -184,7 +207,13 @@ impl Experiment {
             t,
             input,
             channels: self.channels.iter().map(|(c, v)| (*c, kept(v))).collect(),
+            conditions: self.conditions,
         })
+    }
+
+    /// The instants the samples show, t_k − lag: where the model is sampled.
+    pub fn sensed_times(&self) -> Vec<f64> {
+        self.t.iter().map(|t| t - self.conditions.lag).collect()
     }
 
     /// The measured values of `channel`, if the experiment has it.

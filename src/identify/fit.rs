@@ -1,4 +1,5 @@
-//! NRMSE fit in percent, as MATLAB's `compare` reports it (src/identify/identify.md, "Fit metric").
+//! NRMSE fit in percent, as MATLAB's `compare` reports it (src/identify/identify.md, "Fit metric"),
+//! and the measurement noise a record shows, which bounds it.
 
 /// fit = 100 (1 − ‖y − ŷ‖ / ‖y − mean(y)‖).
 pub fn nrmse_fit(measured: &[f64], simulated: &[f64]) -> f64 {
@@ -29,6 +30,30 @@ pub fn nrmse_fit_2d(x: &[f64], y: &[f64], x_sim: &[f64], y_sim: &[f64]) -> f64 {
     let spread: f64 = x.iter().map(|a| (a - mx).powi(2)).sum::<f64>()
         + y.iter().map(|a| (a - my).powi(2)).sum::<f64>();
     100.0 * (1.0 - (err / spread).sqrt())
+}
+
+/// Each sample's departure from the straight line through its two neighbours, divided by the
+/// standard deviation that white noise of unit σ gives it: y_k − (w₀ y_{k−1} + w₁ y_{k+1}) with
+/// w₀ = h₁/(h₀+h₁), w₁ = h₀/(h₀+h₁) has variance σ² (1 + w₀² + w₁²). A smooth signal's departure
+/// at 1 ms is negligible, and uneven sampling (dropped rows) changes only the weights.
+pub fn departures(t: &[f64], y: &[f64]) -> Vec<f64> {
+    (1..y.len().saturating_sub(1))
+        .map(|k| {
+            let (h0, h1) = (t[k] - t[k - 1], t[k + 1] - t[k]);
+            let (w0, w1) = (h1 / (h0 + h1), h0 / (h0 + h1));
+            (y[k] - w0 * y[k - 1] - w1 * y[k + 1]) / (1.0 + w0 * w0 + w1 * w1).sqrt()
+        })
+        .collect()
+}
+
+/// Measurement noise σ from the departures of the samples from their neighbours' line (on an
+/// even grid, the second differences: their variance is 6 σ²).
+pub fn noise_level(t: &[f64], y: &[f64]) -> f64 {
+    let d = departures(t, y);
+    if d.is_empty() {
+        return 0.0;
+    }
+    (d.iter().map(|v| v * v).sum::<f64>() / d.len() as f64).sqrt()
 }
 
 #[cfg(test)]

@@ -75,12 +75,13 @@ impl Problem<'_> {
         let mut jac = DMatrix::zeros(self.len, x.len());
         let mut row = 0;
         for exp in self.experiments {
-            let run = simulate_sensitive(&p, &directions, &exp.input, &exp.t, self.rtol).map_err(
-                |source| Error::Experiment {
+            let times = exp.sensed_times();
+            let start = &exp.conditions.start;
+            let run = simulate_sensitive(&p, &directions, start, &exp.input, &times, self.rtol)
+                .map_err(|source| Error::Experiment {
                     experiment: exp.name.clone(),
                     source,
-                },
-            )?;
+                })?;
             self.counter
                 .fetch_add(1, std::sync::atomic::Ordering::Relaxed);
             for &c in &self.channels {

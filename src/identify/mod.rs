@@ -5,6 +5,7 @@
 //!
 //! Data files, fit metric and outputs: [src/identify/identify.md](identify.md).
 
+pub mod conditions;
 mod error;
 pub mod experiment;
 pub mod fit;
@@ -22,7 +23,7 @@ use crate::model::params::{ParamDef, parameter};
 use crate::model::{Params, Platform};
 use crate::simulation::{DEFAULT_RTOL, Sample, Simulator};
 pub use error::Error;
-pub use experiment::{Channel, Experiment};
+pub use experiment::{Channel, Conditions, Experiment};
 use group::{fit_group, groups};
 
 /// The parameters practically identifiable from h or tip data (src/model/model.md, "Facts that
@@ -55,6 +56,9 @@ pub struct Options {
     pub iteration_budget: Option<usize>,
     /// Where a direction the data do not determine is held.
     pub hold: Hold,
+    /// What to estimate of each record's conditions (its start, its sensor's lag), or `None`:
+    /// the experiments' conditions as they are.
+    pub conditions: Option<conditions::Choice>,
 }
 
 /// Where a group's fit holds a direction of parameter space the data do not determine
@@ -90,6 +94,7 @@ impl Default for Options {
             },
             iteration_budget: None,
             hold: Hold::Start,
+            conditions: Some(conditions::Choice::default()),
         }
     }
 }
@@ -151,18 +156,28 @@ pub struct Identification {
     pub seconds: f64,
     /// Simulated outputs at the fitted parameters, estimation then validation experiments.
     pub simulated: Vec<Vec<Sample>>,
+    /// The conditions estimated for each record, estimation then validation experiments;
+    /// empty where they were kept as given (`Options::conditions` = `None`).
+    pub conditions: Vec<conditions::Found>,
 }
 
-/// Simulates `exp` from rest with `params`, sampled at the experiment's times.
+/// Simulates `exp` with `params` under its conditions (from its start, sampled where its
+/// sensor lags to), the samples stamped with the experiment's times.
 pub fn simulate(params: &Params, exp: &Experiment, rtol: f64) -> Result<Vec<Sample>, Error> {
     let model = Platform::new(params.clone())?;
-    let mut sim = Simulator::new(model, exp.t[0], rtol)?;
+    let times = exp.sensed_times();
+    let in_experiment = |source| Error::Experiment {
+        experiment: exp.name.clone(),
+        source,
+    };
+    let mut sim = Simulator::starting(model, &exp.conditions.start, &exp.input, times[0], rtol)
+        .map_err(in_experiment)?;
     let mut out = Vec::with_capacity(exp.t.len());
-    sim.run_at(&exp.input, &exp.t, |s| out.push(*s))
-        .map_err(|source| Error::Experiment {
-            experiment: exp.name.clone(),
-            source,
-        })?;
+    sim.run_at(&exp.input, &times, |s| out.push(*s))
+        .map_err(in_experiment)?;
+    for (s, &t) in out.iter_mut().zip(&exp.t) {
+        s.t = t;
+    }
     Ok(out)
 }
 
@@ -187,9 +202,82 @@ pub fn fits(exp: &Experiment, sim: &[Sample]) -> ExperimentFit {
     }
 }
 
+/// Rounds of conditions and fit at most (src/identify/identify.md, "The order of estimation").
+const CONDITION_ROUNDS: usize = 4;
+
+/// The fits of `params` on `exps`.
+fn fits_at(params: &Params, exps: &[Experiment], rtol: f64) -> Result<Vec<ExperimentFit>, Error> {
+    exps.iter()
+        .map(|e| simulate(params, e, rtol).map(|s| fits(e, &s)))
+        .collect()
+}
+
 /// Identifies the free parameters on `estimation` from `start`, and reports fits on
-/// `estimation` and `validation`.
+/// `estimation` and `validation`. Where `opts.conditions` asks, each record's conditions are
+/// estimated beside the parameters (src/identify/identify.md, "Records that start mid-run"):
+/// at the start parameters, and again at the fitted ones, with a second fit from there when
+/// they moved.
 pub fn identify(
+    start: &Params,
+    estimation: &[Experiment],
+    validation: &[Experiment],
+    opts: &Options,
+) -> Result<Identification, Error> {
+    let Some(choice) = opts.conditions else {
+        return fit(start, estimation, validation, opts);
+    };
+    let began = Instant::now();
+    let found = |p: &Params, exps: &[Experiment], c: conditions::Choice| -> Result<Vec<_>, _> {
+        exps.iter()
+            .map(|e| conditions::estimate(p, e, c, opts.rtol))
+            .collect()
+    };
+    let under = |exps: &[Experiment], found: &[conditions::Found]| -> Vec<Experiment> {
+        exps.iter()
+            .zip(found)
+            .map(|(e, f)| Experiment {
+                conditions: f.conditions,
+                ..e.clone()
+            })
+            .collect()
+    };
+    // the start parameters are a guess: the lag, a fraction of a sample, waits for the fit
+    let no_lag = conditions::Choice {
+        lag: Some(choice.lag.unwrap_or(0.0)),
+        ..choice
+    };
+    let mut est = under(estimation, &found(start, estimation, no_lag)?);
+    let mut val = validation.to_vec();
+    let mut id = fit(start, &est, &val, opts)?;
+    // the start and the parameters pull on each other (a start off by a micrometre is a slow
+    // transient the parameters would bend to): conditions and fit alternate until the
+    // conditions stand still
+    let mut settled = Vec::new();
+    for _ in 0..CONDITION_ROUNDS {
+        let all: Vec<Experiment> = est.iter().chain(&val).cloned().collect();
+        settled = found(&id.params, &all, choice)?;
+        let moved = settled
+            .iter()
+            .zip(&all)
+            .any(|(f, e)| conditions::moved(&e.conditions, &f.conditions));
+        if !moved {
+            break;
+        }
+        let (e, v) = settled.split_at(estimation.len());
+        (est, val) = (under(estimation, e), under(validation, v));
+        let (iterations, simulations) = (id.iterations, id.simulations);
+        id = fit(&id.params, &est, &val, opts)?;
+        id.estimation_before = fits_at(start, &est, opts.rtol)?;
+        id.iterations += iterations;
+        id.simulations += simulations;
+    }
+    id.seconds = began.elapsed().as_secs_f64();
+    id.conditions = settled;
+    Ok(id)
+}
+
+/// Fits the free parameters on `estimation` from `start` under the experiments' conditions.
+fn fit(
     start: &Params,
     estimation: &[Experiment],
     validation: &[Experiment],
@@ -217,10 +305,7 @@ pub fn identify(
             });
         }
     }
-    let estimation_before = estimation
-        .iter()
-        .map(|e| simulate(start, e, opts.rtol).map(|s| fits(e, &s)))
-        .collect::<Result<Vec<_>, _>>()?;
+    let estimation_before = fits_at(start, estimation, opts.rtol)?;
 
     let mut params = start.clone();
     let (mut iterations, mut simulations) = (0, estimation.len());
@@ -328,5 +413,6 @@ pub fn identify(
         out_of_budget,
         seconds: began.elapsed().as_secs_f64(),
         simulated,
+        conditions: Vec::new(),
     })
 }

@@ -6,6 +6,7 @@ use std::path::Path;
 
 use serde_json::{Value, json};
 
+use super::conditions::{Found, LAG_MAX};
 use super::experiment::{Channel, Experiment};
 use super::{ExperimentFit, Identification};
 use crate::io::file::{FileError, write_text_atomic};
@@ -75,10 +76,63 @@ pub fn to_json(id: &Identification) -> Value {
             "coordinates": id.covariance.log.iter().map(|&l| if l { "ln" } else { "linear" }).collect::<Vec<_>>(),
             "matrix": (0..id.covariance.names.len()).map(|r| (0..id.covariance.names.len()).map(|c| id.covariance.matrix[(r, c)]).collect::<Vec<_>>()).collect::<Vec<_>>(),
         },
+        "conditions": conditions_json(&id.conditions),
         "iterations": id.iterations,
         "simulations": id.simulations,
         "seconds": round(id.seconds, 3),
     })
+}
+
+/// Each record's conditions (src/identify/identify.md, "Records that start mid-run"): how its
+/// start was set, the heights there [µm], the sensor's lag and its standard error [ms].
+pub(crate) fn conditions_json(found: &[Found]) -> Value {
+    Value::Array(
+        found
+            .iter()
+            .map(|f| {
+                json!({
+                    "experiment": f.experiment,
+                    "start": f.start_how,
+                    "start_heights_um": f.heights.map(|h| round(h * 1e6, 3)),
+                    "sensor_lag_ms": round(f.conditions.lag * 1e3, 4),
+                    "sensor_lag_se_ms": f.lag_se.map(|s| round(s * 1e3, 4)),
+                })
+            })
+            .collect(),
+    )
+}
+
+/// The section on the records' conditions, where they were estimated.
+pub(crate) fn conditions_section(md: &mut String, found: &[Found]) {
+    if found.is_empty() {
+        return;
+    }
+    let _ = writeln!(
+        md,
+        "
+## How the records were taken
+
+Estimated beside the model, as properties of the experiment (a lag within 0–{} ms is the sensor's):
+
+| experiment | start | heights at the first sample [µm] | sensor lag [ms] |
+|---|---|---|---|",
+        LAG_MAX * 1e3
+    );
+    for f in found {
+        let lag = match f.lag_se {
+            Some(se) => format!("{:.3} ± {:.3}", f.conditions.lag * 1e3, 1.96 * se * 1e3),
+            None => format!("{:.3} (stated)", f.conditions.lag * 1e3),
+        };
+        let _ = writeln!(
+            md,
+            "| {} | {} | {:.2} / {:.2} / {:.2} | {lag} |",
+            f.experiment,
+            f.start_how,
+            f.heights[0] * 1e6,
+            f.heights[1] * 1e6,
+            f.heights[2] * 1e6
+        );
+    }
 }
 
 /// The residual (measured − simulated) of channel `c` over time [µm], as dots.
@@ -244,8 +298,10 @@ pub fn write(
     }
     let _ = writeln!(
         md,
-        "\nIntervals assume white measurement noise; correlated residuals make them too narrow.\n\n## Fits (NRMSE, MATLAB `compare`)"
+        "\nIntervals assume white measurement noise; correlated residuals make them too narrow."
     );
+    conditions_section(&mut md, &id.conditions);
+    let _ = writeln!(md, "\n## Fits (NRMSE, MATLAB `compare`)");
     fit_table(
         &mut md,
         "Estimation data, start parameters",

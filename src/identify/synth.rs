@@ -51,6 +51,9 @@ pub struct Spec {
     pub columns: Columns,
     pub seed: u64,
     pub rtol: f64,
+    /// When the recording starts [s]: the device is driven from rest at 0, the logger starts
+    /// here (0: a record from rest), and its time column goes on from there.
+    pub record_from: f64,
 }
 
 /// What a real displacement sensor adds to the outputs: a first-order lag before the noise and a
@@ -99,6 +102,7 @@ impl Spec {
             columns,
             seed,
             rtol: DATA_RTOL,
+            record_from: 0.0,
         }
     }
 }
@@ -178,6 +182,9 @@ pub fn synthesize(spec: &Spec) -> Result<(Vec<&'static str>, Vec<Vec<f64>>), Err
             rows.push(row);
         },
     )?;
+    // the logger starts late: its first row is the first at or after `record_from`
+    let first = rows.partition_point(|r| r[0] < spec.record_from * (1.0 - 1e-12));
+    rows.drain(..first);
     let mut rng = Normal::new(spec.seed);
     for (j, _) in channels.iter().enumerate() {
         let col = 4 + j;

@@ -37,6 +37,35 @@ pub fn read(path: &Path) -> Result<Params, FileError> {
 
 /// Applies the parameters in `text` (the contents of `path`) over `base`.
 pub fn parse(path: &Path, text: &str, base: Params) -> Result<Params, FileError> {
+    let mut params = base;
+    for (key, v, at) in numbers(path, text)? {
+        params.set(&key, v).map_err(|e| match e {
+            ParamError::Unknown { .. } => located(
+                path,
+                text,
+                at,
+                Some(&key),
+                format!("unknown parameter '{key}' (`hasel params` lists them)"),
+            ),
+            invalid => located(path, text, at, Some(&key), invalid.to_string()),
+        })?;
+    }
+    let spans = key_spans(text);
+    params.validate().map_err(|e| {
+        let name = match &e {
+            ParamError::Invalid { name, .. } | ParamError::Unknown { name } => name.clone(),
+        };
+        match spans.iter().find(|(k, _)| *k == name) {
+            Some((_, at)) => located(path, text, *at, Some(&name), e.to_string()),
+            None => FileError::new(path, e.to_string()),
+        }
+    })?;
+    Ok(params)
+}
+
+/// The flat `key = number` assignments of the TOML `text` (the contents of `path`), each with
+/// the byte offset of its key.
+fn numbers(path: &Path, text: &str) -> Result<Vec<(String, f64, usize)>, FileError> {
     let table: toml::Spanned<toml::Table> = toml::from_str(text).map_err(|e| {
         let at = e.span().map_or(0, |s| s.start);
         located(
@@ -48,46 +77,66 @@ pub fn parse(path: &Path, text: &str, base: Params) -> Result<Params, FileError>
         )
     })?;
     let spans = key_spans(text);
-    let mut params = base;
-    for (key, value) in table.get_ref() {
-        let at = spans
-            .iter()
-            .find(|(k, _)| k == key)
-            .map_or(0, |(_, at)| *at);
-        let v = match value {
-            toml::Value::Float(f) => *f,
-            toml::Value::Integer(i) => *i as f64,
-            other => {
-                return Err(located(
+    table
+        .get_ref()
+        .iter()
+        .map(|(key, value)| {
+            let at = spans
+                .iter()
+                .find(|(k, _)| k == key)
+                .map_or(0, |(_, at)| *at);
+            match value {
+                toml::Value::Float(f) => Ok((key.clone(), *f, at)),
+                toml::Value::Integer(i) => Ok((key.clone(), *i as f64, at)),
+                other => Err(located(
                     path,
                     text,
                     at,
                     Some(key),
                     format!("{key} must be a number, not {}", other.type_str()),
-                ));
+                )),
             }
-        };
-        params.set(key, v).map_err(|e| match e {
-            ParamError::Unknown { .. } => located(
+        })
+        .collect()
+}
+
+/// A start file (`--start FILE.toml`): the heights `h1`, `h2`, `h3` [m] at a record's first
+/// sample, each given, finite and within ±Lv/2 of the parameters `params`.
+pub fn read_heights(path: &Path, params: &Params) -> Result<[f64; 3], FileError> {
+    let text = std::fs::read_to_string(path)
+        .map_err(|e| FileError::new(path, format!("cannot read: {e}")))?;
+    let mut h = [None; 3];
+    for (key, v, at) in numbers(path, &text)? {
+        let Some(i) = ["h1", "h2", "h3"].iter().position(|k| *k == key) else {
+            return Err(located(
                 path,
-                text,
+                &text,
                 at,
-                Some(key),
-                format!("unknown parameter '{key}' (`hasel params` lists them)"),
-            ),
-            invalid => located(path, text, at, Some(key), invalid.to_string()),
-        })?;
-    }
-    params.validate().map_err(|e| {
-        let name = match &e {
-            ParamError::Invalid { name, .. } | ParamError::Unknown { name } => name.clone(),
+                Some(&key),
+                format!("unknown key '{key}': a start file gives h1, h2 and h3 [m]"),
+            ));
         };
-        match spans.iter().find(|(k, _)| *k == name) {
-            Some((_, at)) => located(path, text, *at, Some(&name), e.to_string()),
-            None => FileError::new(path, e.to_string()),
+        if !(v.is_finite() && v.abs() < 0.5 * params.lv) {
+            return Err(located(
+                path,
+                &text,
+                at,
+                Some(&key),
+                format!(
+                    "{key} = {v}: a height must be finite and within +-Lv/2 = {}",
+                    0.5 * params.lv
+                ),
+            ));
         }
-    })?;
-    Ok(params)
+        h[i] = Some(v);
+    }
+    match h {
+        [Some(a), Some(b), Some(c)] => Ok([a, b, c]),
+        _ => Err(FileError::new(
+            path,
+            "a start file gives all of h1, h2 and h3 [m]",
+        )),
+    }
 }
 
 /// Byte offsets of the top-level `key =` assignments (the TOML parser's spans cover values).

@@ -38,6 +38,10 @@ pub struct Platform {
     nb: usize,
 }
 
+/// Newton iterations of [`Platform::settled_state`] at most: the settled states enter ẋ
+/// almost linearly, so two or three reach rounding.
+const SETTLE_NEWTON: usize = 8;
+
 /// Number of states of the paper's model.
 pub const N_STATES: usize = 3 * actuator::N;
 
@@ -349,6 +353,48 @@ impl Platform {
         Ok(self.with_effects_at_rest(&rest))
     }
 
+    /// A state on the slow manifold (src/model/model.md, "A start mid-run"): the actuators at
+    /// angles `theta`, (θ, l_p) on the invariant curve, p = 0, and every other state (the
+    /// charges, the effects' states) settled at command `u`: ẋ = 0 for those states with the
+    /// mechanics held. What a record that starts mid-run starts from: the angles move on the
+    /// slow time scale (tens of ms to 0.4 s), the rest relaxes in ns (the charges, the
+    /// momentum) or follows the angle and the command (creep, amplifier, trapped charge).
+    pub fn settled_state(&self, theta: [f64; 3], u: [f64; 3]) -> Result<Vec<f64>, ModelError> {
+        let blocks = self.each(|i, a| {
+            let t = theta[i];
+            Ok([t, a.l_p_on_curve(t)?, 0.0, 0.0, 0.0])
+        })?;
+        let mut x = self.with_effects_at_rest(&blocks);
+        let n = x.len();
+        let mechanical = |k: usize| k % self.nb <= actuator::P;
+        let free: Vec<usize> = (0..n).filter(|&k| !mechanical(k)).collect();
+        let scale = self.state_scales();
+        let (mut f, mut jac) = (vec![0.0; n], vec![0.0; n * n]);
+        // Newton on the settled states, scaled by their sizes; a direction that does not move
+        // ẋ (a hysteretic state that does not relax) keeps its rest value
+        for _ in 0..SETTLE_NEWTON {
+            self.rhs(&x, u, &mut f)?;
+            self.jacobian(&x, u, &mut jac)?;
+            let m = free.len();
+            let a = nalgebra::DMatrix::from_fn(m, m, |r, c| {
+                jac[free[c] * n + free[r]] * scale[free[c]] / scale[free[r]]
+            });
+            let b = nalgebra::DVector::from_fn(m, |r, _| -f[free[r]] / scale[free[r]]);
+            let svd = a.svd(true, true);
+            let eps = 1e-12 * svd.singular_values.max();
+            let Ok(step) = svd.solve(&b, eps) else {
+                break;
+            };
+            for (r, &k) in free.iter().enumerate() {
+                x[k] += step[r] * scale[k];
+            }
+            if step.amax() < 1e-13 {
+                break;
+            }
+        }
+        Ok(x)
+    }
+
     /// Where [`Platform::rest_state`] starts: each actuator at its own U = 0 equilibrium, as if
     /// the effects put no static load on it, and the effects' states at rest. A state inside
     /// the model's domain for a tenth of the work, enough where the state's value does not
@@ -449,6 +495,48 @@ pub(crate) mod tests {
 
     fn platform() -> Platform {
         Platform::new(Params::default()).unwrap()
+    }
+
+    /// The slow manifold's state: at the rest angles and 0 V, the rest state; mid-stroke at a
+    /// held command, every state but the mechanics' at rest (ẋ = 0 there), an amplifier's output
+    /// at the command and a creep element relaxed to the angle.
+    #[test]
+    fn a_settled_state_is_at_rest_in_all_but_the_mechanics() {
+        let p = platform();
+        let rest = p.rest_state().unwrap();
+        let theta = [0, 1, 2].map(|i| rest[i * actuator::N]);
+        let settled = p.settled_state(theta, [0.0; 3]).unwrap();
+        for (k, (a, b)) in settled.iter().zip(&rest).enumerate() {
+            assert!(
+                (a - b).abs() <= 1e-12 * p.state_scales()[k],
+                "state {k}: {a:e} {b:e}"
+            );
+        }
+        let mut params = Params::default();
+        params.set("tau_a", 0.02).unwrap();
+        params.set("k_v", 0.1).unwrap();
+        params.set("tau_v", 0.5).unwrap();
+        let p = Platform::new(params).unwrap();
+        let u = [40.0, 55.0, 20.0];
+        let x = p.settled_state([0.004, 0.008, 0.002], u).unwrap();
+        let mut dx = vec![0.0; x.len()];
+        p.rhs(&x, u, &mut dx).unwrap();
+        let scales = p.state_scales();
+        for (k, name) in p.state_names().iter().enumerate() {
+            // the charges relax at ~1e8 /s: a rate of 1e-3 scale/s is 1e-11 of the scale away
+            if !(name.starts_with("theta") || name.starts_with("l_p") || name.starts_with("p_")) {
+                assert!(
+                    dx[k].abs() <= 1e-3 * scales[k],
+                    "{name}: d/dt = {:e}",
+                    dx[k]
+                );
+            }
+        }
+        for i in 0..3 {
+            let at = |n: &str| x[p.state_index(&format!("{n}_{}", i + 1)).unwrap()];
+            assert!((at("U_amp") - u[i]).abs() < 1e-9, "{}", at("U_amp"));
+            assert!((at("z_v") - at("theta")).abs() < 1e-15);
+        }
     }
 
     /// A state away from rest with charges, momentum and a zipped electrode.

@@ -25,9 +25,20 @@ pub enum Interpolation {
     /// second derivative jumps at the samples, where the integrator stops.
     Pchip,
     /// Natural cubic spline: continuous second derivative, so the integrator steps across the
-    /// samples; the cheapest way to replay a densely sampled smooth signal (measured data).
+    /// samples; the cheapest way to replay a densely sampled smooth signal.
     Spline,
+    /// A measured command (src/identify/identify.md, "How an experiment is simulated"): the
+    /// natural spline through each smooth run of samples, and the command held across a step
+    /// (a change from one sample to the next larger than [`STEP_MIN`], at a rate [`STEP_RATIO`]
+    /// times both neighbouring intervals' rates: a gap of dropped rows is no step), where the integrator stops exactly, as with zero-order hold.
+    /// A staircase replays as steps, a sine or a chirp as one spline.
+    Measured,
 }
+
+/// A change between two samples of a measured command is a step when it exceeds this [V]…
+pub const STEP_MIN: f64 = 0.5;
+/// …and this many times the changes before and after it.
+pub const STEP_RATIO: f64 = 4.0;
 
 /// Why samples cannot make a sampled input.
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
@@ -56,6 +67,9 @@ pub struct Samples {
     interpolation: Interpolation,
     /// du/dt at the samples for the cubic interpolations (empty otherwise).
     slopes: Vec<[f64; 3]>,
+    /// For a measured command, the intervals [t_k, t_{k+1}) it steps in, by k, increasing.
+    #[serde(default)]
+    steps: Vec<usize>,
 }
 
 /// The three actuator voltages over time [V].
@@ -142,9 +156,23 @@ impl Input {
         if let Some(k) = (0..u.len()).find(|&k| !u[k].iter().all(|v| v.is_finite())) {
             return Err(InputError::VoltageNotFinite { sample: k, u: u[k] });
         }
+        let steps = if interpolation == Interpolation::Measured {
+            steps(&t, &u)
+        } else {
+            Vec::new()
+        };
         let slopes = match interpolation {
             Interpolation::Pchip => (0..t.len()).map(|k| pchip_slope(&t, &u, k)).collect(),
             Interpolation::Spline => spline_slopes(&t, &u),
+            Interpolation::Measured => runs(t.len(), &steps)
+                .flat_map(|(a, b)| {
+                    if a == b {
+                        vec![[0.0; 3]]
+                    } else {
+                        spline_slopes(&t[a..=b], &u[a..=b])
+                    }
+                })
+                .collect(),
             Interpolation::ZeroOrderHold | Interpolation::Linear => Vec::new(),
         };
         Ok(Input::Sampled(Samples {
@@ -152,6 +180,7 @@ impl Input {
             u,
             interpolation,
             slopes,
+            steps,
         }))
     }
 
@@ -198,6 +227,15 @@ impl Input {
             }
             Interpolation::Pchip => (segment(s.slopes[k], s.slopes[k + 1]), ts[k + 1]),
             Interpolation::Spline => (Piece::Spline(s), ts[ts.len() - 1]),
+            Interpolation::Measured => {
+                // the step at or after interval k: held through it, else the spline up to it
+                let j = s.steps.partition_point(|&step| step < k);
+                match s.steps.get(j) {
+                    Some(&step) if step == k => (Piece::Constant(u[k]), ts[k + 1]),
+                    Some(&step) => (Piece::Spline(s), ts[step]),
+                    None => (Piece::Spline(s), ts[ts.len() - 1]),
+                }
+            }
         }
     }
 
@@ -227,6 +265,36 @@ fn pchip_slope(t: &[f64], u: &[[f64; 3]], k: usize) -> [f64; 3] {
         let (w0, w1) = (2.0 * h1 + h0, h1 + 2.0 * h0);
         (w0 + w1) / (w0 / d0 + w1 / d1)
     })
+}
+
+/// The intervals a measured command steps in (see [`Interpolation::Measured`]), on any of the
+/// three channels.
+fn steps(t: &[f64], u: &[[f64; 3]]) -> Vec<usize> {
+    // rates, not differences: a gap of dropped rows is no step
+    let rate = |k: usize, i: usize| -> f64 {
+        if k + 1 < u.len() {
+            (u[k + 1][i] - u[k][i]).abs() / (t[k + 1] - t[k])
+        } else {
+            0.0
+        }
+    };
+    (0..u.len() - 1)
+        .filter(|&k| {
+            (0..3).any(|i| {
+                let before = if k > 0 { rate(k - 1, i) } else { 0.0 };
+                (u[k + 1][i] - u[k][i]).abs() > STEP_MIN
+                    && rate(k, i) > STEP_RATIO * before.max(rate(k + 1, i))
+            })
+        })
+        .collect()
+}
+
+/// The smooth runs of samples between `steps` of a command of `n` samples, as first and last
+/// sample (a run of one sample is its own spline: slope 0).
+fn runs(n: usize, steps: &[usize]) -> impl Iterator<Item = (usize, usize)> + '_ {
+    let starts = std::iter::once(0).chain(steps.iter().map(|&k| k + 1));
+    let ends = steps.iter().copied().chain(std::iter::once(n - 1));
+    starts.zip(ends)
 }
 
 /// Knot slopes of the natural cubic spline (zero second derivative at both ends), from its
@@ -332,6 +400,40 @@ impl Piece<'_> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A measured staircase replays as steps: held across each, the integrator stopping at the
+    /// sample after it; a sine sampled the same way stays one spline.
+    #[test]
+    fn a_measured_command_steps_where_it_jumps() {
+        let t: Vec<f64> = (0..=40).map(|k| k as f64 * 1e-3).collect();
+        let stair = |tk: f64| {
+            if tk < 0.0155 {
+                10.0
+            } else if tk < 0.0305 {
+                40.0
+            } else {
+                25.0
+            }
+        };
+        let u: Vec<[f64; 3]> = t.iter().map(|&tk| [stair(tk), 0.0, 1.0]).collect();
+        let input = Input::sampled(t.clone(), u, Interpolation::Measured).unwrap();
+        // held across the step in [15, 16) ms, no overshoot anywhere
+        let (piece, end) = input.piece_at(0.0152);
+        assert!(matches!(piece, Piece::Constant(v) if v[0] == 10.0) && end == 0.016);
+        let (_, end) = input.piece_at(0.002);
+        assert_eq!(end, 0.015);
+        for k in 0..4000 {
+            let v = input.value(k as f64 * 1e-5)[0];
+            assert!(
+                (10.0 - 1e-9..=40.0 + 1e-9).contains(&v),
+                "{v} at {} ms",
+                k as f64 * 1e-2
+            );
+        }
+        let u: Vec<[f64; 3]> = t.iter().map(|&tk| [60.0 * (30.0 * tk).sin(); 3]).collect();
+        let input = Input::sampled(t, u, Interpolation::Measured).unwrap();
+        assert!(matches!(input.piece_at(0.0), (Piece::Spline(_), end) if end == 0.04));
+    }
 
     #[test]
     fn paper_sine_has_its_phases() {

@@ -155,6 +155,32 @@ impl Sample {
     }
 }
 
+/// How far back the command before a mid-run start is continued [s]: past the longest
+/// transport delay a fit may give the `delay` effect.
+const PRE_RUN: f64 = 0.05;
+/// The held steps it is continued in [s].
+const PRE_RUN_STEP: f64 = 1e-3;
+
+/// Where a run starts (src/identify/identify.md, "Records that start mid-run").
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Start {
+    /// The rest state at U = 0, the command 0 before the run.
+    Rest,
+    /// Mid-run: the actuators at these angles [rad] on the slow manifold
+    /// ([`Platform::settled_state`]) at the run's first command, which held before the run.
+    Settled([f64; 3]),
+}
+
+impl Start {
+    /// The state it names for `model`, whose first command is `u0`.
+    pub fn state(&self, model: &Platform, u0: [f64; 3]) -> Result<Vec<f64>, ModelError> {
+        match *self {
+            Start::Rest => model.rest_state(),
+            Start::Settled(theta) => model.settled_state(theta, u0),
+        }
+    }
+}
+
 /// A running simulation of the platform: its model, the integrator and the input last applied.
 #[derive(Clone, Debug)]
 pub struct Simulator {
@@ -183,6 +209,36 @@ impl Simulator {
     pub fn new(model: Platform, t0: f64, rtol: f64) -> Result<Simulator, SimError> {
         let x0 = model.rest_state()?;
         Simulator::from_state(model, t0, &x0, rtol)
+    }
+
+    /// Starts at `start` at `t0`, where `input` begins: from rest (the command 0 before), or
+    /// mid-run, where what a transport delay replays first is the command before `t0`: the
+    /// trend of its first samples continued back over [`PRE_RUN`] in held steps of
+    /// [`PRE_RUN_STEP`], its first value before that.
+    pub fn starting(
+        model: Platform,
+        start: &Start,
+        input: &Input,
+        t0: f64,
+        rtol: f64,
+    ) -> Result<Simulator, SimError> {
+        let u0 = input.value(t0);
+        let x0 = start.state(&model, u0)?;
+        let mut sim = Simulator::from_state(model, t0, &x0, rtol)?;
+        if let Start::Settled(_) = start {
+            let slope = input.value(t0 + PRE_RUN_STEP);
+            let steps = (PRE_RUN / PRE_RUN_STEP) as usize;
+            sim.history = std::iter::once((f64::NEG_INFINITY, u0))
+                .chain((1..=steps).rev().map(|k| {
+                    let back = k as f64 * PRE_RUN_STEP;
+                    (
+                        t0 - back,
+                        [0, 1, 2].map(|i| u0[i] - (slope[i] - u0[i]) * k as f64),
+                    )
+                }))
+                .collect();
+        }
+        Ok(sim)
     }
 
     /// Starts at state `x0` at `t0`.

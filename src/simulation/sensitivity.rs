@@ -9,7 +9,7 @@
 //! equation. The delay `tau_d` acts on the input's timing, not on f: a direction that moves it
 //! is refused.
 
-use super::{Driven, Input, Observer, Sample, SimError, Simulator};
+use super::{Driven, Input, Observer, Sample, SimError, Simulator, Start};
 use crate::model::{Params, Platform};
 use crate::solver::sensitivity::{ParametricSystem, Sensitivities};
 use crate::solver::{OdeSystem, Radau5, RhsError};
@@ -128,11 +128,12 @@ impl Observer for Follower<'_> {
     }
 }
 
-/// Simulates `input` from the rest state of `params` at `times[0]` (relative tolerance `rtol`),
-/// sampled at `times`, with the outputs' sensitivities to each of `directions`.
+/// Simulates `input` from `start` of `params` at `times[0]` (relative tolerance `rtol`), sampled
+/// at `times`, with the outputs' sensitivities to each of `directions`.
 pub fn simulate_sensitive(
     params: &Params,
     directions: &[Direction],
+    start: &Start,
     input: &Input,
     times: &[f64],
     rtol: f64,
@@ -166,11 +167,12 @@ pub fn simulate_sensitive(
         }
     }
     let t0 = times.first().copied().unwrap_or(0.0);
-    let rest = base.rest_state()?;
+    let u0 = input.value(t0);
+    let x0 = start.state(&base, u0)?;
     let mut s0 = Vec::with_capacity(n * models.len());
     for (m, step) in models.iter().zip(&steps) {
-        let rest_j = m.rest_state()?;
-        s0.extend(rest_j.iter().zip(&rest).map(|(a, b)| (a - b) / step));
+        let x0_j = start.state(m, u0)?;
+        s0.extend(x0_j.iter().zip(&x0).map(|(a, b)| (a - b) / step));
     }
     let mut follower = Follower {
         base: &base,
@@ -186,7 +188,7 @@ pub fn simulate_sensitive(
             outputs: Vec::with_capacity(times.len() * models.len()),
         },
     };
-    let mut sim = Simulator::from_state(base.clone(), t0, &rest, rtol)?;
+    let mut sim = Simulator::starting(base.clone(), start, input, t0, rtol)?;
     sim.run_observed(input, times, &mut follower)?;
     Ok(follower.out)
 }
@@ -229,7 +231,8 @@ mod tests {
                 step: 1e-6,
             })
             .collect();
-        let got = simulate_sensitive(params, &directions, &input, &times, 1e-8).unwrap();
+        let got =
+            simulate_sensitive(params, &directions, &Start::Rest, &input, &times, 1e-8).unwrap();
         let run = |p: &Params| {
             let mut sim = Simulator::new(Platform::new(p.clone()).unwrap(), 0.0, 1e-12).unwrap();
             let mut out = Vec::new();

@@ -4,6 +4,7 @@
 use std::path::PathBuf;
 
 use hasel_fmu::identify::Experiment;
+use hasel_fmu::identify::conditions::{Choice, StartChoice};
 use hasel_fmu::identify::synth::Columns;
 use hasel_fmu::io::{input_file, params_file};
 use hasel_fmu::model::Params;
@@ -23,6 +24,49 @@ pub fn load_params(path: &Option<PathBuf>) -> Result<Params, Error> {
 /// The experiment files, read and checked.
 pub fn read_all(paths: &[PathBuf]) -> Result<Vec<Experiment>, Error> {
     paths.iter().map(|p| Ok(Experiment::read(p)?)).collect()
+}
+
+/// How the records were taken, shared by `identify` and `diagnose` (src/identify/identify.md,
+/// "Records that start mid-run" and "Sensor lag").
+#[derive(clap::Args)]
+pub struct ConditionArgs {
+    /// Where each record starts: rest, auto (estimated where the first samples are not the rest
+    /// state's), estimate, or FILE.toml giving the heights h1, h2, h3 [m] at the first sample
+    #[arg(
+        long,
+        default_value = "rest",
+        value_name = "rest|auto|estimate|FILE.toml"
+    )]
+    start: String,
+    /// The sensor's lag: stated in seconds (0: none), or estimate (within 0-1 ms)
+    #[arg(long, default_value = "0", value_name = "SECONDS|estimate")]
+    lag: String,
+}
+
+impl ConditionArgs {
+    /// What to estimate of the records' conditions, over the start parameters `params`.
+    pub fn choice(&self, params: &Params) -> Result<Choice, Error> {
+        let start = match self.start.as_str() {
+            "auto" => StartChoice::Auto,
+            "rest" => StartChoice::Rest,
+            "estimate" => StartChoice::Estimate,
+            file => StartChoice::Heights(params_file::read_heights(file.as_ref(), params)?),
+        };
+        let lag = match self.lag.as_str() {
+            "estimate" => None,
+            text => match text.parse::<f64>() {
+                Ok(v) if v.is_finite() && v >= 0.0 => Some(v),
+                _ => {
+                    return Err(Error::flag(
+                        "lag",
+                        text,
+                        "expected `estimate` or a lag in seconds >= 0",
+                    ));
+                }
+            },
+        };
+        Ok(Choice { start, lag })
+    }
 }
 
 /// The recorded outputs of `--columns h|tip`.

@@ -4,7 +4,7 @@ use std::path::PathBuf;
 
 use hasel_fmu::diagnose::{self, Options, report};
 
-use crate::common::{load_params, read_all};
+use crate::common::{ConditionArgs, load_params, read_all};
 use crate::error::Error;
 
 #[derive(clap::Args)]
@@ -33,6 +33,8 @@ pub struct Args {
     /// candidate (reported)
     #[arg(long, value_name = "SECONDS", default_value_t = diagnose::REFIT_BUDGET_S as f64)]
     refit_budget: f64,
+    #[command(flatten)]
+    conditions: ConditionArgs,
 }
 
 pub fn run(a: Args) -> Result<(), Error> {
@@ -55,6 +57,7 @@ pub fn run(a: Args) -> Result<(), Error> {
         refits: a.refits,
         base_range: a.base_range,
         refit_budget: std::time::Duration::from_secs_f64(a.refit_budget),
+        conditions: a.conditions.choice(&start)?,
         ..Options::default()
     };
     let d = diagnose::diagnose(&start, experiments, &opts)?;

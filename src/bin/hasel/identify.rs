@@ -9,7 +9,7 @@ use hasel_fmu::io::csv::write_atomic;
 use hasel_fmu::diagnose::hidden::{self, Truth};
 use hasel_fmu::model::Params;
 
-use crate::common::{InputArgs, columns, load_params, read_all};
+use crate::common::{ConditionArgs, InputArgs, columns, load_params, read_all};
 use crate::error::Error;
 
 /// A parameter file over the defaults with `--set NAME=VALUE` overrides, validated.
@@ -51,6 +51,8 @@ pub struct Args {
     /// Bounds of a parameter, NAME=LO:HI (default [start/20, start*20])
     #[arg(long = "bound", value_name = "NAME=LO:HI")]
     bounds: Vec<String>,
+    #[command(flatten)]
+    conditions: ConditionArgs,
 }
 
 #[derive(clap::Args)]
@@ -91,6 +93,13 @@ pub struct SynthArgs {
     /// Sample interval [s]
     #[arg(long, default_value_t = 1e-3)]
     dt: f64,
+    /// The logger starts this long after the drive [s]: a record that starts mid-run, its time
+    /// column going on from there (the device is driven from rest at 0)
+    #[arg(long, default_value_t = 0.0, value_name = "SECONDS")]
+    record_from: f64,
+    /// A first-order lag of the sensor [s], before the noise
+    #[arg(long, default_value_t = 0.0, value_name = "SECONDS")]
+    sensor_lag: f64,
     #[arg(long, value_name = "FILE.csv")]
     out: PathBuf,
 }
@@ -99,7 +108,10 @@ pub fn run(a: Args) -> Result<(), Error> {
     let start = load_params(&a.params)?;
     let estimation = read_all(&a.experiments)?;
     let validation = read_all(&a.validate)?;
-    let mut opts = Options::default();
+    let mut opts = Options {
+        conditions: Some(a.conditions.choice(&start)?),
+        ..Options::default()
+    };
     if !a.free.is_empty() {
         opts.free = a.free.clone();
     }
@@ -194,7 +206,16 @@ pub fn synth(a: SynthArgs) -> Result<(), Error> {
             columns,
             seed: a.seed,
             rtol: DATA_RTOL,
+            record_from: 0.0,
         },
+    };
+    let spec = Spec {
+        record_from: a.record_from,
+        sensor: Sensor {
+            lag: a.sensor_lag,
+            ..spec.sensor
+        },
+        ..spec
     };
     let (header, rows) = synth::synthesize(&spec)?;
     let n = rows.len();

@@ -47,6 +47,7 @@ pub fn run(
     columns: Columns,
     only: Option<String>,
     artifacts: bool,
+    protocols: bool,
 ) -> Result<(), Error> {
     say!(
         "diagnosis of hidden mechanisms: {seeds} seed(s) per case, {columns:?} data{}, two 6 s experiments at 1 ms (3pi and 11 rad/s), target <= 30 s per diagnosis, typical <= 10 s (issue #11)",
@@ -66,6 +67,8 @@ pub fn run(
     let mut total = 0;
     let mut slowest: f64 = 0.0;
     let mut stages: BTreeMap<String, f64> = BTreeMap::new();
+    // per protocol (its drive, and whether recorded mid-run): (right, cases)
+    let mut by_protocol: BTreeMap<String, (usize, usize)> = BTreeMap::new();
     for truth in Truth::all() {
         // `--only coupling` runs every single case of the family, `--only coupling_tilt` one,
         // `--only two` every two-mechanism case
@@ -81,6 +84,18 @@ pub fn run(
             let mut case = hidden::hide(truth, seed)?;
             if artifacts {
                 case = case.with_artifacts(seed);
+            }
+            let mut protocol = "sines".to_string();
+            if protocols {
+                // drawn per case, apart from the device's seed
+                let draw = (total as u64).wrapping_mul(7919).wrapping_add(seed);
+                let p = hidden::Protocol::draw(draw);
+                protocol = format!("{} {} ms", p.name(), p.dt * 1e3);
+                case = case.with_protocol(p);
+                if draw % 2 == 1 {
+                    case = case.mid_run(1.3);
+                    protocol += " mid-run";
+                }
             }
             let exps = case.experiments(columns, 6.0, seed)?;
             let d = diagnose::diagnose(&Params::default(), exps, &Options::default())?;
@@ -102,6 +117,9 @@ pub fn run(
             }
             total += 1;
             right_cases += ok as usize;
+            let score = by_protocol.entry(protocol.clone()).or_default();
+            score.0 += ok as usize;
+            score.1 += 1;
             if pair {
                 pair_cases += 1;
                 pair_right += ok as usize;
@@ -119,7 +137,7 @@ pub fn run(
                 .collect();
             let forms: Vec<&str> = d.forms.iter().map(|f| f.name).collect();
             say!(
-                "  {:<26} seed {seed}: {:<28} {} {:5.1} s | held-out fit {} -> {} | {gap:.2} below floor | excess after {} % | {} outlier(s) | {}",
+                "  {:<26} seed {seed}: {:<28} {} {:5.1} s | {protocol} | held-out fit {} -> {} | {gap:.2} below floor | excess after {} % | {} outlier(s) | {}",
                 truth.name(),
                 format!("{got} [{}]", forms.join("+")),
                 if ok { "ok  " } else { "MISS" },
@@ -206,6 +224,12 @@ pub fn run(
         if typical <= 10.0 { "met" } else { "MISSED" },
         if slowest <= 30.0 { "met" } else { "MISSED" }
     );
+    if protocols {
+        say!("right per protocol:");
+        for (p, (ok, n)) in &by_protocol {
+            say!("  {p:<24} {ok}/{n}");
+        }
+    }
     say!("time by stage over all cases:");
     for (stage, s) in &stages {
         say!("  {stage:<40} {s:8.1} s");

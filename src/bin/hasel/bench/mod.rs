@@ -45,6 +45,11 @@ pub struct Args {
     /// With --diagnose: record every case as lab data (sensor lag, resolution, outliers, dropouts)
     #[arg(long)]
     artifacts: bool,
+    /// With --diagnose: record every case with a lab protocol drawn at random (staircase,
+    /// chirp, two voltage levels or the sines; 0.5, 1 or 2 ms; every other case from 1.3 s into
+    /// the drive) and print the score per protocol
+    #[arg(long)]
+    protocols: bool,
 }
 
 pub fn run(a: Args) -> Result<(), Error> {
@@ -54,6 +59,7 @@ pub fn run(a: Args) -> Result<(), Error> {
             crate::common::columns(&a.columns),
             a.only,
             a.artifacts,
+            a.protocols,
         );
     }
     if a.identify {
