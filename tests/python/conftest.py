@@ -8,6 +8,14 @@ import pytest
 ROOT = pathlib.Path(__file__).resolve().parents[2]
 
 
+def cross_built(triple, name):
+    """The hasel command `name` cross-built for `triple` (ci/lib.sh, cross_build cli): the newer of
+    the profiles release (ci/platforms.sh) and cross-test (ci/test.sh); None if neither is there."""
+    found = [p for p in (ROOT / "target" / "cross" / "cli" / triple / profile / name
+                         for profile in ("release", "cross-test")) if p.exists()]
+    return max(found, key=lambda p: p.stat().st_mtime, default=None)
+
+
 def built(variable, default, how):
     """The file named by the environment `variable`, else `default`; a clear failure if missing."""
     path = pathlib.Path(os.environ.get(variable, default))

@@ -4,10 +4,11 @@ slice; FMI 3.0's x86_64-darwin and aarch64-darwin are one architecture each. Eve
 dylib that exports exactly the FMI functions of its version, depends on /usr/lib/libSystem.B.dylib
 alone, names its minimum macOS (10.12 on x86_64, 11.0 on arm64: Rust's minimums for the targets),
 and the arm64 one carries a code signature (macOS refuses unsigned arm64 code) whose page hashes
-match the file, checked here by reading the signature's CodeDirectory.
+match the file, checked here by reading the signature's CodeDirectory. The hasel command for macOS,
+one executable each architecture, is checked the same way but for the exports.
 
-`bash ci/platforms.sh` builds the macOS libraries; `ci/test.sh` does not (each cold cross build
-costs more minutes than CI's budget leaves), so these tests skip, saying so, on FMUs without them.
+`ci/test.sh` builds the macOS libraries of both platform FMUs; the inverse FMU's and the commands
+take `bash ci/platforms.sh` (CI's time), so their tests skip, saying so, when they are not there.
 """
 import hashlib
 import pathlib
@@ -17,6 +18,7 @@ import subprocess
 import zipfile
 
 import pytest
+from conftest import cross_built
 from test_binary import FMI2_FUNCTIONS, FMI3_FUNCTIONS
 
 LLVM = pathlib.Path("/usr/lib/llvm-16/bin")
@@ -34,8 +36,11 @@ def member(fmu, folder, tmp_path_factory):
     with zipfile.ZipFile(fmu) as z:
         name = next((n for n in z.namelist() if n.startswith(f"binaries/{folder}/")), None)
         if name is None:
-            # ci/test.sh cross-builds only the Windows libraries (CI's time): README, "Windows and macOS"
-            pytest.skip(f"{fmu} has no binaries/{folder}/: `bash ci/platforms.sh` builds the macOS libraries")
+            if "HaselInverse" in str(fmu):
+                # ci/test.sh builds the platform FMUs' libraries only (CI's time): README, "Windows and macOS"
+                pytest.skip(f"{fmu} has no binaries/{folder}/: `bash ci/platforms.sh` builds it")
+            pytest.fail(f"{fmu} has no binaries/{folder}/: build the FMUs with `bash ci/test.sh` or "
+                        "`bash ci/platforms.sh`")
         assert name.endswith(".dylib"), name
         return pathlib.Path(z.extract(name, tmp_path_factory.mktemp("dylib")))
 
@@ -90,17 +95,22 @@ def load_commands(path):
     return text, commands
 
 
+def check_load_commands(path, arch, filetype):
+    """A Mach-O of `filetype` (DYLIB or EXECUTE) depending on libSystem alone, with its minimum macOS."""
+    text, commands = load_commands(path)
+    assert re.search(rf"\b{filetype}\b", text.split("Load command 0")[0]), text[:600]
+    dependencies = [f["name"].split(" (offset")[0] for c, f in commands if c == "LC_LOAD_DYLIB"]
+    assert dependencies == ["/usr/lib/libSystem.B.dylib"], (arch, dependencies)
+    # before macOS 10.14 the minimum is written as LC_VERSION_MIN_MACOSX, from it on as
+    # LC_BUILD_VERSION with the platform
+    minimum = [f["version"] for c, f in commands if c == "LC_VERSION_MIN_MACOSX"]
+    minimum += [f["minos"] for c, f in commands if c == "LC_BUILD_VERSION" and f["platform"] == "macos"]
+    assert minimum == [MINIMUM[arch]], (arch, minimum)
+
+
 def test_a_dylib_depending_on_libsystem_alone_with_its_minimum_macos(library, tmp_path):
     for arch, path in slices(library, tmp_path).items():
-        text, commands = load_commands(path)
-        assert re.search(r"\bDYLIB\b", text.split("Load command 0")[0]), text[:600]
-        dependencies = [f["name"].split(" (offset")[0] for c, f in commands if c == "LC_LOAD_DYLIB"]
-        assert dependencies == ["/usr/lib/libSystem.B.dylib"], (arch, dependencies)
-        # before macOS 10.14 the minimum is written as LC_VERSION_MIN_MACOSX, from it on as
-        # LC_BUILD_VERSION with the platform
-        minimum = [f["version"] for c, f in commands if c == "LC_VERSION_MIN_MACOSX"]
-        minimum += [f["minos"] for c, f in commands if c == "LC_BUILD_VERSION" and f["platform"] == "macos"]
-        assert minimum == [MINIMUM[arch]], (arch, minimum)
+        check_load_commands(path, arch, "DYLIB")
 
 
 def code_signature_pages(path):
@@ -141,3 +151,15 @@ def test_the_arm64_code_is_signed_and_the_signature_matches(library, tmp_path):
         if arch == "arm64":
             flags, pages = code_signature_pages(path)
             assert flags & 0x2 and pages > 100  # ad hoc (no certificate), as the linker signs
+
+
+@pytest.mark.parametrize("arch,triple", [("x86_64", "x86_64-apple-darwin"), ("arm64", "aarch64-apple-darwin")])
+def test_the_hasel_command(arch, triple):
+    path = cross_built(triple, "hasel")
+    if path is None:
+        pytest.skip(f"no hasel command for {triple}: `bash ci/platforms.sh` builds it")
+    assert llvm("llvm-lipo", "-archs", path).split() == [arch]
+    check_load_commands(path, arch, "EXECUTE")
+    if arch == "arm64":
+        flags, _ = code_signature_pages(path)
+        assert flags & 0x2

@@ -20,7 +20,12 @@ round the last bit differently. The solver is deterministic and smooth in its in
 difference stays near the rounding level unless it flips a step-size decision, which would still
 keep the runs within the solver's error control; 1e-12 m is far below anything physical and far
 above rounding.
+
+The hasel command for Windows (hasel.exe, cross-built by ci/test.sh and ci/platforms.sh) runs under
+Wine too: `simulate`, its CSV compared with the Linux command's, and `identify`, its estimates
+compared with Linux's in units of their standard errors (IDENTIFY_TOLERANCE says why).
 """
+import json
 import os
 import pathlib
 import re
@@ -30,6 +35,7 @@ import subprocess
 import zipfile
 
 import pytest
+from conftest import cross_built
 from test_binary import FMI2_FUNCTIONS, FMI3_FUNCTIONS
 
 ROOT = pathlib.Path(__file__).resolve().parents[2]
@@ -167,18 +173,24 @@ def test_the_windows_dll_runs_under_wine_as_the_linux_library_runs(version, prog
     assert worst <= TOLERANCE
 
 
-HASEL_EXE = ROOT / "target" / "cross" / "cli" / "x86_64-pc-windows-gnu" / "release" / "hasel.exe"
+@pytest.fixture(scope="module")
+def hasel_exe(programs):
+    """hasel.exe beside the bcryptprimitives.dll stand-in (built by ci/test.sh and ci/platforms.sh)."""
+    exe = cross_built("x86_64-pc-windows-gnu", "hasel.exe")
+    if exe is None:
+        pytest.fail("hasel.exe is missing: `bash ci/test.sh` or `bash ci/platforms.sh` builds it")
+    return shutil.copy(exe, programs)
 
 
-def test_hasel_exe_simulates_under_wine_as_on_linux(programs, wine_env, hasel_path, tmp_path):
-    """The hasel command for Windows (built by `bash ci/platforms.sh`, not by ci/test.sh: CI's time):
-    2 s of the paper's excitation, the CSV compared with the Linux command's. The inputs differ by a
+def wine_hasel(hasel_exe, wine_env, *args):
+    return subprocess.run(["wine", hasel_exe, *map(str, args)], env=wine_env, check=True, capture_output=True,
+                          text=True, timeout=300).stdout
+
+
+def test_hasel_exe_simulates_under_wine_as_on_linux(hasel_exe, wine_env, hasel_path, tmp_path):
+    """2 s of the paper's excitation, the CSV compared with the Linux command's. The inputs differ by a
     last bit of sin (msvcrt's under Wine), the outputs by as little (measured: 9e-17 m)."""
-    if not HASEL_EXE.exists():
-        pytest.skip(f"{HASEL_EXE} is missing: `bash ci/platforms.sh` builds it")
-    exe = shutil.copy(HASEL_EXE, programs)  # beside the bcryptprimitives.dll stand-in
-    subprocess.run(["wine", exe, "simulate", "--t-end", "2", "--out", windows_path(tmp_path / "win.csv")],
-                   env=wine_env, check=True, capture_output=True, timeout=300)
+    wine_hasel(hasel_exe, wine_env, "simulate", "--t-end", "2", "--out", windows_path(tmp_path / "win.csv"))
     subprocess.run([hasel_path, "simulate", "--t-end", "2", "--out", tmp_path / "linux.csv"], check=True,
                    capture_output=True)
     rows = [[line.split(",") for line in (tmp_path / f).read_text().splitlines()] for f in ("win.csv", "linux.csv")]
@@ -188,3 +200,38 @@ def test_hasel_exe_simulates_under_wine_as_on_linux(programs, wine_env, hasel_pa
     print("hasel.exe simulate under Wine vs Linux, largest difference per column:", worst)
     assert worst["t"] == 0 and max(worst[c] for c in ("U1", "U2", "U3")) <= 1e-12
     assert max(v for c, v in worst.items() if c[0] in "ht") <= TOLERANCE
+
+
+# what identification may differ by between the platforms, as a fraction of each estimate's
+# standard error: the simulations differ in last bits (exp and pow are msvcrt's under Wine), which
+# can move where Levenberg-Marquardt stops by its convergence tolerance, not by anything the data
+# could tell apart
+IDENTIFY_TOLERANCE = 1e-3
+
+
+def test_hasel_exe_identifies_under_wine_as_on_linux(hasel_exe, wine_env, hasel_path, tmp_path):
+    """An experiment written by the Linux command (2 s, a stiffer actuator 1, 0.5 % noise), fitted by
+    both commands on Kb_1 and b_1: the same estimates, standard errors and fit."""
+    experiment = tmp_path / "exp.csv"
+    subprocess.run([hasel_path, "synth", "--t-end", "2", "--set", "Kb_1=0.31", "--noise", "0.005",
+                    "--out", experiment], check=True, capture_output=True)
+    fit = ["--free", "Kb_1,b_1"]
+    subprocess.run([hasel_path, "identify", experiment, *fit, "--out", tmp_path / "linux"], check=True,
+                   capture_output=True)
+    wine_hasel(hasel_exe, wine_env, "identify", windows_path(experiment), *fit, "--out",
+               windows_path(tmp_path / "win"))
+    linux, win = (json.loads((tmp_path / d / "identification.json").read_text()) for d in ("linux", "win"))
+    assert (tmp_path / "win" / "report.md").exists() and (tmp_path / "win" / "fit_0.png").exists()
+    assert win["fit"]["estimation"].keys() == linux["fit"]["estimation"].keys()
+    worst = 0.0
+    for name in ("Kb_1", "b_1"):
+        lp, wp = linux["parameters"][name], win["parameters"][name]
+        assert lp["estimated"] and wp["estimated"]
+        worst = max(worst, abs(wp["value"] - lp["value"]) / lp["std_error"],
+                    abs(wp["std_error"] - lp["std_error"]) / lp["std_error"])
+    print(f"hasel.exe identify under Wine vs Linux: largest difference {worst:.3g} standard errors "
+          f"(Kb_1 {linux['parameters']['Kb_1']['value']:.6g})")
+    assert worst <= IDENTIFY_TOLERANCE
+    for experiment, scores in linux["fit"]["estimation"].items():
+        for output, score in scores.items():
+            assert abs(win["fit"]["estimation"][experiment][output] - score) <= 0.01 + 1e-9  # one step of the printed 0.01 %
