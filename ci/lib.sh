@@ -275,13 +275,14 @@ pack_platforms() {
 # it fresh), for TRIPLE from cross_build's (cli, the same profile and environment).
 build_wheel() {
     local args=() env=()
+    ensure_venv
     if (($#)); then
+        darwin_sdk
         mapfile -t env < <(cross_env "$1")
         args=(--target "$1" -Z build-std=std,panic_unwind --target-dir "$CROSS_DIR/cli" --profile "$CROSS_PROFILE")
     else
         args=(--release)
     fi
-    ensure_venv
     mkdir -p python/hasel_fmu/fmu
     cp fmu/HaselPlatform.fmu fmu/HaselPlatform-fmi3.fmu fmu/HaselInverse.fmu python/hasel_fmu/fmu/
     step "the Python wheel for ${1:-Linux} (maturin)"
