@@ -14,13 +14,12 @@ INVERSE_LIB="$INVERSE_TARGET_DIR/$FMU_TARGET/release/libhasel_fmu.so"
 FMU3_TARGET_DIR="$ROOT/target/fmi3"
 FMU3_LIB="$FMU3_TARGET_DIR/$FMU_TARGET/release/libhasel_fmu.so"
 
-step() { printf '\n== %s\n' "$*"; }
+step() { printf '\n== [%d s] %s\n' "$SECONDS" "$*"; }
 
-ensure_apt() {
-    # libclang-dev: bindgen of the `fmi` crate (Rust import test) and of sundials-sys; libtbb12:
-    # ecospy; libsundials-dev: native CVODE in hasel bench's `compare` feature
+# Installs those of the Debian packages named that are missing.
+ensure_packages() {
     local missing=()
-    for pkg in libclang-dev libtbb12 libsundials-dev; do
+    for pkg in "$@"; do
         dpkg -s "$pkg" >/dev/null 2>&1 || missing+=("$pkg")
     done
     if ((${#missing[@]})); then
@@ -28,6 +27,12 @@ ensure_apt() {
         apt-get update -qq
         DEBIAN_FRONTEND=noninteractive apt-get install -y -qq "${missing[@]}" >/dev/null
     fi
+}
+
+ensure_apt() {
+    # libclang-dev: bindgen of the `fmi` crate (Rust import test) and of sundials-sys; libtbb12:
+    # ecospy; libsundials-dev: native CVODE in hasel bench's `compare` feature
+    ensure_packages libclang-dev libtbb12 libsundials-dev
 }
 
 ensure_venv() {
@@ -60,15 +65,16 @@ ensure_fmi_sim() {
 }
 
 # A cdylib built with other features needs a target folder of its own (its file name would
-# clash); seeded once from the main build's artifacts, so that only this crate compiles again,
-# not its dependencies (a cold build of them takes minutes on two cores).
+# clash); seeded once from the build of the same target in folder FROM (default: the main
+# build's) for TRIPLE and cargo profile PROFILE (default release), so that only this crate compiles
+# again, not its dependencies (a cold build of them takes minutes on two cores).
 seed_target_dir() {
-    local dir="$1"
-    if [ ! -d "$dir/$FMU_TARGET" ] && [ -d "target/$FMU_TARGET" ]; then
-        mkdir -p "$dir/release"
-        cp -a "target/$FMU_TARGET" "$dir/"
+    local dir="$1" from="${2:-target}" triple="${3:-$FMU_TARGET}" profile="${4:-release}"
+    if [ ! -d "$dir/$triple/$profile" ] && [ -d "$from/$triple/$profile" ]; then
+        mkdir -p "$dir/$triple" "$dir/$profile"
+        cp -a "$from/$triple/$profile" "$dir/$triple/"
         for sub in build deps .fingerprint; do
-            if [ -d "target/release/$sub" ]; then cp -a "target/release/$sub" "$dir/release/"; fi
+            if [ -d "$from/$profile/$sub" ] && [ ! -d "$dir/$profile/$sub" ]; then cp -a "$from/$profile/$sub" "$dir/$profile/"; fi
         done
     fi
 }
@@ -100,4 +106,204 @@ build_fmu() {
     seed_target_dir "$INVERSE_TARGET_DIR"
     zigbuild_fmu_lib --features inverse-fmu --target-dir "$INVERSE_TARGET_DIR"
     ./target/release/hasel fmu --model inverse --lib "$INVERSE_LIB"
+}
+
+# ---- the other platforms' libraries and commands (ci/platforms.sh; ci/test.sh builds some) ----
+#
+# Debian's rustc 1.96 (rustc-web) with the standard library's sources of the same version
+# (rust-web-src) builds std for each target from source (-Zbuild-std; RUSTC_BOOTSTRAP lets the
+# stable compiler take the flag); rustup's toolchain stays the default for everything else.
+# Windows links with mingw-w64, macOS with LLVM's ld64.lld against stubs of libSystem.
+WINDOWS_TARGET=x86_64-pc-windows-gnu
+MAC_TARGETS=(x86_64-apple-darwin aarch64-apple-darwin)
+CROSS_TARGETS=("$WINDOWS_TARGET" "${MAC_TARGETS[@]}")
+CROSS_DIR="$ROOT/target/cross"
+# what is built, each in a folder of its own under CROSS_DIR: the three FMU libraries (without
+# the feature tools, which only the hasel command needs) and the hasel command
+declare -A CROSS_ARGS=([fmi2]="--lib --no-default-features" [fmi3]="--lib --no-default-features --features fmi3"
+    [inverse]="--lib --no-default-features --features inverse-fmu" [cli]="--bin hasel")
+# the cargo profile of the cross builds: release for what ships; CROSS_PROFILE=cross-test for a
+# cheaper build to test (Cargo.toml says why)
+CROSS_PROFILE="${CROSS_PROFILE:-release}"
+# the linker's stub libraries for macOS (darwin_sdk) and the tools cross builds run by name
+# (rust-objcopy, Debian's cargo), first on their PATH
+DARWIN_SDK="$CROSS_DIR/darwin-sdk"
+CROSS_BIN="$CROSS_DIR/bin"
+LLVM_BIN=/usr/lib/llvm-16/bin
+WHEELS="$ROOT/target/wheels"
+
+ensure_cross_tools() {
+    ensure_packages rustc-web cargo-web rust-web-src libstd-rust-web-dev gcc-mingw-w64-x86-64 lld-16 llvm-16
+    local version
+    version="$(/usr/bin/rustc --version | cut -d' ' -f2)"
+    if [ ! -d "/usr/src/rustc-$version/library" ]; then
+        echo "Debian's rustc is $version but /usr/src has no standard library sources of it (rust-web-src)" >&2
+        return 1
+    fi
+}
+
+# What tests/python/test_windows.py runs the Windows DLLs with: Wine (64-bit) and gcc (the
+# Linux build of the same test importer); mingw-w64 comes with ensure_cross_tools.
+ensure_wine() {
+    ensure_packages wine wine64 gcc
+}
+
+# The stubs ld64.lld links the macOS libraries against, made from the libSystem.tbd of PyPI's
+# ziglang (installed into the venv by ci/requirements.txt): a text description of
+# /usr/lib/libSystem.B.dylib's exports. Its arm64 entries are for arm64e (the pointer-
+# authenticating ABI of Apple's own binaries); ours are plain arm64, so they are renamed.
+# libc, libm and libiconv (asked for by the libc crate) resolve to libSystem on macOS too. Also
+# rust-objcopy, which rustc runs to strip a macOS binary (LLVM's objcopy under that name), and
+# cargo as Debian's, the one of the standard library's sources (maturin runs `cargo` by name).
+darwin_sdk() {
+    local tbd
+    tbd="$(find "$VENV/lib" -path '*/ziglang/lib/libc/darwin/libSystem.tbd' | head -n 1)"
+    if [ -z "$tbd" ]; then
+        echo "no libSystem.tbd in the venv's ziglang package (ci/requirements.txt)" >&2
+        return 1
+    fi
+    mkdir -p "$DARWIN_SDK" "$CROSS_BIN"
+    sed -E 's/arm64e(\.x1)?-/arm64-/g' "$tbd" > "$DARWIN_SDK/libSystem.tbd"
+    for lib in libc libm libiconv; do ln -sf libSystem.tbd "$DARWIN_SDK/$lib.tbd"; done
+    ln -sf "$LLVM_BIN/llvm-objcopy" "$CROSS_BIN/rust-objcopy"
+    ln -sf /usr/bin/cargo "$CROSS_BIN/cargo"
+}
+
+# cross_env TRIPLE...: the environment of a cross build for the TRIPLEs (NAME=VALUE lines), at
+# opt-level 2 for release as the Linux library (zigbuild_fmu_lib says why).
+cross_env() {
+    echo RUSTC=/usr/bin/rustc
+    echo RUSTC_BOOTSTRAP=1
+    echo CARGO_PROFILE_RELEASE_OPT_LEVEL=2
+    echo "PATH=$CROSS_BIN:$PATH"
+    local triple upper
+    for triple in "$@"; do
+        upper="${triple^^}"
+        upper="${upper//-/_}"
+        case "$triple" in
+            *-windows-gnu) echo "CARGO_TARGET_${upper}_LINKER=x86_64-w64-mingw32-gcc" ;;
+            *-apple-darwin) echo "CARGO_TARGET_${upper}_LINKER=$LLVM_BIN/ld64.lld"
+                echo "CARGO_TARGET_${upper}_RUSTFLAGS=-Clinker-flavor=ld64.lld -Clink-arg=-L$DARWIN_SDK -Clink-arg=-lSystem" ;;
+        esac
+    done
+}
+
+# cross_cargo SET TRIPLE...: builds SET (the FMU library fmi2, fmi3 or inverse, or cli, the hasel
+# command) for every TRIPLE in one cargo run (the targets' builds overlap on the two cores) in
+# CROSS_DIR/SET, with the profile CROSS_PROFILE.
+cross_cargo() {
+    local set="$1" triple env
+    shift
+    mapfile -t env < <(cross_env "$@")
+    local targets=()
+    for triple in "$@"; do
+        targets+=(--target "$triple")
+        if [ "$set" != fmi2 ]; then seed_target_dir "$CROSS_DIR/$set" "$CROSS_DIR/fmi2" "$triple" "$CROSS_PROFILE"; fi
+    done
+    # shellcheck disable=SC2086 # the arguments split into words
+    env "${env[@]}" nice -n 10 cargo build -q --profile "$CROSS_PROFILE" "${targets[@]}" \
+        -Zbuild-std=std,panic_unwind --target-dir "$CROSS_DIR/$set" ${CROSS_ARGS[$set]}
+}
+
+# cross_file TRIPLE SET FILE: where cross_cargo put FILE of SET for TRIPLE.
+cross_file() {
+    echo "$CROSS_DIR/$2/$1/$CROSS_PROFILE/$3"
+}
+
+# cross_lib TRIPLE SET: the library cross_cargo built.
+cross_lib() {
+    case "$1" in
+        *-windows-gnu) cross_file "$1" "$2" hasel_fmu.dll ;;
+        *) cross_file "$1" "$2" libhasel_fmu.dylib ;;
+    esac
+}
+
+# darwin_universal SET: the universal macOS library of both architectures (FMI 2.0's darwin64).
+darwin_universal() {
+    local out="$CROSS_DIR/$1/universal/$CROSS_PROFILE/libhasel_fmu.dylib"
+    mkdir -p "$(dirname "$out")"
+    "$LLVM_BIN/llvm-lipo" -create "$(cross_lib "${MAC_TARGETS[0]}" "$1")" \
+        "$(cross_lib "${MAC_TARGETS[1]}" "$1")" -output "$out"
+    echo "$out"
+}
+
+# cross_libs SET FLAG: `hasel fmu` arguments (FLAG FILE ...) for the libraries of feature set SET
+# built for other platforms, whichever are there: Windows's, and macOS's (for FMI 2.0, FLAG --lib,
+# one universal library of both architectures; for FMI 3.0 one each).
+cross_libs() {
+    local set="$1" flag="$2" win mac=()
+    win="$(cross_lib "$WINDOWS_TARGET" "$set")"
+    if [ -f "$win" ]; then printf '%s\n' "$flag" "$win"; fi
+    for triple in "${MAC_TARGETS[@]}"; do
+        if [ -f "$(cross_lib "$triple" "$set")" ]; then mac+=("$(cross_lib "$triple" "$set")"); fi
+    done
+    if ((${#mac[@]} == 2)); then
+        if [ "$flag" = --lib ]; then
+            printf '%s\n' "$flag" "$(darwin_universal "$set")"
+        else
+            printf '%s\n' "$flag" "${mac[0]}" "$flag" "${mac[1]}"
+        fi
+    fi
+}
+
+# cross_build SET TRIPLE...: builds SET (cross_cargo) for the TRIPLEs.
+cross_build() {
+    local set="$1"
+    shift
+    ensure_cross_tools
+    ensure_venv
+    darwin_sdk
+    step "build $set ($CROSS_PROFILE) for $* (Debian's rustc, std from source)"
+    timed cross_cargo "$set" "$@"
+}
+
+# Packs the three FMUs with the Linux libraries of build_fmu and every other platform's that
+# cross_build made; `hasel fmu` says which went where.
+pack_platforms() {
+    local v2 v3 inverse
+    mapfile -t v2 < <(cross_libs fmi2 --lib)
+    mapfile -t v3 < <(cross_libs fmi3 --lib-fmi3)
+    mapfile -t inverse < <(cross_libs inverse --lib)
+    step "pack fmu/HaselPlatform.fmu and fmu/HaselPlatform-fmi3.fmu with every platform's library built"
+    ./target/release/hasel fmu --lib "$FMU_LIB" "${v2[@]}" --lib-fmi3 "$FMU3_LIB" "${v3[@]}"
+    step "pack fmu/HaselInverse.fmu with every platform's library built"
+    ./target/release/hasel fmu --model inverse --lib "$INVERSE_LIB" "${inverse[@]}"
+}
+
+# build_wheel [TRIPLE]: the Python wheel (python/pyproject.toml, maturin) of the hasel command and
+# the FMUs in fmu/, into target/wheels: for Linux from build_fmu's build of the command (cargo finds
+# it fresh), for TRIPLE from cross_build's (cli, the same profile and environment).
+build_wheel() {
+    local args=() env=()
+    ensure_venv
+    if (($#)); then
+        darwin_sdk
+        mapfile -t env < <(cross_env "$1")
+        args=(--target "$1" -Z build-std=std,panic_unwind --target-dir "$CROSS_DIR/cli" --profile "$CROSS_PROFILE")
+    else
+        args=(--release)
+    fi
+    mkdir -p python/hasel_fmu/fmu
+    cp fmu/HaselPlatform.fmu fmu/HaselPlatform-fmi3.fmu fmu/HaselInverse.fmu python/hasel_fmu/fmu/
+    step "the Python wheel for ${1:-Linux} (maturin)"
+    (cd python && env "${env[@]}" nice -n 10 maturin build -q "${args[@]}" --out "$WHEELS")
+}
+
+# ci/platforms.sh: the three FMU libraries for Windows and both macOS architectures, packed, the
+# hasel command for each (target/cross/cli/TRIPLE/release/), and a wheel for each platform.
+build_platforms() {
+    local set triple
+    for set in fmi2 fmi3 inverse cli; do
+        cross_build "$set" "${CROSS_TARGETS[@]}"
+    done
+    pack_platforms
+    build_wheel
+    for triple in "${CROSS_TARGETS[@]}"; do build_wheel "$triple"; done
+}
+
+# Runs a command and prints how long it took.
+timed() {
+    local start=$SECONDS
+    "$@"
+    echo "   ($((SECONDS - start)) s)"
 }

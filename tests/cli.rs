@@ -181,7 +181,7 @@ fn packing_refuses_a_file_that_is_not_a_library() {
     let out = dir.join("x.fmu");
     let o = hasel(&["fmu", "--lib", s(&fake), "--out", s(&out)]);
     assert!(
-        stderr(&o).contains("not an ELF shared library"),
+        stderr(&o).contains("not a shared library (ELF, PE or Mach-O)"),
         "{}",
         stderr(&o)
     );

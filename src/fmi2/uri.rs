@@ -1,10 +1,9 @@
 //! `fmuResourceLocation` of `fmi2Instantiate` (FMI 2.0 standard, section 2.1.6): a URI
 //! (RFC 3986) of the FMU's `resources` folder. Only `file` URIs of local paths are
 //! supported: `file:///abs/path`, `file:/abs/path` and `file://localhost/abs/path`, with
-//! percent-encoded octets decoded.
+//! percent-encoded octets decoded; on Windows the path starts with a drive letter
+//! (`file:///C:/fmu/resources`, RFC 8089 appendix E.2).
 
-use std::ffi::OsString;
-use std::os::unix::ffi::OsStringExt;
 use std::path::PathBuf;
 
 /// Decodes `%XX` escapes into bytes.
@@ -54,7 +53,29 @@ pub fn path_from_file_uri(uri: &str) -> Result<PathBuf, String> {
         return Err(format!("resource location {uri:?} is not an absolute path"));
     }
     let path = path.split(['?', '#']).next().unwrap_or(path);
-    Ok(PathBuf::from(OsString::from_vec(percent_decode(path)?)))
+    local_path(percent_decode(path)?).map_err(|why| format!("resource location {uri:?} {why}"))
+}
+
+/// The path of the decoded URI path `bytes` (`/abs/path`): its bytes as they are, which is what
+/// a Unix file name is.
+#[cfg(unix)]
+fn local_path(bytes: Vec<u8>) -> Result<PathBuf, String> {
+    use std::os::unix::ffi::OsStringExt;
+    Ok(PathBuf::from(std::ffi::OsString::from_vec(bytes)))
+}
+
+/// The path of the decoded URI path `bytes` (`/C:/abs/path`): UTF-8 (RFC 3986 section 2.5)
+/// with the slash before the drive letter dropped; a path without a drive letter is refused,
+/// as Windows would take it relative to the current drive.
+#[cfg(windows)]
+fn local_path(bytes: Vec<u8>) -> Result<PathBuf, String> {
+    let text = String::from_utf8(bytes).map_err(|_| "is not UTF-8".to_string())?;
+    let drive = text.as_bytes();
+    if !(drive.len() >= 4 && drive[1].is_ascii_alphabetic() && drive[2] == b':' && drive[3] == b'/')
+    {
+        return Err("names no drive (file:///C:/...)".into());
+    }
+    Ok(PathBuf::from(&text[1..]))
 }
 
 #[cfg(test)]

@@ -4,8 +4,11 @@
 //! around the core. Beside it the HaselInverse FMU for feedforward ([`inverse`]), served by the
 //! same shell from a build of the library with the feature `inverse-fmu`.
 
+#[cfg(feature = "tools")]
+pub mod binary;
 pub mod hasel_core;
 pub mod inverse;
+#[cfg(feature = "tools")]
 pub mod pack;
 pub mod structure;
 pub mod variables;
@@ -15,7 +18,7 @@ pub use hasel_core::HaselCore;
 use crate::fmi_common::variables::{DefaultExperiment, ModelInfo};
 use crate::simulation::DEFAULT_RTOL;
 
-/// `modelIdentifier` and the shared library's name in `binaries/linux64/`.
+/// `modelIdentifier` and the shared libraries' name in `binaries/<platform>/`.
 pub const MODEL_IDENTIFIER: &str = "HaselPlatform";
 
 /// The parameter file inside the FMU's `resources/` that `hasel fmu --params` packs; its values

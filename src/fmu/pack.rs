@@ -1,16 +1,19 @@
-//! Packs an FMU archive, FMI 2.0 or 3.0: `modelDescription.xml`, the shared library
-//! (`binaries/linux64/<modelIdentifier>.so`, FMI 3.0: `binaries/x86_64-linux/...`),
-//! `documentation/index.html` and `resources/parameters.toml`, all generated from one variable
-//! table and one parameter set: the platform's ([`platform`]) or the inverse's
-//! ([`super::inverse::spec`], FMI 2.0 only).
+//! Packs an FMU archive, FMI 2.0 or 3.0: `modelDescription.xml`, the shared library of each
+//! platform built (`binaries/linux64/<modelIdentifier>.so`, FMI 3.0:
+//! `binaries/x86_64-linux/...`, and the others of [`super::binary`]), `documentation/index.html` and `resources/parameters.toml`, all generated from one variable
+//! table and one parameter set: the platform's ([`platform`]) or the inverse's ([`inverse`],
+//! FMI 2.0 only). Only the `hasel` command packs (feature `tools`): the FMU libraries have none
+//! of this.
 
 use std::io::Write;
 use std::path::Path;
 
+use super::binary::{Platform, platform_of};
+use super::inverse::{self as inverse_fmu, InverseCore};
 use super::structure::model_structure;
 use super::variables::variables;
 use super::{RESOURCE_PARAMS, model_info};
-use crate::fmi_common::model_api::ModelStructure;
+use crate::fmi_common::model_api::{FmuCore, ModelStructure};
 use crate::fmi_common::variables::{Causality, ModelInfo, Variable};
 use crate::fmi2::model_description::{guid_for, model_description_xml};
 use crate::fmi3::model_description as fmi3_description;
@@ -45,6 +48,25 @@ pub fn platform(params: &Params) -> Spec {
                 an effect that is off keeps its state at 0); the transport delay tau_d needs \
                 Co-Simulation. Directional derivatives (both interfaces) come from the model's \
                 analytic Jacobian. The simulation starts from the U = 0 equilibrium under gravity.",
+    }
+}
+
+/// The HaselInverse FMU with the start values `params`: what `hasel fmu --model inverse` packs.
+pub fn inverse(params: &Params) -> Spec {
+    Spec {
+        info: inverse_fmu::model_info(),
+        variables: inverse_fmu::variables::variables(params),
+        structure: InverseCore::model_structure(),
+        about: "The inverse of the HaselPlatform FMU, for feedforward: each communication step \
+                maps the inputs held over it (the antenna tip's x and y and the platform's mean \
+                height, which x and y leave open) to the actuator heights by the inverse \
+                kinematics from X and Y (Newton on the forward kinematics), and to the constant \
+                voltages that hold those heights at equilibrium (closed form: the height's angle, \
+                the film on its invariant curve, the torque balance with the charges of the DC \
+                circuit). The outputs at the end of a step are those of the inputs held over it; \
+                a tip it cannot reach (below the rest height, beyond the height where the input \
+                gain vanishes) makes the step return fmi2Discard with the reason logged. Its \
+                parameters are the platform's.",
     }
 }
 
@@ -87,14 +109,6 @@ impl FmiVersion {
         match self {
             FmiVersion::V2 => "FMI 2.0",
             FmiVersion::V3 => "FMI 3.0",
-        }
-    }
-
-    /// The platform folder under `binaries/` (FMI 2.0 section 2.3, FMI 3.0 section 2.5.1.1).
-    fn platform(self) -> &'static str {
-        match self {
-            FmiVersion::V2 => "linux64",
-            FmiVersion::V3 => "x86_64-linux",
         }
     }
 
@@ -192,16 +206,26 @@ fn contains(bytes: &[u8], text: &str) -> bool {
     bytes.windows(text.len()).any(|w| w == text.as_bytes())
 }
 
+/// A shared library of the FMU, read and checked by [`read_library`].
+#[derive(Debug)]
+pub struct Library {
+    pub platform: Platform,
+    /// Its folder under `binaries/`.
+    pub folder: &'static str,
+    pub bytes: Vec<u8>,
+}
+
 /// Reads the shared library at `library`, which must be the build of `version`
-/// (`--features fmi3` for FMI 3.0).
-pub fn read_library(library: &Path, version: FmiVersion) -> Result<Vec<u8>, FileError> {
-    let so = std::fs::read(library)
+/// (`--features fmi3` for FMI 3.0) for a platform that version has a folder for.
+pub fn read_library(library: &Path, version: FmiVersion) -> Result<Library, FileError> {
+    let bytes = std::fs::read(library)
         .map_err(|e| FileError::new(library, format!("cannot read the FMU library: {e}")))?;
-    if !so.starts_with(b"\x7fELF") {
-        return Err(FileError::new(library, "not an ELF shared library"));
-    }
+    let platform = platform_of(&bytes).map_err(|e| FileError::new(library, e))?;
+    let folder = platform
+        .folder(version == FmiVersion::V3)
+        .map_err(|e| FileError::new(library, format!("a {platform} library: {e}")))?;
     let (needed, foreign) = version.marker_symbols();
-    if !contains(&so, needed) || contains(&so, foreign) {
+    if !contains(&bytes, needed) || contains(&bytes, foreign) {
         let build = match version {
             FmiVersion::V2 => "cargo build --release --lib",
             FmiVersion::V3 => "cargo build --release --lib --features fmi3",
@@ -214,34 +238,51 @@ pub fn read_library(library: &Path, version: FmiVersion) -> Result<Vec<u8>, File
             ),
         ));
     }
-    Ok(so)
+    Ok(Library {
+        platform,
+        folder,
+        bytes,
+    })
 }
 
-/// Writes the FMU of `spec` in `version` to `out` (atomically) with the library `so` of
-/// [`read_library`] and `params` as its resource file.
+/// Writes the FMU of `spec` in `version` to `out` (atomically) with the `libraries` of
+/// [`read_library`], at most one a folder, and `params` as its resource file.
 pub fn pack(
-    so: Vec<u8>,
+    libraries: Vec<Library>,
     spec: &Spec,
     params: &Params,
     out: &Path,
     version: FmiVersion,
 ) -> Result<(), FileError> {
+    for (i, lib) in libraries.iter().enumerate() {
+        if libraries[..i].iter().any(|l| l.folder == lib.folder) {
+            return Err(FileError::new(
+                out,
+                format!("two libraries for binaries/{}", lib.folder),
+            ));
+        }
+    }
     let mut zip = zip::ZipWriter::new(std::io::Cursor::new(Vec::new()));
     let options = zip::write::SimpleFileOptions::default()
         .compression_method(zip::CompressionMethod::Deflated);
-    let entries: [(String, Vec<u8>); 4] = [
-        (
-            "modelDescription.xml".into(),
-            version.model_description(spec).into_bytes(),
-        ),
+    let binaries = libraries.into_iter().map(|lib| {
         (
             format!(
-                "binaries/{}/{}.so",
-                version.platform(),
-                spec.info.model_identifier
+                "binaries/{}/{}.{}",
+                lib.folder,
+                spec.info.model_identifier,
+                lib.platform.suffix()
             ),
-            so,
-        ),
+            lib.bytes,
+        )
+    });
+    let entries = [(
+        "modelDescription.xml".to_string(),
+        version.model_description(spec).into_bytes(),
+    )]
+    .into_iter()
+    .chain(binaries)
+    .chain([
         (
             "documentation/index.html".into(),
             documentation(spec, version).into_bytes(),
@@ -250,12 +291,12 @@ pub fn pack(
             format!("resources/{RESOURCE_PARAMS}"),
             params_file::to_toml(params).into_bytes(),
         ),
-    ];
+    ]);
     let zip_err = |e: String| FileError::new(out, format!("cannot build the archive: {e}"));
-    for (name, bytes) in &entries {
+    for (name, bytes) in entries {
         zip.start_file(name.as_str(), options)
             .map_err(|e| zip_err(e.to_string()))?;
-        zip.write_all(bytes).map_err(|e| zip_err(e.to_string()))?;
+        zip.write_all(&bytes).map_err(|e| zip_err(e.to_string()))?;
     }
     let bytes = zip
         .finish()
@@ -268,12 +309,13 @@ pub fn pack(
 mod tests {
     use super::*;
     use crate::fmi_common::variables::check_variable_table;
-    use crate::fmu::inverse;
+    use crate::fmu::binary::Arch;
+    use crate::fmu::binary::tests::header;
 
     /// Both FMUs at the default parameters.
     fn specs() -> [Spec; 2] {
         let p = Params::default();
-        [platform(&p), inverse::spec(&p)]
+        [platform(&p), inverse(&p)]
     }
 
     #[test]
@@ -298,9 +340,9 @@ mod tests {
     #[test]
     fn the_guid_follows_the_start_values() {
         let mut p = Params::default();
-        let g0 = [guid(&platform(&p)), guid(&inverse::spec(&p))];
+        let g0 = [guid(&platform(&p)), guid(&inverse(&p))];
         p.set("Kb_1", 0.31).unwrap();
-        for (spec, g0) in [platform(&p), inverse::spec(&p)].iter().zip(g0) {
+        for (spec, g0) in [platform(&p), inverse(&p)].iter().zip(g0) {
             assert_ne!(g0, guid(spec));
             assert!(model_description(spec).contains(&guid(spec)));
         }
@@ -311,16 +353,91 @@ mod tests {
         let dir = std::env::temp_dir().join(format!("hasel_pack_{}", std::process::id()));
         std::fs::create_dir_all(&dir).unwrap();
         let lib = dir.join("lib.so");
-        std::fs::write(&lib, b"\x7fELF ... fmi2Instantiate ...").unwrap();
+        let elf = |symbol: &str| [header(Platform::Linux), symbol.as_bytes().to_vec()].concat();
+        std::fs::write(&lib, elf("fmi2Instantiate")).unwrap();
         assert!(read_library(&lib, FmiVersion::V2).is_ok());
         let e = read_library(&lib, FmiVersion::V3).unwrap_err().to_string();
         assert!(
             e.contains("not the FMI 3.0 build") && e.contains("--features fmi3"),
             "{e}"
         );
-        std::fs::write(&lib, b"\x7fELF fmi3InstantiateCoSimulation").unwrap();
+        std::fs::write(&lib, elf("fmi3InstantiateCoSimulation")).unwrap();
         assert!(read_library(&lib, FmiVersion::V2).is_err());
         assert!(read_library(&lib, FmiVersion::V3).is_ok());
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn each_platform_goes_in_the_folder_its_version_names_and_only_once() {
+        let dir = std::env::temp_dir().join(format!("hasel_pack_all_{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let p = Params::default();
+        let spec = platform(&p);
+        for (version, platforms, names) in [
+            (
+                FmiVersion::V2,
+                vec![
+                    Platform::Linux,
+                    Platform::Windows,
+                    Platform::DarwinUniversal,
+                ],
+                vec![
+                    "binaries/linux64/HaselPlatform.so",
+                    "binaries/win64/HaselPlatform.dll",
+                    "binaries/darwin64/HaselPlatform.dylib",
+                ],
+            ),
+            (
+                FmiVersion::V3,
+                vec![
+                    Platform::Linux,
+                    Platform::Windows,
+                    Platform::Darwin(Arch::X86_64),
+                    Platform::Darwin(Arch::Arm64),
+                ],
+                vec![
+                    "binaries/x86_64-linux/HaselPlatform.so",
+                    "binaries/x86_64-windows/HaselPlatform.dll",
+                    "binaries/x86_64-darwin/HaselPlatform.dylib",
+                    "binaries/aarch64-darwin/HaselPlatform.dylib",
+                ],
+            ),
+        ] {
+            let symbol = version.marker_symbols().0;
+            let read = |platforms: &[Platform]| -> Vec<Library> {
+                platforms
+                    .iter()
+                    .enumerate()
+                    .map(|(i, &pl)| {
+                        let lib = dir.join(format!("lib{i}"));
+                        std::fs::write(&lib, [header(pl), symbol.as_bytes().to_vec()].concat())
+                            .unwrap();
+                        read_library(&lib, version).unwrap()
+                    })
+                    .collect()
+            };
+            let out = dir.join("x.fmu");
+            pack(read(&platforms), &spec, &p, &out, version).unwrap();
+            let zip = zip::ZipArchive::new(std::fs::File::open(&out).unwrap()).unwrap();
+            let mut binaries: Vec<String> = zip
+                .file_names()
+                .map(|n| n.unwrap().to_string())
+                .filter(|n| n.starts_with("binaries/"))
+                .collect();
+            binaries.sort();
+            let mut names = names;
+            names.sort();
+            assert_eq!(binaries, names);
+            let e = pack(
+                read(&[Platform::Windows, Platform::Windows]),
+                &spec,
+                &p,
+                &out,
+                version,
+            )
+            .unwrap_err();
+            assert!(e.to_string().contains("two libraries for binaries/"), "{e}");
+        }
         std::fs::remove_dir_all(&dir).unwrap();
     }
 
@@ -368,9 +485,9 @@ mod tests {
             assert!(full.contains("<ModelExchange") && full.contains("<CoSimulation"));
             assert_eq!((count(&full, "true"), count(&full, "false")), (2, 0));
             // the inverse: Co-Simulation only, without them
-            let inverse = version.model_description(&inverse::spec(&p));
-            assert!(!inverse.contains("<ModelExchange") && inverse.contains("<CoSimulation"));
-            assert_eq!((count(&inverse, "true"), count(&inverse, "false")), (0, 1));
+            let inv = version.model_description(&inverse(&p));
+            assert!(!inv.contains("<ModelExchange") && inv.contains("<CoSimulation"));
+            assert_eq!((count(&inv, "true"), count(&inv, "false")), (0, 1));
         }
     }
 

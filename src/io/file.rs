@@ -150,6 +150,7 @@ impl Drop for AtomicFile {
 /// another to the disk inside the rename, so replacing a 2 MB trajectory cost a millisecond
 /// more than writing a new one. The swap is as atomic for readers (they see the old file or
 /// the whole new one); like a first write, it leaves the write-back to the kernel.
+#[cfg(target_os = "linux")]
 fn replace_file(tmp: &Path, path: &Path) -> bool {
     use std::ffi::CString;
     use std::os::unix::ffi::OsStrExt;
@@ -178,6 +179,14 @@ fn replace_file(tmp: &Path, path: &Path) -> bool {
         let _ = std::fs::remove_file(tmp);
     }
     swapped
+}
+
+/// Elsewhere (macOS, Windows) there is no such swap to try: [`AtomicFile::commit`] renames, which
+/// replaces the file atomically there too (rename(2) on macOS, `MoveFileExW` with
+/// `MOVEFILE_REPLACE_EXISTING` on Windows).
+#[cfg(not(target_os = "linux"))]
+fn replace_file(_tmp: &Path, _path: &Path) -> bool {
+    false
 }
 
 /// The names in folder `dir`, for tests that no temporary file is left behind.

@@ -8,6 +8,23 @@ import pytest
 ROOT = pathlib.Path(__file__).resolve().parents[2]
 
 
+def cross_built(triple, name):
+    """The hasel command `name` cross-built for `triple` (ci/lib.sh, cross_build cli): the newer of
+    the profiles release and cross-test (ci/platforms.sh); None if neither is there."""
+    found = [p for p in (ROOT / "target" / "cross" / "cli" / triple / profile / name
+                         for profile in ("release", "cross-test")) if p.exists()]
+    return max(found, key=lambda p: p.stat().st_mtime, default=None)
+
+
+def platform_missing(why):
+    """A build or tool of another platform is missing: a failure where `bash ci/platforms.sh` runs
+    the tests (it builds and installs them all, HASEL_PLATFORMS=required), a skip that says so where
+    `bash ci/test.sh` does (it builds Linux only: CI's time, README "Windows and macOS")."""
+    if os.environ.get("HASEL_PLATFORMS") == "required":
+        pytest.fail(why)
+    pytest.skip(why)
+
+
 def built(variable, default, how):
     """The file named by the environment `variable`, else `default`; a clear failure if missing."""
     path = pathlib.Path(os.environ.get(variable, default))

@@ -24,7 +24,7 @@ impl Model {
     fn spec(self, params: &Params) -> Spec {
         match self {
             Model::Platform => pack::platform(params),
-            Model::Inverse => inverse::spec(params),
+            Model::Inverse => pack::inverse(params),
         }
     }
 
@@ -70,14 +70,16 @@ pub struct Args {
     /// with `-fmi3` added to the name when both are packed)
     #[arg(long)]
     out: Option<PathBuf>,
-    /// The FMI 2.0 shared library, built for that model (default: libhasel_fmu.so beside this
-    /// executable)
-    #[arg(long, value_name = "FILE.so")]
-    lib: Option<PathBuf>,
-    /// The FMI 3.0 shared library, built with `--features fmi3` (default:
-    /// libhasel_fmu_fmi3.so beside this executable)
-    #[arg(long, value_name = "FILE.so")]
-    lib_fmi3: Option<PathBuf>,
+    /// The FMI 2.0 shared library, built for that model; once for each platform (Linux .so,
+    /// Windows .dll, macOS universal .dylib of both architectures), each packed into the folder
+    /// FMI 2.0 names for it (default: libhasel_fmu.so beside this executable)
+    #[arg(long, value_name = "FILE")]
+    lib: Vec<PathBuf>,
+    /// The FMI 3.0 shared library, built with `--features fmi3`; once for each platform (Linux,
+    /// Windows, and macOS x86_64 and arm64 each on its own) (default: libhasel_fmu_fmi3.so
+    /// beside this executable)
+    #[arg(long, value_name = "FILE")]
+    lib_fmi3: Vec<PathBuf>,
 }
 
 #[derive(clap::Args)]
@@ -96,11 +98,16 @@ pub struct DescribeArgs {
     out: Option<PathBuf>,
 }
 
-/// `name.so` beside this executable.
-fn beside_exe(name: &str) -> Result<PathBuf, Error> {
-    Ok(std::env::current_exe()
-        .map_err(Error::CurrentExe)?
-        .with_file_name(name))
+/// `libs`, or if none is given `name` beside this executable.
+fn or_beside_exe(libs: Vec<PathBuf>, name: &str) -> Result<Vec<PathBuf>, Error> {
+    if !libs.is_empty() {
+        return Ok(libs);
+    }
+    Ok(vec![
+        std::env::current_exe()
+            .map_err(Error::CurrentExe)?
+            .with_file_name(name),
+    ])
 }
 
 /// `out` with `-fmi3` added to the file name (`x.fmu` → `x-fmi3.fmu`).
@@ -131,14 +138,8 @@ pub fn run(a: Args) -> Result<(), Error> {
     let out = a
         .out
         .unwrap_or_else(|| PathBuf::from(format!("fmu/{}.fmu", a.model.identifier())));
-    let v2 = match a.lib {
-        Some(p) => p,
-        None => beside_exe("libhasel_fmu.so")?,
-    };
-    let v3 = match a.lib_fmi3 {
-        Some(p) => p,
-        None => beside_exe("libhasel_fmu_fmi3.so")?,
-    };
+    let v2 = or_beside_exe(a.lib, "libhasel_fmu.so")?;
+    let v3 = or_beside_exe(a.lib_fmi3, "libhasel_fmu_fmi3.so")?;
     let jobs = match (a.fmi, a.model) {
         (Some(Fmi::V2), _) | (None, Model::Inverse) => vec![(FmiVersion::V2, v2, out)],
         (Some(Fmi::V3), _) => vec![(FmiVersion::V3, v3, out)],
@@ -149,17 +150,26 @@ pub fn run(a: Args) -> Result<(), Error> {
     };
     // every library is checked before anything is written
     let mut libraries = Vec::with_capacity(jobs.len());
-    for (version, lib, _) in &jobs {
-        libraries.push(pack::read_library(lib, *version)?);
+    for (version, libs, _) in &jobs {
+        let read: Result<Vec<_>, _> = libs
+            .iter()
+            .map(|lib| pack::read_library(lib, *version))
+            .collect();
+        libraries.push(read?);
     }
-    for ((version, lib, out), so) in jobs.into_iter().zip(libraries) {
-        pack::pack(so, &spec, &params, &out, version)?;
+    for ((version, libs, out), read) in jobs.into_iter().zip(libraries) {
+        let packed: Vec<String> = read
+            .iter()
+            .zip(&libs)
+            .map(|(l, path)| format!("{} ({}) from {}", l.folder, l.platform, path.display()))
+            .collect();
+        pack::pack(read, &spec, &params, &out, version)?;
         say!(
-            "wrote {} ({}, token {}, library {})",
+            "wrote {} ({}, token {}), binaries {}",
             out.display(),
             version.name(),
             version.token(&spec),
-            lib.display()
+            packed.join(", ")
         );
     }
     Ok(())

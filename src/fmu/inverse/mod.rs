@@ -10,14 +10,11 @@ pub mod variables;
 pub use self::core::InverseCore;
 
 use crate::fmi_common::variables::ModelInfo;
-use crate::model::Params;
 use crate::simulation::DEFAULT_RTOL;
 
 use super::model_info_of;
-use super::pack::Spec;
-use crate::fmi_common::model_api::FmuCore;
 
-/// `modelIdentifier` and the shared library's name in `binaries/linux64/`.
+/// `modelIdentifier` and the shared libraries' name in `binaries/<platform>/`.
 pub const MODEL_IDENTIFIER: &str = "HaselInverse";
 
 /// The model-level data of `modelDescription.xml` (no solver: the tolerance is the platform's
@@ -32,25 +29,6 @@ pub fn model_info() -> ModelInfo {
         // a static map: Co-Simulation only, no directional derivatives
         false,
     )
-}
-
-/// What `hasel fmu --model inverse` packs.
-pub fn spec(params: &Params) -> Spec {
-    Spec {
-        info: model_info(),
-        variables: variables::variables(params),
-        structure: InverseCore::model_structure(),
-        about: "The inverse of the HaselPlatform FMU, for feedforward: each communication step \
-                maps the inputs held over it (the antenna tip's x and y and the platform's mean \
-                height, which x and y leave open) to the actuator heights by the inverse \
-                kinematics from X and Y (Newton on the forward kinematics), and to the constant \
-                voltages that hold those heights at equilibrium (closed form: the height's angle, \
-                the film on its invariant curve, the torque balance with the charges of the DC \
-                circuit). The outputs at the end of a step are those of the inputs held over it; \
-                a tip it cannot reach (below the rest height, beyond the height where the input \
-                gain vanishes) makes the step return fmi2Discard with the reason logged. Its \
-                parameters are the platform's.",
-    }
 }
 
 /// The 44 C functions of the inverse FMU's binary, around [`InverseCore`] (the library built
