@@ -40,8 +40,9 @@ pub enum StartChoice {
     /// As the record's conditions have it (found before: a first fit keeps its start).
     Kept,
     /// As the record's conditions have it, but a start mid-run estimated again with the
-    /// effects' states among its unknowns (a refit: an effect whose states are slow stood
-    /// elsewhere than settled when the device had been driven before the record).
+    /// effects' states among its unknowns where the model has any (a refit: an effect whose
+    /// states are slow stood elsewhere than settled when the device had been driven before the
+    /// record).
     Refined,
 }
 
@@ -263,7 +264,12 @@ pub fn estimate(
         }
         StartChoice::Estimate => (true, "estimated"),
         StartChoice::Kept => (false, "kept"),
-        StartChoice::Refined if found_before => (true, "detected mid-run, estimated"),
+        // the angles were found before; a model without states of its own adds nothing to
+        // re-estimate (and a long record's conditions cost a fit of their own)
+        StartChoice::Refined if found_before && model.n_effect_states() > 0 => {
+            (true, "detected mid-run, estimated")
+        }
+        StartChoice::Refined if found_before => (false, "kept"),
         StartChoice::Refined => (false, "rest"),
         StartChoice::Auto => {
             // once found mid-run, a record stays so: the fit under its start no longer holds
