@@ -305,13 +305,8 @@ pub fn estimate(
             hi.push(m / THETA_UNIT);
         }
         let slow = slow_at_start(&model, exp, theta)?;
-        let scales = model.state_scales();
-        let n_block = scales.len() / 3;
-        let extras = slow.len() / 3;
-        slow_scales = (0..3)
-            .flat_map(|i| &scales[n_block * (i + 1) - extras..n_block * (i + 1)])
-            .copied()
-            .collect();
+        // the effects' scales, picked from the state's as the effects' states are
+        slow_scales = model.effect_states(&model.state_scales());
         for (v, s) in slow.iter().zip(&slow_scales) {
             z0.push(v / s);
             lo.push(-SLOW_RANGE);
