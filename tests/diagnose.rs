@@ -12,6 +12,7 @@ use std::time::Duration;
 use hasel_fmu::diagnose::hidden::{self, Truth};
 use hasel_fmu::diagnose::{self, FIT_TOLERANCE, Options, Verdict, floor_fit};
 use hasel_fmu::identify::synth::Columns;
+use hasel_fmu::model::effects::FittedLaw;
 use hasel_fmu::model::{Effect, Params};
 
 fn diagnose_case(truth: Truth, columns: Columns, seed: u64) -> diagnose::Diagnosis {
@@ -69,9 +70,10 @@ fn at_the_noise_floor(case: &str, d: &diagnose::Diagnosis) {
     }
 }
 
-/// A second form of a family: named as the family, in one of `forms` (reported in the JSON).
-fn named_in_form(effect: Effect, forms: &[&str], seed: u64) {
-    let d = named_from(Truth::Variant(effect), Columns::Heights, seed);
+/// A further form of a family (its `variant`-th): named as the family, in one of `forms`
+/// (reported in the JSON).
+fn named_in_form(effect: Effect, variant: usize, forms: &[&str], seed: u64) -> diagnose::Diagnosis {
+    let d = named_from(Truth::Variant(effect, variant), Columns::Heights, seed);
     assert_eq!(d.forms.len(), 1, "{effect}");
     assert!(
         forms.contains(&d.forms[0].name),
@@ -80,6 +82,18 @@ fn named_in_form(effect: Effect, forms: &[&str], seed: u64) {
     );
     let json = diagnose::report::to_json(&d);
     assert_eq!(json["forms"][0], d.forms[0].name);
+    d
+}
+
+/// The named effect's fitted law, shown in the JSON with the textbook form nearest it.
+fn law_shown(d: &diagnose::Diagnosis) -> &FittedLaw {
+    assert_eq!(d.laws.len(), 1, "{}", d.answer());
+    let law = &d.laws[0];
+    assert_eq!(law.effect, d.effects[0]);
+    let json = diagnose::report::to_json(d);
+    let nearest = law.nearest().unwrap();
+    assert_eq!(json["laws"][0]["nearest"]["form"], nearest.name.as_str());
+    law
 }
 
 #[test]
@@ -148,14 +162,54 @@ fn stiffening_is_named_from_the_tip_alone() {
 
 #[test]
 fn a_tilt_spring_is_coupling_with_pair_stiffnesses() {
-    named_in_form(Effect::Coupling, &["pairs"], 1);
+    named_in_form(Effect::Coupling, 0, &["pairs"], 1);
 }
 
 #[test]
 fn retention_across_the_film_is_charge_drift_as_an_absorption_branch() {
     // across the film or across C2 alone differ by the branch bypassing C1 || R1, whose
     // R1 ~ 100 Ohm holds almost no voltage: either branch form, never the series stage
-    named_in_form(Effect::ChargeDrift, &["electrode", "film"], 1);
+    named_in_form(Effect::ChargeDrift, 0, &["electrode", "film"], 1);
+}
+
+#[test]
+fn an_output_stage_with_unequal_limits_is_named_saturation() {
+    // random limits 6–14 V apart with a random tanh knee, which no form contains exactly
+    let d = named_in_form(Effect::Saturation, 0, &["unequal", "shaped"], 8);
+    let s = d.last.params.effects.saturation;
+    let truth = hidden::hide(Truth::Variant(Effect::Saturation, 0), 8).unwrap();
+    let truth = truth.params.effects.saturation;
+    // the fitted limits are apart on the same side as the truth's
+    let apart = s.u_max - s.negative_limit();
+    assert!(
+        apart * (truth.u_max - truth.u_max_neg) > 0.0 && apart.abs() > 3.0,
+        "fitted +{} / -{}, truly +{} / -{}",
+        s.u_max,
+        s.negative_limit(),
+        truth.u_max,
+        truth.u_max_neg
+    );
+    let law = law_shown(&d);
+    let nearest = &law.nearest().unwrap().name;
+    assert!(nearest.starts_with("unequal"), "{}: {law:?}", law.text);
+}
+
+#[test]
+fn a_slewing_amplifier_is_named_amplifier_lag() {
+    // a slew limit whose transition is a random Rapp curve, which the tanh does not contain
+    let d = named_in_form(Effect::AmplifierLag, 1, &["slew"], 8);
+    let a = d.last.params.effects.amplifier_lag;
+    let truth = hidden::hide(Truth::Variant(Effect::AmplifierLag, 1), 8).unwrap();
+    let truth = truth.params.effects.amplifier_lag;
+    assert!(
+        (a.slew / truth.slew).ln().abs() < 0.2f64.ln_1p(),
+        "slew {} V/s, truly {} V/s",
+        a.slew,
+        truth.slew
+    );
+    let law = law_shown(&d);
+    let nearest = &law.nearest().unwrap().name;
+    assert!(nearest.starts_with("hard slew"), "{}: {law:?}", law.text);
 }
 
 /// Two mechanisms at once: both named, in either order, each with its form in the JSON, and

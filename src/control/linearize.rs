@@ -268,35 +268,30 @@ fn effect_notes(model: &Platform, x: &[f64], u: [f64; 3]) -> Vec<EffectNote> {
     for i in 0..3 {
         let xi = &x[nb * i..nb * (i + 1)];
         let sat = fx.saturation;
-        if sat.u_max.is_finite() {
+        if sat.is_on() {
             let amp = extras
                 .iter()
                 .rposition(|e| e.effect == Effect::AmplifierLag);
             let v = amp.map_or(u[i], |k| xi[actuator::N + k]);
-            let knee = if sat.soft {
-                0.85 * sat.u_max
-            } else {
-                sat.u_max
-            };
-            let (smooth, text) = if !sat.soft && v.abs() == sat.u_max {
+            let (_, slope) = sat.map(v);
+            let limits = format!(
+                "limits +{} V / -{} V, dead zone {} V",
+                sat.u_max,
+                sat.negative_limit(),
+                sat.u_dead
+            );
+            let (smooth, text) = if sat.at_corner(v) {
                 (
                     false,
                     format!(
-                        "the amplifier output {v} V is exactly at its limit U_max = {} V: clamp() has no derivative there (the Jacobian takes the slope 0 of the clipped side)",
-                        sat.u_max
+                        "the amplifier output {v} V is exactly at a corner of the output map ({limits}): it has no derivative there (the Jacobian takes the slope of the inner side)"
                     ),
                 )
-            } else if v.abs() > sat.u_max || (sat.soft && v.abs() > knee) {
+            } else if slope < 1.0 {
                 (
                     true,
                     format!(
-                        "the amplifier output {v} V is beyond the linear range (U_max = {} V): the port voltage's slope is reduced{}",
-                        sat.u_max,
-                        if sat.soft {
-                            " by the tanh knee"
-                        } else {
-                            " to 0 (no response to small changes of U)"
-                        }
+                        "the amplifier output {v} V is outside the output map's linear range ({limits}): the port voltage's slope is reduced to {slope:.3}"
                     ),
                 )
             } else {

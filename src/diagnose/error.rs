@@ -17,9 +17,9 @@ pub enum Error {
     Input(#[from] InputError),
     #[error("no experiment")]
     NoExperiment,
-    /// Hidden data asked for a second form of an effect that has none.
-    #[error("{0} has no second hidden form")]
-    NoVariant(crate::model::Effect),
+    /// Hidden data asked for a further form of an effect that it lacks.
+    #[error("{0} has no further hidden form {1}")]
+    NoVariant(crate::model::Effect, usize),
     /// Hidden data asked for a pair of mechanisms that is not in the table.
     #[error("no two-mechanism case {0}")]
     NoPair(usize),

@@ -2,10 +2,10 @@
 //! the base parameters Kb, b, γ1, γ2 off by up to ±20 %, one mechanism of the library in a
 //! form that differs from the library's term, its magnitude random within a range where it
 //! visibly changes the response, measurement noise of 0.5–2 % of each output's range, and the
-//! paper's two experiments (the 60 V sine at 3π and at 11 rad/s). Each family has a second
-//! hidden form beside the first where the library has several (a tilt spring, retention across
-//! the film, unequal creep times, rate-dependent Dahl hysteresis, a second-order amplifier of
-//! equal stages). Also data with no effect and with two mechanisms outside the library (a floor
+//! paper's two experiments (the 60 V sine at 3π and at 11 rad/s). Families have further hidden
+//! forms beside the first (a tilt spring, retention across the film, unequal creep times,
+//! rate-dependent Dahl hysteresis, a second-order amplifier of equal stages, a slewing amplifier,
+//! an output stage with unequal limits), drawn at random where the family's law is flexible. Also data with no effect and with two mechanisms outside the library (a floor
 //! vibration picked up by the sensor, a ripple of the amplifier's supply), and data with two
 //! mechanisms of the library at once ([`PAIRS`]). Any case can be recorded as lab data, with
 //! artifacts on top ([`Hidden::with_artifacts`]).
@@ -27,8 +27,8 @@ use crate::simulation::{Input, InputError, Interpolation};
 pub enum Truth {
     Nothing,
     Effect(Effect),
-    /// The effect in its second hidden form (the families with several forms).
-    Variant(Effect),
+    /// The effect in its further hidden form k (`Family::variants[k]`).
+    Variant(Effect, usize),
     /// A floor vibration at a frequency unrelated to the drive, added to the measurements: more
     /// than two frequency resolutions of a [`RECORD_S`] record from every harmonic of both
     /// drive frequencies.
@@ -49,7 +49,7 @@ pub const PAIRS: [(&str, [Truth; 2]); 3] = [
     (
         "coupling_tilt+creep",
         [
-            Truth::Variant(Effect::Coupling),
+            Truth::Variant(Effect::Coupling, 0),
             Truth::Effect(Effect::Creep),
         ],
     ),
@@ -58,7 +58,7 @@ pub const PAIRS: [(&str, [Truth; 2]); 3] = [
     (
         "charge_drift_film+hysteresis",
         [
-            Truth::Variant(Effect::ChargeDrift),
+            Truth::Variant(Effect::ChargeDrift, 0),
             Truth::Effect(Effect::Hysteresis),
         ],
     ),
@@ -78,7 +78,7 @@ impl Truth {
         match self {
             Truth::Nothing => "none",
             Truth::Effect(e) => e.name(),
-            Truth::Variant(e) => e.family().variants.first().map_or(e.name(), |v| v.0),
+            Truth::Variant(e, k) => e.family().variants.get(k).map_or(e.name(), |v| v.0),
             Truth::Outside => "vibration",
             Truth::Ripple => "supply_ripple",
             Truth::Two(k) => PAIRS.get(k).map_or("two", |p| p.0),
@@ -92,7 +92,7 @@ impl Truth {
     /// The effect the data hide, if it is one of the library's.
     pub fn effect(self) -> Option<Effect> {
         match self {
-            Truth::Effect(e) | Truth::Variant(e) => Some(e),
+            Truth::Effect(e) | Truth::Variant(e, _) => Some(e),
             _ => None,
         }
     }
@@ -107,16 +107,15 @@ impl Truth {
         }
     }
 
-    /// Every truth: no effect, each family, each family's second form, the two mechanisms
+    /// Every truth: no effect, each family, each family's further forms, the two mechanisms
     /// outside the library, the pairs.
     pub fn all() -> Vec<Truth> {
         std::iter::once(Truth::Nothing)
             .chain(Effect::ALL.into_iter().map(Truth::Effect))
             .chain(
-                Effect::ALL
-                    .into_iter()
-                    .filter(|e| !e.family().variants.is_empty())
-                    .map(Truth::Variant),
+                Effect::ALL.into_iter().flat_map(|e| {
+                    (0..e.family().variants.len()).map(move |k| Truth::Variant(e, k))
+                }),
             )
             .chain([Truth::Outside, Truth::Ripple])
             .chain((0..PAIRS.len()).map(Truth::Two))
@@ -223,9 +222,9 @@ fn plant(
             )
         }
         Truth::Effect(e) => planted(e.family().hidden, params, &mut wandering_delay, between),
-        Truth::Variant(e) => match e.family().variants.first() {
+        Truth::Variant(e, k) => match e.family().variants.get(k) {
             Some(&(_, plant)) => planted(plant, params, &mut wandering_delay, between),
-            None => return Err(Error::NoVariant(e)),
+            None => return Err(Error::NoVariant(e, k)),
         },
         Truth::Two(k) => {
             let [a, b] = PAIRS.get(k).ok_or(Error::NoPair(k))?.1;

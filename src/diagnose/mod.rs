@@ -33,7 +33,7 @@ use std::time::{Duration, Instant};
 
 use crate::identify::conditions::{Choice, LagChoice, StartChoice};
 use crate::identify::{self, Experiment, FIT_RTOL, Hold, Identification, Options as IdOptions};
-use crate::model::effects::{Form, Magnitude};
+use crate::model::effects::{FittedLaw, Form, Magnitude};
 use crate::model::{Effect, Params};
 use analysis::Disagreement;
 pub use error::Error;
@@ -61,7 +61,7 @@ pub const FIT_TOLERANCE: f64 = 1.0;
 /// (src/diagnose/diagnose.md, "Two mechanisms at once").
 pub const PARTIAL_GAP: f64 = 0.25;
 
-/// A family's runner-up form is refitted beside its best when the screening gives it at least
+/// A family's other forms are refitted beside its best when the screening gives them at least
 /// this share of the best form's worth (src/diagnose/diagnose.md, "Families of forms").
 pub const FORM_RUNNER_UP: f64 = 0.8;
 
@@ -139,9 +139,9 @@ pub struct Candidate {
     pub score: f64,
     /// Start values of its parameters from the screening.
     pub start: Vec<(&'static str, f64)>,
-    /// The runner-up form and its start values, refitted too when the screening cannot tell
-    /// it from the best ([`FORM_RUNNER_UP`]).
-    pub alternative: Option<(&'static Form, Vec<(&'static str, f64)>)>,
+    /// The other forms and their start values, refitted too when the screening cannot tell
+    /// them from the best ([`FORM_RUNNER_UP`]), best first.
+    pub alternatives: Vec<(&'static Form, Vec<(&'static str, f64)>)>,
     /// Every form refitted, with its ΔBIC or why its refit failed.
     pub forms_tried: Vec<(&'static str, Result<f64, String>)>,
     pub refit: Option<Refit>,
@@ -244,6 +244,9 @@ pub struct Diagnosis {
     pub outliers: Vec<analysis::Outliers>,
     /// The fits the verdict rests on, against the noise floor.
     pub fits: Fits,
+    /// The fitted law of each named effect whose family has one, in the order named, beside the
+    /// textbook forms nearest it (src/diagnose/diagnose.md, "The fitted law").
+    pub laws: Vec<FittedLaw>,
 }
 
 /// The fits behind a verdict, computed once with it; the report only shows them.
@@ -386,7 +389,12 @@ fn nested_refit(
     let at_neutral = start
         .iter()
         .map(|&(name, v)| match form.magnitudes.contains(&name) {
-            true => Ok((name, neutral.get(name)?)),
+            // a limit is neutral at +inf, where no fit can start (its coordinate is ln U): it
+            // starts far above the screening's value instead, where it acts on nothing commanded
+            true => {
+                let off = neutral.get(name)?;
+                Ok((name, if off.is_finite() { off } else { 10.0 * v }))
+            }
             false => Ok((name, v)),
         })
         .collect::<Result<Vec<_>, Error>>()?;
@@ -615,9 +623,9 @@ fn refit_conditions(forms: &[&Form]) -> Choice {
 type PlannedRefit = (usize, &'static Form, Vec<(&'static str, f64)>);
 
 /// What a round refits (candidate index, form, start values): the best form of each of the
-/// `refits` best candidates and, for the best candidate, its runner-up form when the screening
-/// could not tell the two apart (the family that most likely wins is the one whose form is
-/// reported; the others' forms only compete for second place).
+/// `refits` best candidates and, for the best candidate, each other form the screening could
+/// not tell from its best (the family that most likely wins is the one whose form is reported;
+/// the others' forms only compete for second place).
 fn refit_plan(candidates: &[Candidate], refits: usize) -> Vec<PlannedRefit> {
     let mut plan: Vec<_> = candidates
         .iter()
@@ -625,8 +633,12 @@ fn refit_plan(candidates: &[Candidate], refits: usize) -> Vec<PlannedRefit> {
         .take(refits)
         .map(|(k, c)| (k, c.form, c.start.clone()))
         .collect();
-    if let Some((form, start)) = candidates.first().and_then(|c| c.alternative.clone()) {
-        plan.push((0, form, start));
+    if let Some(c) = candidates.first() {
+        plan.extend(
+            c.alternatives
+                .iter()
+                .map(|(form, start)| (0, *form, start.clone())),
+        );
     }
     plan
 }
@@ -934,6 +946,12 @@ pub fn diagnose(
     let separating_experiment = (verdict == Verdict::Ambiguous)
         .then(|| separating_experiment(ambiguous_between[0], ambiguous_between[1]));
     let fits = Fits::new(&ordered, &base, &current, &after);
+    let u_peak = analysis::peak_command(&estimation[0]);
+    let laws = forms
+        .iter()
+        .filter_map(|f| f.effect.family().law)
+        .map(|law| law(&current.params, u_peak))
+        .collect();
     timing.push(("total".to_string(), began.elapsed().as_secs_f64()));
     Ok(Diagnosis {
         verdict,
@@ -953,6 +971,7 @@ pub fn diagnose(
         experiments: ordered,
         outliers,
         fits,
+        laws,
     })
 }
 
@@ -1091,8 +1110,7 @@ fn decide(evidence: &[Option<Evidence>]) -> Decision {
 }
 
 /// The screening of one round: every effect not yet added, scored, best first; each in the form
-/// of its family worth most, with the runner-up form when it is worth nearly as much
-/// ([`FORM_RUNNER_UP`]).
+/// of its family worth most, with the other forms worth nearly as much ([`FORM_RUNNER_UP`]).
 fn screen(
     current: &Identification,
     exp: &Experiment,
@@ -1128,16 +1146,16 @@ fn screen(
             ranked.sort_by(|a, b| b.worth.total_cmp(&a.worth));
             let mut ranked = ranked.into_iter();
             let first = ranked.next().expect("a family has a form");
-            let alternative = ranked
-                .next()
+            let alternatives = ranked
                 .filter(|s| first.worth > 0.0 && s.worth >= FORM_RUNNER_UP * first.worth)
-                .map(|s| (s.form, s.start));
+                .map(|s| (s.form, s.start))
+                .collect();
             Candidate {
                 effect,
                 form: first.form,
                 score: first.score,
                 start: first.start,
-                alternative,
+                alternatives,
                 forms_tried: Vec::new(),
                 refit: None,
                 refit_error: None,
@@ -1216,7 +1234,7 @@ fn judge(
 }
 
 /// The 95 % interval of the effect's magnitude and whether it excludes the neutral value
-/// (0, or for U_max the largest command: a limit above it clips nothing).
+/// (0, or for a limit the largest command: a limit above it clips nothing).
 fn magnitude_interval(
     form: &Form,
     id: &Identification,
@@ -1230,10 +1248,12 @@ fn magnitude_interval(
     };
     match form.effect.family().magnitude {
         Magnitude::Limit => {
+            // either limit below the largest command (of unequal ones, one may clip nothing)
             let u_peak = analysis::peak_command(&estimation[0]);
-            let c = ci("U_max");
-            let ok = c.as_ref().is_some_and(|(_, _, hi)| *hi < u_peak);
-            (c, ok)
+            let cs: Vec<_> = form.magnitudes.iter().filter_map(|n| ci(n)).collect();
+            let below = |c: &&(String, f64, f64)| c.2 < u_peak;
+            let ok = cs.iter().any(|c| below(&c));
+            (cs.iter().find(below).or(cs.first()).cloned(), ok)
         }
         Magnitude::Signed => {
             let cs: Vec<_> = form.free.iter().filter_map(|n| ci(n)).collect();

@@ -13,6 +13,7 @@ use crate::identify::report::{
 };
 use crate::io::file::{FileError, write_text_atomic};
 use crate::io::params_file;
+use crate::model::effects::FittedLaw;
 use crate::plot::{self, Panel, Series};
 
 fn candidate_json(c: &Candidate) -> Value {
@@ -60,6 +61,77 @@ fn disagreement_json(d: &Disagreement) -> Value {
         "correlations": d.correlations.iter().map(|(n, c)| (n.clone(), json!(round(*c, 3)))).collect::<Map<_, _>>(),
         "off_harmonic": round(d.off_harmonic, 3),
     })
+}
+
+fn points_json(points: &[(f64, f64)]) -> Value {
+    points
+        .iter()
+        .map(|&(x, y)| json!([round(x, 4), round(y, 4)]))
+        .collect()
+}
+
+fn law_json(l: &FittedLaw) -> Value {
+    json!({
+        "effect": l.effect.name(),
+        "law": l.text,
+        "axes": [l.axes.0, l.axes.1],
+        "curve": points_json(&l.curve),
+        "nearest": l.nearest().map(|t| json!({"form": t.name, "distance": round(t.distance, 4)})),
+        "textbook": l.textbook.iter().map(|t| json!({
+            "form": t.name,
+            "distance": round(t.distance, 4),
+        })).collect::<Vec<_>>(),
+    })
+}
+
+/// A fitted law, and the textbook form nearest it, in words.
+fn law_sentence(l: &FittedLaw) -> String {
+    let others: Vec<String> = l
+        .textbook
+        .iter()
+        .skip(1)
+        .map(|t| format!("{} {:.1} %", t.name, 100.0 * t.distance))
+        .collect();
+    match l.nearest() {
+        Some(t) => format!(
+            "`{}`: {}. Nearest textbook form: {}, {:.1} % away (RMS difference over the curve, relative to its RMS){}.",
+            l.effect.name(),
+            l.text,
+            t.name,
+            100.0 * t.distance,
+            if others.is_empty() {
+                String::new()
+            } else {
+                format!("; then {}", others.join(", "))
+            }
+        ),
+        None => format!("`{}`: {}.", l.effect.name(), l.text),
+    }
+}
+
+/// The fitted law beside the textbook form nearest it.
+fn law_panel(l: &FittedLaw) -> Panel {
+    let mut series = vec![Series {
+        label: "fitted".into(),
+        points: l.curve.clone(),
+        color: 1,
+        dots: false,
+    }];
+    if let Some(t) = l.nearest() {
+        series.push(Series {
+            label: t.name.clone(),
+            points: t.curve.clone(),
+            color: 0,
+            dots: false,
+        });
+    }
+    Panel {
+        title: format!("{}: the fitted law", l.effect.name()),
+        x_label: l.axes.0.into(),
+        y_label: l.axes.1.into(),
+        series,
+        equal_axes: false,
+    }
 }
 
 /// Where a remaining disagreement lies, in words.
@@ -147,6 +219,7 @@ pub fn to_json(d: &Diagnosis) -> Value {
             }).collect::<Vec<_>>(),
         })).collect::<Vec<_>>(),
         "parameters": effect_params,
+        "laws": d.laws.iter().map(law_json).collect::<Vec<_>>(),
         "estimation": d.estimation,
         "held_out": d.held_out,
         "fits": {
@@ -532,6 +605,20 @@ pub fn write(dir: &Path, d: &Diagnosis) -> Result<(), FileError> {
             }
         }
         let _ = writeln!(md);
+    }
+    if !d.laws.is_empty() {
+        let _ = writeln!(md, "## The fitted laws\n");
+        for l in &d.laws {
+            let _ = writeln!(md, "- {}", law_sentence(l));
+        }
+        let panels: Vec<Panel> = d.laws.iter().map(law_panel).collect();
+        plot::draw(
+            &dir.join("laws.png"),
+            &panels,
+            panels.len(),
+            (600 * panels.len() as u32, 400),
+        )?;
+        let _ = writeln!(md, "\n![the fitted laws](laws.png)\n");
     }
     let _ = writeln!(md, "## Fits before and after (NRMSE, MATLAB `compare`)\n");
     fits_table(&mut md, d);

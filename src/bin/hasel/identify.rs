@@ -174,9 +174,9 @@ fn effect_help() -> String {
         all.map(|t| t.name()).collect::<Vec<_>>().join(", ")
     };
     format!(
-        "Hide a mechanism in the data, in a form that differs from the library's term: an effect of the library ({}), a second form of one ({}), `vibration` or `supply_ripple` (outside the library), `none`, or two at once ({}); with the base parameters Kb, b, gamma1, gamma2 off by up to 20 %, all drawn from --case",
+        "Hide a mechanism in the data, in a form that differs from the library's term: an effect of the library ({}), a further form of one ({}), `vibration` or `supply_ripple` (outside the library), `none`, or two at once ({}); with the base parameters Kb, b, gamma1, gamma2 off by up to 20 %, all drawn from --case",
         names(|t| matches!(t, Truth::Effect(_))),
-        names(|t| matches!(t, Truth::Variant(_))),
+        names(|t| matches!(t, Truth::Variant(..))),
         names(|t| matches!(t, Truth::Two(_))),
     )
 }

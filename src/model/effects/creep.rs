@@ -89,6 +89,7 @@ pub const FAMILY: Family = Family {
     },
     hidden: spread_times,
     variants: &[("creep_two_times", unequal_times)],
+    law: None,
 };
 
 /// One branch at three times, two branches at a short and a long time (src/diagnose/

@@ -52,6 +52,10 @@ pub struct Family {
     pub hidden: Plant,
     /// Further hidden forms, by name (their names are hidden cases of the CLI).
     pub variants: &'static [(&'static str, Plant)],
+    /// The family's fitted law at the model `params`, drawn over commands up to the peak
+    /// command [V], beside the textbook forms nearest it (src/diagnose/diagnose.md, "The fitted
+    /// law"); `None` for a family whose forms are its textbook terms.
+    pub law: Option<fn(&Params, f64) -> FittedLaw>,
 }
 
 /// One form of a family: the parameters it frees (its magnitude first) and the settings that
@@ -194,4 +198,124 @@ pub fn log_between(between: &mut dyn FnMut(f64, f64) -> f64, lo: f64, hi: f64) -
 /// mechanical families' probes and hidden magnitudes.
 pub fn mean_kb(params: &Params) -> f64 {
     params.act.iter().map(|a| a.kb).sum::<f64>() / 3.0
+}
+
+/// A fitted constitutive law drawn against its variable, with the textbook forms fitted to it
+/// by least squares over the same points, nearest first (src/diagnose/diagnose.md, "The fitted
+/// law").
+#[derive(Clone, Debug)]
+pub struct FittedLaw {
+    pub effect: Effect,
+    /// The law and its fitted values, in words.
+    pub text: String,
+    /// The variable and the law's value, with their units.
+    pub axes: (&'static str, &'static str),
+    pub curve: Vec<(f64, f64)>,
+    pub textbook: Vec<Compared>,
+}
+
+/// A textbook form as fitted to a law.
+#[derive(Clone, Debug)]
+pub struct Compared {
+    /// The form and its fitted values, in words.
+    pub name: String,
+    pub curve: Vec<(f64, f64)>,
+    /// RMS of its difference from the law over the curve's points, relative to the law's RMS.
+    pub distance: f64,
+}
+
+/// A textbook form fitted to a law: its name and values in words, and its curve.
+pub struct Textbook {
+    name: String,
+    f: Box<dyn Fn(f64) -> f64>,
+}
+
+impl Textbook {
+    pub fn new(name: String, f: impl Fn(f64) -> f64 + 'static) -> Textbook {
+        Textbook {
+            name,
+            f: Box::new(f),
+        }
+    }
+}
+
+impl FittedLaw {
+    /// The law `curve` beside each `textbook` form, evaluated at its points, nearest first.
+    pub fn new(
+        effect: Effect,
+        text: String,
+        axes: (&'static str, &'static str),
+        curve: Vec<(f64, f64)>,
+        textbook: Vec<Textbook>,
+    ) -> FittedLaw {
+        let rms = |v: &mut dyn Iterator<Item = f64>| {
+            let (s, n) = v.fold((0.0, 0), |(s, n), x| (s + x * x, n + 1));
+            (s / n.max(1) as f64).sqrt()
+        };
+        let scale = rms(&mut curve.iter().map(|p| p.1)).max(1e-300);
+        let mut textbook: Vec<Compared> = textbook
+            .into_iter()
+            .map(|t| {
+                let points: Vec<(f64, f64)> = curve.iter().map(|&(x, _)| (x, (t.f)(x))).collect();
+                let diff = &mut points.iter().zip(&curve).map(|(a, b)| a.1 - b.1);
+                Compared {
+                    name: t.name,
+                    distance: rms(diff) / scale,
+                    curve: points,
+                }
+            })
+            .collect();
+        textbook.sort_by(|a, b| a.distance.total_cmp(&b.distance));
+        FittedLaw {
+            effect,
+            text,
+            axes,
+            curve,
+            textbook,
+        }
+    }
+
+    /// The textbook form nearest the law.
+    pub fn nearest(&self) -> Option<&Compared> {
+        self.textbook.first()
+    }
+}
+
+/// Points of a law on [lo, hi], where it is drawn and compared.
+pub fn sampled(lo: f64, hi: f64, f: impl Fn(f64) -> f64) -> Vec<(f64, f64)> {
+    const POINTS: usize = 201;
+    (0..POINTS)
+        .map(|k| {
+            let x = lo + (hi - lo) * k as f64 / (POINTS - 1) as f64;
+            (x, f(x))
+        })
+        .collect()
+}
+
+/// The minimum of `cost` over [lo, hi] (lo > 0) in ln x: a textbook form's one scale fitted to
+/// a law. A grid first (the cost of a clamp is flat wherever it clips nothing, where a
+/// golden-section search alone drifts), then a golden-section search between the best point's
+/// neighbours.
+pub fn golden(lo: f64, hi: f64, cost: impl Fn(f64) -> f64) -> f64 {
+    const GRID: usize = 64;
+    let at = |k: usize| lo.ln() + (hi / lo).ln() * k as f64 / (GRID - 1) as f64;
+    let best = (0..GRID)
+        .min_by(|&i, &j| cost(at(i).exp()).total_cmp(&cost(at(j).exp())))
+        .unwrap_or(0);
+    let r = 0.5 * (5f64.sqrt() - 1.0);
+    let (mut a, mut b) = (at(best.saturating_sub(1)), at((best + 1).min(GRID - 1)));
+    let (mut c, mut d) = (b - r * (b - a), a + r * (b - a));
+    let (mut fc, mut fd) = (cost(c.exp()), cost(d.exp()));
+    while b - a > 1e-6 {
+        if fc < fd {
+            (b, d, fd) = (d, c, fc);
+            c = b - r * (b - a);
+            fc = cost(c.exp());
+        } else {
+            (a, c, fc) = (c, d, fd);
+            d = a + r * (b - a);
+            fd = cost(d.exp());
+        }
+    }
+    (0.5 * (a + b)).exp()
 }

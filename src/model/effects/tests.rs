@@ -29,19 +29,32 @@ fn all_on(other_forms: bool) -> Params {
         f.hysteresis.r_h = 3.0;
         f.hysteresis.law = HysteresisLaw::Dahl;
         f.amplifier_lag.tau_a2 = 0.004;
-        f.saturation.soft = true;
+        // slewing for errors beyond S tau_a = 20 V: the busy state's reach that far
+        f.amplifier_lag.slew = 1000.0;
+        f.saturation.u_max_neg = 35.0;
+        f.saturation.knee = 0.3;
+        f.saturation.u_dead = 2.0;
         f.stiffening.exponent = 6;
         f.preload.law = PreloadLaw::Weight;
     }
     p
 }
 
-/// The library form, the other forms, and the other forms with the drift element across the
-/// zipping capacitor and across the film.
+/// The other forms with the input path's synthetic shapes: a tanh knee, a Rapp slew transition.
+fn synthetic_input_path() -> Params {
+    let mut p = all_on(true);
+    p.effects.saturation.tanh_knee = 0.2;
+    p.effects.amplifier_lag.rapp_rate = 3.0;
+    p
+}
+
+/// The library form, the other forms, the input path's synthetic shapes, and the other forms
+/// with the drift element across the zipping capacitor and across the film.
 fn configurations() -> Vec<(String, Params)> {
     let mut out = vec![
         ("library forms".to_string(), all_on(false)),
         ("other forms".to_string(), all_on(true)),
+        ("synthetic input path".to_string(), synthetic_input_path()),
     ];
     for site in [DriftSite::Electrode, DriftSite::Film] {
         let mut p = all_on(true);
@@ -92,10 +105,134 @@ fn neutral_by_default() {
 #[test]
 fn jacobian_matches_finite_differences_with_every_effect() {
     // U inside the clipping range (the hard clamp has no derivative at its corners)
-    for (_, p) in configurations() {
+    for (_, p) in configurations().into_iter().chain(without_amplifier()) {
         check_jacobian(p, [40.0, 25.0, -30.0]);
     }
     check_jacobian(all_on(false), [70.0, 25.0, -80.0]);
+    // beyond the map's limits and in its dead zone, of either sign
+    for (_, p) in without_amplifier() {
+        check_jacobian(p, [70.0, 1.0, -80.0]);
+    }
+}
+
+/// The configurations with the amplifier off as well: the output map then reads the command
+/// itself, of either sign.
+fn without_amplifier() -> Vec<(String, Params)> {
+    let mut out = configurations();
+    for (name, p) in &mut out {
+        name.push_str(", no amplifier");
+        p.effects.switch_off(Effect::AmplifierLag);
+    }
+    out
+}
+
+#[test]
+fn the_output_map_is_monotone_and_its_slope_exact() {
+    use super::saturation::Saturation;
+    let maps = [all_on(false), all_on(true), synthetic_input_path()]
+        .map(|p| p.effects.saturation)
+        .into_iter()
+        .chain([Saturation {
+            u_max: 40.0,
+            knee: 1e-3,
+            ..Saturation::default()
+        }]);
+    for s in maps {
+        let mut last = f64::NEG_INFINITY;
+        for k in -1000..=1000 {
+            let v = 0.1 * f64::from(k) + 0.0123;
+            let (u, slope) = s.map(v);
+            assert!(u >= last && slope >= 0.0, "{s:?} at {v}");
+            last = u;
+            let h = 1e-6;
+            let fd = (s.map(v + h).0 - s.map(v - h).0) / (2.0 * h);
+            assert!((fd - slope).abs() < 1e-6, "{s:?} at {v}: {slope} vs {fd}");
+        }
+    }
+}
+
+#[test]
+fn the_rate_law_is_monotone_and_its_slope_exact() {
+    let rates = [all_on(true), synthetic_input_path()].map(|p| p.effects.amplifier_lag);
+    for a in rates {
+        let mut last = f64::NEG_INFINITY;
+        for k in -1000..=1000 {
+            let e = 0.1 * f64::from(k) + 0.0123;
+            let (r, slope) = a.rate(e);
+            assert!(r >= last && slope > 0.0, "{a:?} at {e}");
+            last = r;
+            let h = 1e-6;
+            let fd = (a.rate(e + h).0 - a.rate(e - h).0) / (2.0 * h);
+            assert!((fd - slope).abs() < 1e-6 * slope.max(1.0), "{a:?} at {e}");
+        }
+        // linear at small errors, slewing at S for large ones
+        assert!((a.rate(1e-6).0 * a.tau_a / 1e-6 - 1.0).abs() < 1e-6);
+        assert!((a.rate(1e4).0 / a.slew - 1.0).abs() < 1e-3);
+    }
+}
+
+/// The fitted law shown beside the textbook forms: a law that is one of them is at distance 0
+/// from it and named nearest, with its values.
+#[test]
+fn a_textbook_law_is_nearest_itself() {
+    let mut p = Params::default();
+    p.effects.saturation.u_max = 54.5;
+    p.effects.saturation.u_max_neg = 88.0;
+    let law = (Effect::Saturation.family().law.unwrap())(&p, 60.0);
+    let nearest = law.nearest().unwrap();
+    assert_eq!(nearest.name, "unequal clamp +54.5 V / -none", "{law:?}");
+    assert!(nearest.distance < 1e-6, "{law:?}");
+    let mut p = Params::default();
+    p.effects.amplifier_lag.tau_a = 0.02;
+    let law = (Effect::AmplifierLag.family().law.unwrap())(&p, 60.0);
+    let nearest = law.nearest().unwrap();
+    assert_eq!(nearest.name, "linear lag, 20.00 ms", "{law:?}");
+    assert!(nearest.distance < 1e-6, "{law:?}");
+    // a slew far below the fastest error: nearest the hard slew limit
+    p.effects.amplifier_lag.slew = 100.0;
+    let law = (Effect::AmplifierLag.family().law.unwrap())(&p, 60.0);
+    let nearest = law.nearest().unwrap();
+    assert!(
+        nearest.name.starts_with("hard slew limit 100 V/s"),
+        "{law:?}"
+    );
+    assert!(nearest.distance < 0.05, "{law:?}");
+}
+
+#[test]
+fn input_jacobian_matches_finite_differences() {
+    // the commands on the map's knee and beyond it, in its dead zone, and slewing
+    let us = [[40.0, 1.0, -30.0], [70.0, -1.5, -80.0]];
+    for (name, p) in configurations().into_iter().chain(without_amplifier()) {
+        let m = Platform::new(p).unwrap();
+        let x = busy_state(&m);
+        let n = m.n_states();
+        for u in us {
+            let mut b = vec![0.0; 3 * n];
+            m.input_jacobian(&x, u, &mut b).unwrap();
+            let (mut fp, mut fm) = (vec![0.0; n], vec![0.0; n]);
+            for j in 0..3 {
+                let h = 1e-6 * u[j].abs().max(1.0);
+                let (mut up, mut um) = (u, u);
+                up[j] += h;
+                um[j] -= h;
+                m.rhs(&x, up, &mut fp).unwrap();
+                m.rhs(&x, um, &mut fm).unwrap();
+                for r in 0..n {
+                    let fd = (fp[r] - fm[r]) / (2.0 * h);
+                    let an = b[j * n + r];
+                    // the difference's rounding: the rate's last digits over the step
+                    let rounding = 1e-13 * fp[r].abs().max(fm[r].abs()) / h;
+                    assert!(
+                        (an - fd).abs() <= 1e-6 * fd.abs().max(an.abs()) + rounding,
+                        "{name}, U = {u:?}: d{}/dU{}: analytic {an:e} vs fd {fd:e}",
+                        m.state_names()[r],
+                        j + 1
+                    );
+                }
+            }
+        }
+    }
 }
 
 #[test]
