@@ -6,9 +6,7 @@
 use super::family::{FittedLaw, Textbook, golden, sampled};
 use super::saturation::rapp;
 use super::terms::{At, Law, Port, States};
-use super::{
-    Drive, Effect, Exposing, Family, Form, Magnitude, Planted, Probe, Scaling, log_between,
-};
+use super::{Drive, Effect, Exposing, Family, Form, Magnitude, Planted, Probe, log_between};
 use crate::model::Params;
 use crate::model::actuator::{Actuator, StateInfo};
 use crate::model::params::common_rows;
@@ -126,12 +124,11 @@ pub const FAMILY: Family = Family {
     law: Some(law),
 };
 
-/// One stage, and two of half the time, at a fast and a slow time (src/diagnose/diagnose.md,
-/// "Screening"). A slewing stage at a fast and a slow time, slewing at 4, 6 or 8 times the peak
-/// command per second (the paper's 60 V sines change by up to 11 times it), beside the linear
-/// stage of the same time: a lag and a slew both delay the response, and the screening's linear
-/// projection tells them apart only by what the slew explains beyond the lag; its values are
-/// kept as the start, as its coefficients mix the two.
+/// One stage, and two of half the time, at a fast and a slow time; a slewing stage at a fast
+/// and a slow time, slewing at 4, 6 or 8 times the peak command per second (the paper's 60 V
+/// sines change by up to 11 times it) (src/diagnose/diagnose.md, "Screening"). A lag and a slew
+/// both delay the response: the screening's linear projection ranks them alike, and the refits
+/// of every form it cannot tell apart decide.
 fn probes(_: &Params, u_peak: f64) -> Vec<Probe> {
     let mut out = Vec::new();
     for tau in [0.01, 0.04] {
@@ -144,14 +141,10 @@ fn probes(_: &Params, u_peak: f64) -> Vec<Probe> {
     }
     for tau in [0.005, 0.02] {
         for s in [4.0, 6.0, 8.0] {
-            out.push(Probe {
-                form: &FORMS[2],
-                columns: vec![
-                    vec![("tau_a", tau)],
-                    vec![("tau_a", tau), ("slew", s * u_peak)],
-                ],
-                scaling: Scaling::Fixed,
-            });
+            out.push(Probe::one(
+                &FORMS[2],
+                vec![("tau_a", tau), ("slew", s * u_peak)],
+            ));
         }
     }
     out
