@@ -280,11 +280,8 @@ impl Fits {
                     .collect()
             })
             .collect();
-        let held = if last.validation.is_empty() {
-            &floor[..1]
-        } else {
-            &floor[1..]
-        };
+        let (first, fits) = last.held_out();
+        let held = &floor[first..first + fits.len()];
         let mut sum = BTreeMap::<String, (f64, usize)>::new();
         for (name, f) in held.iter().flatten() {
             let s = sum.entry(name.clone()).or_default();
@@ -321,11 +318,7 @@ impl Diagnosis {
 /// Per-channel NRMSE fits on the held-out experiments (the estimation one when there is
 /// none), averaged over experiments, with the noise floor's fit beside them.
 fn held_out_fits(id: &Identification) -> BTreeMap<String, f64> {
-    let fits = if id.validation.is_empty() {
-        &id.estimation
-    } else {
-        &id.validation
-    };
+    let (_, fits) = id.held_out();
     let mut sum: BTreeMap<String, (f64, usize)> = BTreeMap::new();
     for e in fits {
         for (name, f) in &e.fits {
@@ -460,12 +453,7 @@ fn held_out_gain(
     before: &Identification,
     after: &Identification,
 ) -> (f64, f64) {
-    // a single record is its own held-out one (`held_or_estimation`)
-    let (fb, fa) = if before.validation.is_empty() {
-        (&before.estimation, &after.estimation)
-    } else {
-        (&before.validation, &after.validation)
-    };
+    let (fb, fa) = (before.held_out().1, after.held_out().1);
     let exps: Vec<&Experiment> = held.iter().collect();
     let (mut gain, mut gap, mut n) = (0.0, 0.0, 0);
     for (k, (b, a)) in fb.iter().zip(fa).enumerate() {
@@ -505,11 +493,7 @@ fn held_or_estimation<'e>(
 
 /// The largest distance of a held-out fit below the noise floor's [points].
 fn worst_gap_to_floor(held: &[Experiment], id: &Identification) -> f64 {
-    let fits = if id.validation.is_empty() {
-        &id.estimation
-    } else {
-        &id.validation
-    };
+    let (_, fits) = id.held_out();
     let mut worst: f64 = 0.0;
     for (e, f) in held.iter().zip(fits) {
         for (name, v) in &f.fits {
@@ -540,11 +524,7 @@ fn remaining(
     last: &Identification,
     after: &[Disagreement],
 ) -> Vec<Remaining> {
-    let (first, fits) = if last.validation.is_empty() {
-        (0, &last.estimation)
-    } else {
-        (1, &last.validation)
-    };
+    let (first, fits) = last.held_out();
     let mut out = Vec::new();
     for ((e, floor), f) in experiments[first..].iter().zip(&floor[first..]).zip(fits) {
         for (name, v) in &f.fits {

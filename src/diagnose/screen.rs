@@ -7,7 +7,7 @@
 //! forms"); a form is worth its explained share less the price of its dimensions, in the units
 //! of the BIC.
 
-use nalgebra::{DMatrix, DVector};
+use nalgebra::{DMatrix, DVector, Dyn, SVD};
 
 use super::Error;
 use super::analysis::noise_level;
@@ -62,8 +62,22 @@ pub struct Point<'a> {
     weights: Vec<(Channel, f64)>,
     rtol: f64,
     y0: DVector<f64>,
-    residual: DVector<f64>,
+    /// The directions in which the free parameters move the outputs, B, and its SVD.
     base_directions: DMatrix<f64>,
+    base: SVD<f64, Dyn, Dyn>,
+    /// The residual with what B can do projected out, r⊥ = r − B (B⁺ r).
+    residual_perp: DVector<f64>,
+}
+
+/// Iterations of an SVD at most: a few dozen converge these matrices; nalgebra's plain `svd`
+/// iterates until it converges, which a NaN never does.
+const SVD_SWEEPS: usize = 1000;
+
+/// The SVD of `m`, bounded in its iterations.
+fn svd(m: DMatrix<f64>) -> Result<SVD<f64, Dyn, Dyn>, Error> {
+    SVD::try_new(m, true, true, f64::EPSILON, SVD_SWEEPS).ok_or(Error::Projection(
+        "the SVD of the sensitivities did not converge",
+    ))
 }
 
 impl<'a> Point<'a> {
@@ -92,14 +106,19 @@ impl<'a> Point<'a> {
             p.set(name, v + h)?;
             cols.push(outputs(&p, exp, &weights, rtol)? - &y0);
         }
+        let base_directions = DMatrix::from_columns(&cols);
+        let base = svd(base_directions.clone())?;
+        let residual_perp = &residual
+            - &base_directions * base.solve(&residual, 1e-12).map_err(Error::Projection)?;
         Ok(Point {
             params,
             exp,
             weights,
             rtol,
             y0,
-            residual,
-            base_directions: DMatrix::from_columns(&cols),
+            base_directions,
+            base,
+            residual_perp,
         })
     }
 
@@ -115,17 +134,11 @@ impl<'a> Point<'a> {
         }
         let d = DMatrix::from_columns(&cols);
         // project out the base sensitivities: D⊥ = D − B (B⁺ D)
-        let b = &self.base_directions;
-        let svd = b.clone().svd(true, true);
-        let d_perp = &d - b * svd.solve(&d, 1e-12).map_err(Error::Projection)?;
-        let r_perp = &self.residual
-            - b * svd
-                .solve(&self.residual, 1e-12)
-                .map_err(Error::Projection)?;
-        let coef = d_perp
-            .clone()
-            .svd(true, true)
-            .solve(&r_perp, 1e-9)
+        let d_perp =
+            &d - &self.base_directions * self.base.solve(&d, 1e-12).map_err(Error::Projection)?;
+        let r_perp = &self.residual_perp;
+        let coef = svd(d_perp.clone())?
+            .solve(r_perp, 1e-9)
             .map_err(Error::Projection)?;
         let explained = (&d_perp * &coef).norm_squared();
         let total = r_perp.norm_squared().max(1e-300);
@@ -165,7 +178,7 @@ impl<'a> Point<'a> {
             _ => false,
         };
         let explained = if wrong_sign { 0.0 } else { explained };
-        let n = self.residual.len() as f64;
+        let n = self.residual_perp.len() as f64;
         Ok(Score {
             form: probe.form,
             score: explained / total,

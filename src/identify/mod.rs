@@ -161,6 +161,19 @@ pub struct Identification {
     pub conditions: Vec<conditions::Found>,
 }
 
+impl Identification {
+    /// The fits on the held-out records: the validation ones, or the estimation ones where
+    /// there are none (a single record is then its own held-out one), with the index of the
+    /// first of them among all records.
+    pub fn held_out(&self) -> (usize, &[ExperimentFit]) {
+        if self.validation.is_empty() {
+            (0, &self.estimation)
+        } else {
+            (self.estimation.len(), &self.validation)
+        }
+    }
+}
+
 /// Simulates `exp` with `params` under its conditions (from its start, sampled where its
 /// sensor lags to), the samples stamped with the experiment's times.
 pub fn simulate(params: &Params, exp: &Experiment, rtol: f64) -> Result<Vec<Sample>, Error> {
