@@ -11,6 +11,8 @@ use std::time::Duration;
 
 use hasel_fmu::diagnose::hidden::{self, Truth};
 use hasel_fmu::diagnose::{self, FIT_TOLERANCE, Options, Verdict, floor_fit};
+use hasel_fmu::identify::Options as IdOptions;
+use hasel_fmu::identify::conditions::{self, Choice};
 use hasel_fmu::identify::synth::Columns;
 use hasel_fmu::model::{Effect, Params};
 
@@ -341,5 +343,26 @@ fn a_sensor_lag_neither_names_an_effect_nor_leaves_unexplained() {
     for lag in [0.0, 3.2e-4] {
         let d = diagnose_lab(case.clone().with_sensor_lag(lag), 2);
         assert_eq!(d.verdict, Verdict::None, "lag {lag}: {}", d.answer());
+    }
+}
+
+/// A record mid-run of a device with a static load the model lacks (a preload): the model is
+/// off by about as much everywhere as at rest, and that offset must not hide the start (in
+/// the protocols' benchmark the held-out record of this case was simulated from rest).
+#[test]
+fn a_start_mid_run_is_found_though_the_model_misses_a_static_load() {
+    let protocol = hidden::Protocol::draw(71272).lasting(6.0);
+    assert_eq!(protocol.drive, hidden::Drive::Levels);
+    let case = hidden::hide(Truth::Effect(Effect::Preload), 1).unwrap();
+    let exps = case
+        .with_protocol(protocol)
+        .mid_run(1.3)
+        .experiments(Columns::Heights, 1)
+        .unwrap();
+    let rtol = IdOptions::default().rtol;
+    for exp in &exps {
+        let found = conditions::estimate(&Params::default(), exp, Choice::default(), rtol);
+        let how = found.unwrap().start_how;
+        assert_eq!(how, "detected mid-run, estimated", "{}", exp.name);
     }
 }
