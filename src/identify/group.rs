@@ -19,12 +19,33 @@ pub(super) struct Coordinate {
 }
 
 impl Coordinate {
-    pub(super) fn new(def: &'static ParamDef, prior: f64) -> Coordinate {
-        Coordinate {
-            def,
-            log: def.rule != Rule::Finite && prior > 0.0,
-            scale: prior.abs().max(1e-300),
-        }
+    /// The coordinates of `defs` from `base`: ln p where p must stay positive, otherwise p over
+    /// its start value; a weight of a series (`Rule::Weight`) over the largest start among the
+    /// weights of its unit, or where they all start at 0 among the parameters of its unit (a
+    /// creep's weights against Kb), so that it can start at 0, leave it and come back.
+    fn of(defs: &[&'static ParamDef], base: &Params) -> Vec<Coordinate> {
+        let largest = |weights: bool, unit: &str| {
+            defs.iter()
+                .filter(|d| d.unit == unit && (!weights || d.rule == Rule::Weight))
+                .map(|d| (d.get)(base).abs())
+                .fold(0.0, f64::max)
+        };
+        defs.iter()
+            .map(|&def| {
+                let prior = (def.get)(base);
+                let scale = match def.rule {
+                    Rule::Weight => Some(largest(true, def.unit))
+                        .filter(|&s| s > 0.0)
+                        .unwrap_or_else(|| largest(false, def.unit)),
+                    _ => prior.abs(),
+                };
+                Coordinate {
+                    def,
+                    log: def.rule.fitted_in_log(prior),
+                    scale: scale.max(1e-300),
+                }
+            })
+            .collect()
     }
     fn to_x(self, p: f64) -> f64 {
         if self.log { p.ln() } else { p / self.scale }
@@ -188,6 +209,8 @@ pub(super) struct GroupResult {
     pub(super) not_identifiable: Vec<(String, String)>,
     pub(super) held_combinations: Vec<Vec<(String, f64)>>,
     pub(super) names: Vec<String>,
+    /// The fit's coordinate of each of `names`.
+    pub(super) coords: Vec<Coordinate>,
     pub(super) covariance: DMatrix<f64>,
     pub(super) iterations: usize,
     pub(super) simulations: usize,
@@ -367,10 +390,7 @@ pub(super) fn fit_group(
                 * e.t.len()
         })
         .sum();
-    let coords: Vec<Coordinate> = defs
-        .iter()
-        .map(|d| Coordinate::new(d, (d.get)(base)))
-        .collect();
+    let coords = Coordinate::of(defs, base);
     let problem = Problem {
         base,
         coords: coords.clone(),
@@ -398,6 +418,7 @@ pub(super) fn fit_group(
             let prior = (c.def.get)(base);
             let default = match c.def.rule {
                 Rule::Positive | Rule::PositiveOrInfinite => (prior / 20.0, prior * 20.0),
+                Rule::Weight => (0.0, f64::INFINITY),
                 Rule::NonNegative => (
                     0.0,
                     if prior > 0.0 {
@@ -463,6 +484,7 @@ pub(super) fn fit_group(
                     not_identifiable,
                     held_combinations: vec![],
                     names: vec![],
+                    coords: vec![],
                     covariance: DMatrix::zeros(0, 0),
                     iterations,
                     simulations,
@@ -646,6 +668,7 @@ pub(super) fn fit_group(
             .iter()
             .map(|&c| coords[c].def.name.to_string())
             .collect();
+        let active_coords = active.iter().map(|&c| coords[c]).collect();
         let covariance = DMatrix::from_fn(active.len(), active.len(), |a, b| {
             cov_x[(active[a], active[b])]
         });
@@ -658,6 +681,7 @@ pub(super) fn fit_group(
                 not_identifiable,
                 held_combinations,
                 names,
+                coords: active_coords,
                 covariance,
                 iterations,
                 simulations,
