@@ -569,33 +569,49 @@ pub(super) fn fit_group(
             }
             &inv * meat * &inv
         });
-        // the worst-determined direction, if its 95 % interval is wider than ×/÷ 1.5
+        // the worst-determined direction, if its 95 % interval is wider than ×/÷ 1.5. Weights
+        // of a series are not held for a wide interval: neighbours of a spectrum share what the
+        // data tell of them, the sum is what is judged, and 0 is a value a weight may take
+        // (src/identify/identify.md, "Parameters the data do not determine"); the other
+        // parameters are judged on their marginal covariance
         let worst = match &cov_z {
             None => {
                 let eig = jtj.symmetric_eigen();
                 let (kmin, _) = eig.eigenvalues.argmin();
                 Some((
-                    eig.eigenvectors.column(kmin).into_owned(),
+                    &basis * eig.eigenvectors.column(kmin),
                     "the measured outputs do not depend on it".to_string(),
                 ))
             }
             Some(cov) => {
-                let eig = cov.clone().symmetric_eigen();
-                let (kmax, var) = eig.eigenvalues.argmax();
-                let half = 1.96 * var.max(0.0).sqrt();
-                (half > MAX_LOG_HALF_WIDTH).then(|| {
-                    (
-                        eig.eigenvectors.column(kmax).into_owned(),
-                        format!(
-                            "its 95 % interval would span a factor of {:.3e}",
-                            (2.0 * half).exp()
-                        ),
-                    )
-                })
+                let judged: Vec<usize> = (0..n)
+                    .filter(|&i| coords[i].def.rule != Rule::Weight)
+                    .collect();
+                let cov_x = &basis * cov * basis.transpose();
+                let eig = cov_x
+                    .select_rows(&judged)
+                    .select_columns(&judged)
+                    .symmetric_eigen();
+                let widest = (!judged.is_empty()).then(|| eig.eigenvalues.argmax());
+                widest
+                    .map(|(kmax, var)| (kmax, 1.96 * var.max(0.0).sqrt()))
+                    .filter(|&(_, half)| half > MAX_LOG_HALF_WIDTH)
+                    .map(|(kmax, half)| {
+                        let mut v = DVector::zeros(n);
+                        for (k, &i) in judged.iter().enumerate() {
+                            v[i] = eig.eigenvectors[(k, kmax)];
+                        }
+                        (
+                            v,
+                            format!(
+                                "its 95 % interval would span a factor of {:.3e}",
+                                (2.0 * half).exp()
+                            ),
+                        )
+                    })
             }
         };
-        if let Some((u, reason)) = worst {
-            let mut v = &basis * u;
+        if let Some((mut v, reason)) = worst {
             // a direction mostly along one parameter holds exactly that parameter (when several
             // parameters do nothing at all, their null space is entered one at a time)
             let j = v.iamax();
