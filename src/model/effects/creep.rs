@@ -263,7 +263,19 @@ const NEAREST_TOLERANCE: f64 = 0.01;
 /// the window's start; the nearest is the one of fewest parameters within
 /// [`NEAREST_TOLERANCE`] of the closest.
 fn spectrum_law(creep: &Creep) -> FittedLaw {
-    let mut points: Vec<(f64, f64)> = creep.branches().iter().map(|b| (b.tau, b.k)).collect();
+    // the spectrum's weights of 0 too: the fit set them there
+    let free = (creep.k_v > 0.0).then_some((creep.tau_v, creep.k_v));
+    let grid = GRID
+        .iter()
+        .copied()
+        .zip(creep.grid)
+        .filter(|_| creep.spectrum_on());
+    let spread = creep
+        .spread
+        .iter()
+        .filter(|b| b.k > 0.0)
+        .map(|b| (b.tau, b.k));
+    let mut points: Vec<(f64, f64)> = free.into_iter().chain(grid).chain(spread).collect();
     points.sort_by(|a, b| a.0.total_cmp(&b.0));
     let t = log_times(WINDOW.0, WINDOW.1, 60);
     let g: Vec<f64> = t
