@@ -330,17 +330,27 @@ fn rms(g: &[f64], fit: impl Iterator<Item = f64>) -> f64 {
 
 type Fitted = (&'static str, String, f64);
 
-/// k exp(−t/τ), τ on `taus`.
-fn one_time(t: &[f64], g: &[f64], taus: &[f64]) -> Fitted {
-    let (k, tau, d) = taus
-        .iter()
-        .map(|&tau| {
-            let e: Vec<f64> = t.iter().map(|t| (-t / tau).exp()).collect();
-            let (k, d) = scaled(g, &e);
-            (k, tau, d)
+/// The kernel of `shapes` whose best non-negative multiple c fits `g` at `t` closest:
+/// (its shape, c, the RMS residual).
+fn closest<S: Copy>(
+    t: &[f64],
+    g: &[f64],
+    shapes: impl Iterator<Item = S>,
+    kernel: impl Fn(S, f64) -> f64,
+) -> (S, f64, f64) {
+    shapes
+        .map(|shape| {
+            let e: Vec<f64> = t.iter().map(|&t| kernel(shape, t)).collect();
+            let (c, d) = scaled(g, &e);
+            (shape, c, d)
         })
         .min_by(|a, b| a.2.total_cmp(&b.2))
-        .expect("times to try");
+        .expect("kernels to try")
+}
+
+/// k exp(−t/τ), τ on `taus`.
+fn one_time(t: &[f64], g: &[f64], taus: &[f64]) -> Fitted {
+    let (tau, k, d) = closest(t, g, taus.iter().copied(), |tau, t| (-t / tau).exp());
     (
         "one time",
         format!("k = {k:.3e} N.m/rad, tau = {tau:.3} s"),
@@ -350,15 +360,8 @@ fn one_time(t: &[f64], g: &[f64], taus: &[f64]) -> Fitted {
 
 /// c t^(−α), α from 0 to 1.5 (a fractional, Scott-Blair, kernel).
 fn power_law(t: &[f64], g: &[f64]) -> Fitted {
-    let (c, alpha, d) = (0..=150)
-        .map(|i| {
-            let alpha = i as f64 / 100.0;
-            let e: Vec<f64> = t.iter().map(|t| t.powf(-alpha)).collect();
-            let (c, d) = scaled(g, &e);
-            (c, alpha, d)
-        })
-        .min_by(|a, b| a.2.total_cmp(&b.2))
-        .expect("exponents to try");
+    let alphas = (0..=150).map(|i| i as f64 / 100.0);
+    let (alpha, c, d) = closest(t, g, alphas, |alpha, t| t.powf(-alpha));
     (
         "power law",
         format!("G = {c:.3e} N.m/rad (t / 1 s)^-{alpha:.2}"),
@@ -368,16 +371,10 @@ fn power_law(t: &[f64], g: &[f64]) -> Fitted {
 
 /// k exp(−(t/τ)^β), τ on `taus`, β from 0.05 to 1.
 fn stretched(t: &[f64], g: &[f64], taus: &[f64]) -> Fitted {
-    let (k, tau, beta, d) = taus
+    let shapes = taus
         .iter()
-        .flat_map(|&tau| (1..=20).map(move |i| (tau, i as f64 / 20.0)))
-        .map(|(tau, beta)| {
-            let e: Vec<f64> = t.iter().map(|t| (-(t / tau).powf(beta)).exp()).collect();
-            let (k, d) = scaled(g, &e);
-            (k, tau, beta, d)
-        })
-        .min_by(|a, b| a.3.total_cmp(&b.3))
-        .expect("kernels to try");
+        .flat_map(|&tau| (1..=20).map(move |i| (tau, i as f64 / 20.0)));
+    let ((tau, beta), k, d) = closest(t, g, shapes, |(tau, beta), t| (-(t / tau).powf(beta)).exp());
     (
         "stretched exponential",
         format!("k = {k:.3e} N.m/rad, tau = {tau:.3} s, beta = {beta:.2}"),
