@@ -95,7 +95,7 @@ pub struct Form {
     pub free: &'static [&'static str],
     /// The parameters that switch the form on, any one of which is enough: its first free
     /// parameter, or each of interchangeable ones (the two stages of a second-order amplifier,
-    /// the two creep branches), of which a fit may leave either near 0.
+    /// the weights of the creep's spectrum), of which a fit may leave any near 0.
     pub magnitudes: &'static [&'static str],
     /// Parameters set to select the form, never fitted (e.g. `drift_site`).
     pub settings: &'static [(&'static str, f64)],
@@ -142,7 +142,7 @@ pub enum Magnitude {
 
 /// Effect parameter settings that switch a form of a family on, each giving one direction in
 /// output space; several settings of one probe span a subspace (the preload's three torques,
-/// the coupling's three pairs, the creep's two branches).
+/// the coupling's three pairs, the weights of the creep's spectrum).
 pub struct Probe {
     pub form: &'static Form,
     pub columns: Vec<Vec<(&'static str, f64)>>,
