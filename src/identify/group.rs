@@ -22,7 +22,8 @@ impl Coordinate {
     /// The coordinates of `defs` from `base`: ln p where p must stay positive, otherwise p over
     /// its start value; a weight of a series (`Rule::Weight`) over the largest start among the
     /// weights of its unit, or where they all start at 0 among the parameters of its unit (a
-    /// creep's weights against Kb), so that it can start at 0, leave it and come back.
+    /// creep's weights against Kb), or else 1 in its unit, so that it can start at 0, leave it
+    /// and come back.
     fn of(defs: &[&'static ParamDef], base: &Params) -> Vec<Coordinate> {
         let largest = |weights: bool, unit: &str| {
             defs.iter()
@@ -34,9 +35,10 @@ impl Coordinate {
             .map(|&def| {
                 let prior = (def.get)(base);
                 let scale = match def.rule {
-                    Rule::Weight => Some(largest(true, def.unit))
-                        .filter(|&s| s > 0.0)
-                        .unwrap_or_else(|| largest(false, def.unit)),
+                    Rule::Weight => [largest(true, def.unit), largest(false, def.unit)]
+                        .into_iter()
+                        .find(|&s| s > 0.0)
+                        .unwrap_or(1.0),
                     _ => prior.abs(),
                 };
                 Coordinate {
@@ -588,18 +590,21 @@ pub(super) fn fit_group(
                     .filter(|&i| coords[i].def.rule != Rule::Weight)
                     .collect();
                 let cov_x = &basis * cov * basis.transpose();
-                let eig = cov_x
-                    .select_rows(&judged)
-                    .select_columns(&judged)
-                    .symmetric_eigen();
-                let widest = (!judged.is_empty()).then(|| eig.eigenvalues.argmax());
-                widest
+                let eig = (!judged.is_empty()).then(|| {
+                    cov_x
+                        .select_rows(&judged)
+                        .select_columns(&judged)
+                        .symmetric_eigen()
+                });
+                eig.as_ref()
+                    .map(|eig| eig.eigenvalues.argmax())
                     .map(|(kmax, var)| (kmax, 1.96 * var.max(0.0).sqrt()))
                     .filter(|&(_, half)| half > MAX_LOG_HALF_WIDTH)
                     .map(|(kmax, half)| {
+                        let vectors = &eig.as_ref().expect("judged above").eigenvectors;
                         let mut v = DVector::zeros(n);
                         for (k, &i) in judged.iter().enumerate() {
-                            v[i] = eig.eigenvectors[(k, kmax)];
+                            v[i] = vectors[(k, kmax)];
                         }
                         (
                             v,
