@@ -33,7 +33,8 @@ use std::time::{Duration, Instant};
 
 use crate::identify::conditions::{Choice, LagChoice, StartChoice};
 use crate::identify::{self, Experiment, FIT_RTOL, Hold, Identification, Options as IdOptions};
-use crate::model::effects::{Form, Magnitude};
+use crate::model::effects::{FittedLaw, Form, Magnitude};
+use crate::model::params::{Rule, parameter};
 use crate::model::{Effect, Params};
 use analysis::Disagreement;
 pub use error::Error;
@@ -223,6 +224,9 @@ pub struct Diagnosis {
     pub effects: Vec<Effect>,
     /// The form of each named effect, in the same order.
     pub forms: Vec<&'static Form>,
+    /// The fitted law of each named effect whose family has a flexible one, in the same order
+    /// (src/diagnose/diagnose.md, "The fitted law").
+    pub laws: Vec<Option<FittedLaw>>,
     pub ambiguous_between: Vec<Effect>,
     /// For `ambiguous`: the experiment that would tell the candidates apart…
     pub separating_experiment: Option<String>,
@@ -433,6 +437,18 @@ fn unknowns(id: &Identification, free: usize) -> usize {
         _ => 0,
     };
     free + slow
+}
+
+/// How many of the fitted parameters `free` a BIC counts at `params`: every one but a weight of
+/// a series that ended at its bound 0 (src/diagnose/diagnose.md, "The decision rule"): a
+/// flexible law is charged for the weights it uses, not for the length of its grid.
+fn degrees(free: &[String], params: &Params) -> usize {
+    free.iter()
+        .filter(|name| {
+            let weight = parameter(name).is_some_and(|d| d.rule == Rule::Weight);
+            !(weight && params.get(name).is_ok_and(|v| v == 0.0))
+        })
+        .count()
 }
 
 /// BIC over the channels of one experiment: Σ_c N_c ln(RSS_c / N_c) + k ln N.
@@ -914,11 +930,16 @@ pub fn diagnose(
     let separating_experiment = (verdict == Verdict::Ambiguous)
         .then(|| separating_experiment(ambiguous_between[0], ambiguous_between[1]));
     let fits = Fits::new(&ordered, &base, &current, &after);
+    let laws = forms
+        .iter()
+        .map(|f| f.effect.family().law.map(|law| law(&current.params)))
+        .collect();
     timing.push(("total".to_string(), began.elapsed().as_secs_f64()));
     Ok(Diagnosis {
         verdict,
         effects,
         forms,
+        laws,
         ambiguous_between,
         separating_experiment,
         separation,
@@ -1002,11 +1023,11 @@ fn revisit(
                 let delta = bic(
                     &estimation[0],
                     &id.simulated[0],
-                    unknowns(&id, o.free.len()),
+                    unknowns(&id, degrees(&o.free, &id.params)),
                 ) - bic(
                     &estimation[0],
                     &current.simulated[0],
-                    unknowns(current, free_list(forms).len()),
+                    unknowns(current, degrees(&free_list(forms), &current.params)),
                 );
                 let at_floor =
                     worst_gap_to_floor(held_or_estimation(estimation, held), &id) <= FIT_TOLERANCE;
@@ -1138,8 +1159,9 @@ fn judge(
     held: &[Experiment],
     forms: &[&Form],
 ) -> Refit {
-    let k_before = free_list(forms).len();
-    let k_after = k_before + form.free.len();
+    let k_before = degrees(&free_list(forms), &before.params);
+    let with: Vec<&Form> = forms.iter().copied().chain([form]).collect();
+    let k_after = degrees(&free_list(&with), &id.params);
     let delta_bic = bic(&estimation[0], &id.simulated[0], unknowns(&id, k_after))
         - bic(
             &estimation[0],
@@ -1235,14 +1257,47 @@ fn magnitude_interval(
                     .and_then(|e| e.std_error.map(|se| e.value > 1.96 * se.abs()))
                     .unwrap_or(false)
             };
-            let shown = form
-                .magnitudes
-                .iter()
-                .find(|n| excludes(n))
-                .unwrap_or(&form.magnitudes[0]);
-            (ci(shown), excludes(shown))
+            match form.magnitudes.iter().find(|n| excludes(n)) {
+                Some(shown) => (ci(shown), true),
+                None if form.magnitudes.len() > 1 => sum_interval(form.magnitudes, id),
+                None => (ci(form.magnitudes[0]), false),
+            }
         }
     }
+}
+
+/// The 95 % interval of the sum of the positive `magnitudes` (a spectrum's weights, which its
+/// fit may share out between neighbours that are each uncertain) from the covariance, and
+/// whether it excludes 0.
+fn sum_interval(magnitudes: &[&str], id: &Identification) -> (Option<(String, f64, f64)>, bool) {
+    let cov = &id.covariance;
+    // each magnitude's position in the covariance and ∂p/∂(its coordinate)
+    let terms: Vec<(usize, f64)> = magnitudes
+        .iter()
+        .filter_map(|m| {
+            let k = cov.names.iter().position(|n| n == m)?;
+            let v = id.params.get(m).ok()?;
+            Some((k, if cov.log[k] { v } else { 1.0 }))
+        })
+        .collect();
+    let total: f64 = magnitudes
+        .iter()
+        .filter_map(|m| id.params.get(m).ok())
+        .sum();
+    let var: f64 = terms
+        .iter()
+        .flat_map(|&(a, da)| {
+            terms
+                .iter()
+                .map(move |&(b, db)| da * db * cov.matrix[(a, b)])
+        })
+        .sum();
+    let half = 1.96 * var.max(0.0).sqrt();
+    let name = magnitudes.join(" + ");
+    (
+        Some((name, total - half, total + half)),
+        !terms.is_empty() && total > half,
+    )
 }
 
 /// Which experiment tells two effects apart: what exposes each.

@@ -108,6 +108,22 @@ pub fn to_json(d: &Diagnosis) -> Value {
         "verdict": d.verdict.name(),
         "effects": d.effects.iter().map(|e| e.name()).collect::<Vec<_>>(),
         "forms": d.forms.iter().map(|f| f.name).collect::<Vec<_>>(),
+        "laws": d.effects.iter().zip(&d.laws).filter_map(|(e, law)| {
+            let law = law.as_ref()?;
+            Some(json!({
+                "effect": e.name(),
+                "what": law.what,
+                "axes": law.axes,
+                "points": law.points.iter().map(|&(x, y)| [x, y]).collect::<Vec<_>>(),
+                "nearest": law.textbook[law.nearest].name,
+                "distance": law.distance,
+                "textbook": law.textbook.iter().map(|k| json!({
+                    "name": k.name,
+                    "values": k.values,
+                    "distance": round(k.distance, 4),
+                })).collect::<Vec<_>>(),
+            }))
+        }).collect::<Vec<_>>(),
         "ambiguous_between": d.ambiguous_between.iter().map(|e| e.name()).collect::<Vec<_>>(),
         "separating_experiment": d.separating_experiment,
         "separation": d.separation.iter().map(|s| json!({
@@ -308,6 +324,44 @@ fn candidates_table(md: &mut String, cs: &[Candidate]) {
 }
 
 /// Measured, before and after for each output of one experiment, and the residuals.
+/// The fitted law of each named effect that has one: its points, and the textbook forms with
+/// how far each lies, the nearest first.
+fn laws_section(md: &mut String, d: &Diagnosis) {
+    for (e, law) in d.effects.iter().zip(&d.laws) {
+        let Some(law) = law else { continue };
+        let near = &law.textbook[law.nearest];
+        let _ = writeln!(
+            md,
+            "## The fitted law of `{}`\n\n{}: nearest the textbook form **{}** ({}), {:.1} % away ({}).\n\n| {} | {} |\n|---|---|",
+            e.name(),
+            law.what,
+            near.name,
+            near.values,
+            100.0 * near.distance,
+            law.distance,
+            law.axes[0],
+            law.axes[1]
+        );
+        for (x, y) in &law.points {
+            let _ = writeln!(md, "| {x:.3} | {y:.4e} |");
+        }
+        let _ = writeln!(
+            md,
+            "\n| textbook form | fitted values | distance |\n|---|---|---|"
+        );
+        for k in &law.textbook {
+            let _ = writeln!(
+                md,
+                "| {} | {} | {:.1} % |",
+                k.name,
+                k.values,
+                100.0 * k.distance
+            );
+        }
+        let _ = writeln!(md);
+    }
+}
+
 fn figure(d: &Diagnosis, k: usize) -> Vec<Panel> {
     let um = 1e6;
     let exp = &d.experiments[k];
@@ -532,6 +586,7 @@ pub fn write(dir: &Path, d: &Diagnosis) -> Result<(), FileError> {
             }
         }
         let _ = writeln!(md);
+        laws_section(&mut md, d);
     }
     let _ = writeln!(md, "## Fits before and after (NRMSE, MATLAB `compare`)\n");
     fits_table(&mut md, d);

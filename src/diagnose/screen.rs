@@ -5,14 +5,14 @@
 //! scales the probe into a starting value for the refit. Every form of an effect's family has
 //! its own probes, which the family's module writes (src/diagnose/diagnose.md, "Families of
 //! forms"); a form is worth its explained share less the price of its dimensions, in the units
-//! of the BIC.
+//! of the BIC (for a series of non-negative weights, the weights it uses).
 
 use nalgebra::{DMatrix, DVector, Dyn, SVD};
 
 use super::Error;
 use super::analysis::noise_level;
 use crate::identify::{Channel, Experiment, simulate};
-use crate::model::effects::{Form, Probe, Scaling};
+use crate::model::effects::{Form, Probe, Scaling, nonnegative_least_squares};
 use crate::model::{Effect, Params};
 
 /// Probes of every form of every family not yet in `params`, at values that change the response
@@ -137,9 +137,13 @@ impl<'a> Point<'a> {
         let d_perp =
             &d - &self.base_directions * self.base.solve(&d, 1e-12).map_err(Error::Projection)?;
         let r_perp = &self.residual_perp;
-        let coef = svd(d_perp.clone())?
-            .solve(r_perp, 1e-9)
-            .map_err(Error::Projection)?;
+        let coef = if probe.scaling == Scaling::Weights {
+            nonnegative_least_squares(&d_perp, r_perp)
+        } else {
+            svd(d_perp.clone())?
+                .solve(r_perp, 1e-9)
+                .map_err(Error::Projection)?
+        };
         let explained = (&d_perp * &coef).norm_squared();
         let total = r_perp.norm_squared().max(1e-300);
         let mut start = Vec::new();
@@ -165,7 +169,7 @@ impl<'a> Point<'a> {
                 // saturation angles) are kept
                 let value = match probe.scaling {
                     Scaling::Magnitude if i == 0 => v * coef[k].clamp(0.2, 5.0),
-                    Scaling::Signed if i == 0 => v * coef[k],
+                    Scaling::Signed | Scaling::Weights if i == 0 => v * coef[k],
                     _ => v,
                 };
                 start.push((name, value));
@@ -179,10 +183,15 @@ impl<'a> Point<'a> {
         };
         let explained = if wrong_sign { 0.0 } else { explained };
         let n = self.residual_perp.len() as f64;
+        // a series is charged for the weights it uses, not for the length of its grid
+        let dimensions = match probe.scaling {
+            Scaling::Weights => coef.iter().filter(|&&c| c > 0.0).count(),
+            _ => probe.form.free.len(),
+        };
         Ok(Score {
             form: probe.form,
             score: explained / total,
-            worth: explained - probe.form.free.len() as f64 * n.ln(),
+            worth: explained - dimensions as f64 * n.ln(),
             start,
         })
     }

@@ -75,9 +75,9 @@ def test_interface_is_the_contract(fmu_path):
     assert md.modelExchange.modelIdentifier == "HaselPlatform"
     for interface in (md.modelExchange, md.coSimulation):
         assert interface.providesDirectionalDerivative
-    # 33 states: the paper's 5 and 6 effect states per actuator, each with its der() variable
+    # 48 states: the paper's 5 and 11 effect states per actuator, each with its der() variable
     states = [d.variable.derivative for d in md.derivatives]
-    assert len(states) == 33 and states[0].name == "theta_1" and states[-1].name == "U_amp2_3"
+    assert len(states) == 48 and states[0].name == "theta_1" and states[-1].name == "U_amp2_3"
     assert [d.variable.name for d in md.derivatives][:2] == ["der(theta_1)", "der(l_p_1)"]
     assert by_name["der(Q1_2)"].unit == "A" and by_name["der(theta_3)"].unit == "rad/s"
 
@@ -168,7 +168,7 @@ def test_effects_are_parameters_and_their_states_variables(fmu_path):
     assert np.all(off["Q3_1"] == 0.0) and np.all(off["z_v_2"] == 0.0)
 
 
-EFFECTS_WITH_STATES = {"R3": 2e4, "tau3": 0.5, "k_v": 0.05, "tau_v": 0.3, "k_v2": 0.02, "k_h": 0.04,
+EFFECTS_WITH_STATES = {"R3": 2e4, "tau3": 0.5, "k_v": 0.05, "tau_v": 0.3, "k_v_1s": 0.02, "k_h": 0.04,
                        "theta_h": 2e-3, "tau_a": 0.02, "tau_a2": 0.005, "k_c": 40.0, "k3": 30.0}
 
 
@@ -237,8 +237,8 @@ def test_directional_derivatives_match_central_differences(fmu_path, effects, tm
         err = np.max(np.abs(dd - fd) * scale / row_scale)
         assert err <= 1e-6 * size, f"column {md.modelVariables[known].name}: error {err:.2e} of {size:.2e}"
         nonzero += size > 0
-    # 15 states and 3 inputs move something; with the effects, 33 states
-    assert nonzero == (36 if effects else 18)
+    # 15 states and 3 inputs move something; with the effects, 48 states
+    assert nonzero == (51 if effects else 18)
     for fmu in (cs, me):
         fmu.terminate()
         fmu.freeInstance()

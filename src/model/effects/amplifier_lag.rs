@@ -63,6 +63,7 @@ pub const FAMILY: Family = Family {
     },
     hidden: unequal_stages,
     variants: &[("amplifier_lag_second_order", equal_stages)],
+    law: None,
 };
 
 /// One stage, and two of half the time, at a fast and a slow time (src/diagnose/diagnose.md,

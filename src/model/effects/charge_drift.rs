@@ -137,6 +137,7 @@ pub const FAMILY: Family = Family {
     },
     hidden: two_traps,
     variants: &[("charge_drift_film", across_the_film)],
+    law: None,
 };
 
 /// The element is on at its magnitude: R3 in series, C3 across the film.

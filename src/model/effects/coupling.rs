@@ -65,6 +65,7 @@ pub const FAMILY: Family = Family {
     },
     hidden: unequal_pairs,
     variants: &[("coupling_tilt", tilt_spring)],
+    law: None,
 };
 
 /// The equal pairs at k_c, and each pair alone (src/diagnose/diagnose.md, "Screening").

@@ -50,6 +50,7 @@ pub const FAMILY: Family = Family {
     },
     hidden: wandering,
     variants: &[],
+    law: None,
 };
 
 /// A delay wandering around its mean (network jitter), which the data generator applies.

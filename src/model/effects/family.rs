@@ -5,6 +5,8 @@
 //! documents. Its terms (energy, right-hand side, Jacobian, dissipation) are the module's
 //! [`super::terms::Law`].
 
+use nalgebra::{DMatrix, DVector};
+
 use super::{Effect, EffectParams};
 use crate::model::Params;
 use crate::model::actuator::StateInfo;
@@ -52,6 +54,36 @@ pub struct Family {
     pub hidden: Plant,
     /// Further hidden forms, by name (their names are hidden cases of the CLI).
     pub variants: &'static [(&'static str, Plant)],
+    /// The family's fitted law as a verdict shows it, where the family has a flexible one
+    /// (src/diagnose/diagnose.md, "The fitted law").
+    pub law: Option<fn(&Params) -> FittedLaw>,
+}
+
+/// A family's fitted law as the verdict shows it: its points against its variable, and the
+/// textbook forms fitted to it with how far each lies.
+#[derive(Clone, Debug, PartialEq)]
+pub struct FittedLaw {
+    /// What the points are, in words.
+    pub what: &'static str,
+    /// Names and units of the points' two coordinates.
+    pub axes: [&'static str; 2],
+    pub points: Vec<(f64, f64)>,
+    /// How the distance to a textbook form is measured, in words.
+    pub distance: &'static str,
+    /// The textbook forms fitted to the law, fewest parameters first.
+    pub textbook: Vec<Textbook>,
+    /// The one the law is nearest to: an index into `textbook`.
+    pub nearest: usize,
+}
+
+/// A textbook form fitted to a law.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Textbook {
+    pub name: &'static str,
+    /// Its fitted values, in words.
+    pub values: String,
+    /// How far the law lies from it (see [`FittedLaw::distance`]).
+    pub distance: f64,
 }
 
 /// One form of a family: the parameters it frees (its magnitude first) and the settings that
@@ -63,7 +95,7 @@ pub struct Form {
     pub free: &'static [&'static str],
     /// The parameters that switch the form on, any one of which is enough: its first free
     /// parameter, or each of interchangeable ones (the two stages of a second-order amplifier,
-    /// the two creep branches), of which a fit may leave either near 0.
+    /// the weights of the creep's spectrum), of which a fit may leave any near 0.
     pub magnitudes: &'static [&'static str],
     /// Parameters set to select the form, never fitted (e.g. `drift_site`).
     pub settings: &'static [(&'static str, f64)],
@@ -110,7 +142,7 @@ pub enum Magnitude {
 
 /// Effect parameter settings that switch a form of a family on, each giving one direction in
 /// output space; several settings of one probe span a subspace (the preload's three torques,
-/// the coupling's three pairs, the creep's two branches).
+/// the coupling's three pairs, the weights of the creep's spectrum).
 pub struct Probe {
     pub form: &'static Form,
     pub columns: Vec<Vec<(&'static str, f64)>>,
@@ -137,6 +169,10 @@ pub enum Scaling {
     Signed,
     /// A limit (U_max): the probe value is kept.
     Fixed,
+    /// Non-negative weights of a series (the creep's spectrum), column j switching weight j on
+    /// alone: the start is each column's value times its coefficient of the non-negative least
+    /// squares, 0 where that is 0, and the form's worth counts only the weights above 0.
+    Weights,
     /// The coupling's pairs: column j switches pair j on alone at k_c; the start is
     /// k_c c_12 with the weights c_13 / c_12 and c_23 / c_12 (all kept positive).
     Pairs,
@@ -194,4 +230,85 @@ pub fn log_between(between: &mut dyn FnMut(f64, f64) -> f64, lo: f64, hi: f64) -
 /// mechanical families' probes and hidden magnitudes.
 pub fn mean_kb(params: &Params) -> f64 {
     params.act.iter().map(|a| a.kb).sum::<f64>() / 3.0
+}
+
+/// min |A x − b| over x ≥ 0, by Lawson and Hanson's active set: the weights of a non-negative
+/// series (a creep's spectrum, its screening's start).
+pub fn nonnegative_least_squares(a: &DMatrix<f64>, b: &DVector<f64>) -> DVector<f64> {
+    let n = a.ncols();
+    let mut x = DVector::zeros(n);
+    let mut passive = vec![false; n];
+    let tol = 1e-12 * a.norm() * b.norm();
+    // each pass frees one coefficient; the inner loop drops the ones its solve makes negative
+    for _ in 0..3 * n {
+        let w = a.transpose() * (b - a * &x);
+        let Some(j) = (0..n)
+            .filter(|&j| !passive[j] && w[j] > tol)
+            .max_by(|&i, &j| w[i].total_cmp(&w[j]))
+        else {
+            break;
+        };
+        passive[j] = true;
+        // each inner pass sets one coefficient back to 0 (bounded: rounding must not spin it)
+        for _ in 0..n {
+            let idx: Vec<usize> = (0..n).filter(|&j| passive[j]).collect();
+            let z = a
+                .select_columns(&idx)
+                .svd(true, true)
+                .solve(b, 1e-12)
+                .expect("U and V were computed");
+            if z.iter().all(|&v| v > 0.0) {
+                for (k, &j) in idx.iter().enumerate() {
+                    x[j] = z[k];
+                }
+                break;
+            }
+            // toward z as far as every coefficient stays ≥ 0; the one that reaches 0 leaves
+            let alpha = idx
+                .iter()
+                .zip(z.iter())
+                .filter(|&(_, &zk)| zk <= 0.0)
+                .map(|(&j, &zk)| x[j] / (x[j] - zk))
+                .fold(1.0f64, f64::min);
+            for (k, &j) in idx.iter().enumerate() {
+                x[j] += alpha * (z[k] - x[j]);
+                if z[k] <= 0.0 && x[j] <= 1e-14 * x.amax().max(f64::MIN_POSITIVE) {
+                    x[j] = 0.0;
+                    passive[j] = false;
+                }
+            }
+            if idx.iter().all(|&j| !passive[j]) {
+                break;
+            }
+        }
+    }
+    x
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn nonnegative_least_squares_drops_what_would_be_negative() {
+        // b = 2 a0 + 1 a1 exactly; a2 would take a negative share of the rest
+        let a = DMatrix::from_row_slice(
+            4,
+            3,
+            &[1.0, 0.0, 1.0, 0.0, 1.0, 1.0, 1.0, 1.0, 0.0, 0.5, 0.0, 1.0],
+        );
+        let b = &a.column(0) * 2.0 + a.column(1);
+        let x = nonnegative_least_squares(&a, &b.into_owned());
+        assert!(
+            (x[0] - 2.0).abs() < 1e-12 && (x[1] - 1.0).abs() < 1e-12 && x[2] == 0.0,
+            "{x}"
+        );
+        // against every column: 0
+        let x = nonnegative_least_squares(&a, &DVector::from_element(4, -1.0));
+        assert!(x.iter().all(|&v| v == 0.0), "{x}");
+        // the unconstrained solution has a negative coefficient: held at 0, the rest refitted
+        let b = &a.column(0) * 1.0 - &a.column(2) * 0.5;
+        let x = nonnegative_least_squares(&a, &b.into_owned());
+        assert!(x[2] == 0.0 && x[0] > 0.0, "{x}");
+    }
 }

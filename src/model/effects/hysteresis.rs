@@ -99,6 +99,7 @@ pub const FAMILY: Family = Family {
     },
     hidden: dahl,
     variants: &[("hysteresis_rate", relaxing_dahl)],
+    law: None,
 };
 
 /// Two saturation angles, without and with relaxation (src/diagnose/diagnose.md, "Screening").

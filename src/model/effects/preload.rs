@@ -78,6 +78,7 @@ pub const FAMILY: Family = Family {
     },
     hidden: weight,
     variants: &[],
+    law: None,
 };
 
 /// A weight on the platform.

@@ -69,6 +69,7 @@ pub const FAMILY: Family = Family {
     },
     hidden: compressing,
     variants: &[],
+    law: None,
 };
 
 /// An output stage that compresses before it clips.

@@ -67,6 +67,7 @@ pub const FAMILY: Family = Family {
     },
     hidden: fifth_power,
     variants: &[],
+    law: None,
 };
 
 /// Stiffening of the fifth power.
