@@ -5,7 +5,7 @@
 //! documents. Its terms (energy, right-hand side, Jacobian, dissipation) are the module's
 //! [`super::terms::Law`].
 
-use nalgebra::{DMatrix, DVector};
+use nalgebra::{DMatrix, DVector, SVD};
 
 use super::{Effect, EffectParams};
 use crate::model::Params;
@@ -252,11 +252,12 @@ pub fn nonnegative_least_squares(a: &DMatrix<f64>, b: &DVector<f64>) -> DVector<
         // each inner pass sets one coefficient back to 0 (bounded: rounding must not spin it)
         for _ in 0..n {
             let idx: Vec<usize> = (0..n).filter(|&j| passive[j]).collect();
-            let z = a
-                .select_columns(&idx)
-                .svd(true, true)
-                .solve(b, 1e-12)
-                .expect("U and V were computed");
+            // bounded: nalgebra's plain `svd` iterates for ever on a NaN
+            let Some(svd) = SVD::try_new(a.select_columns(&idx), true, true, f64::EPSILON, 1000)
+            else {
+                return x;
+            };
+            let z = svd.solve(b, 1e-12).expect("U and V were computed");
             if z.iter().all(|&v| v > 0.0) {
                 for (k, &j) in idx.iter().enumerate() {
                     x[j] = z[k];
