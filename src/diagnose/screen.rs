@@ -13,6 +13,7 @@ use super::Error;
 use super::analysis::noise_level;
 use crate::identify::{Channel, Experiment, simulate};
 use crate::model::effects::{Form, Probe, Scaling, nonnegative_least_squares};
+use crate::model::linalg::bounded_svd;
 use crate::model::{Effect, Params};
 
 /// Probes of every form of every family not yet in `params`, at values that change the response
@@ -69,13 +70,9 @@ pub struct Point<'a> {
     residual_perp: DVector<f64>,
 }
 
-/// Iterations of an SVD at most: a few dozen converge these matrices; nalgebra's plain `svd`
-/// iterates until it converges, which a NaN never does.
-const SVD_SWEEPS: usize = 1000;
-
 /// The SVD of `m`, bounded in its iterations.
 fn svd(m: DMatrix<f64>) -> Result<SVD<f64, Dyn, Dyn>, Error> {
-    SVD::try_new(m, true, true, f64::EPSILON, SVD_SWEEPS).ok_or(Error::Projection(
+    bounded_svd(m).ok_or(Error::Projection(
         "the SVD of the sensitivities did not converge",
     ))
 }

@@ -5,11 +5,12 @@
 //! documents. Its terms (energy, right-hand side, Jacobian, dissipation) are the module's
 //! [`super::terms::Law`].
 
-use nalgebra::{DMatrix, DVector, SVD};
+use nalgebra::{DMatrix, DVector};
 
 use super::{Effect, EffectParams};
 use crate::model::Params;
 use crate::model::actuator::StateInfo;
+use crate::model::linalg::bounded_svd;
 use crate::model::params::ParamDef;
 
 /// One family: a place in the model where a missing mechanism enters, with its forms.
@@ -252,9 +253,7 @@ pub fn nonnegative_least_squares(a: &DMatrix<f64>, b: &DVector<f64>) -> DVector<
         // each inner pass sets one coefficient back to 0 (bounded: rounding must not spin it)
         for _ in 0..n {
             let idx: Vec<usize> = (0..n).filter(|&j| passive[j]).collect();
-            // bounded: nalgebra's plain `svd` iterates for ever on a NaN
-            let Some(svd) = SVD::try_new(a.select_columns(&idx), true, true, f64::EPSILON, 1000)
-            else {
+            let Some(svd) = bounded_svd(a.select_columns(&idx)) else {
                 return x;
             };
             let z = svd.solve(b, 1e-12).expect("U and V were computed");
