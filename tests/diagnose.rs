@@ -11,8 +11,10 @@ use std::time::Duration;
 
 use hasel_fmu::diagnose::hidden::{self, Truth};
 use hasel_fmu::diagnose::{self, FIT_TOLERANCE, Options, Verdict, floor_fit};
+use hasel_fmu::identify::Options as IdOptions;
+use hasel_fmu::identify::conditions::{self, Choice};
 use hasel_fmu::identify::synth::Columns;
-use hasel_fmu::model::effects::FittedLaw;
+use hasel_fmu::model::effects::{FittedLaw, creep};
 use hasel_fmu::model::{Effect, Params};
 
 fn diagnose_case(truth: Truth, columns: Columns, seed: u64) -> diagnose::Diagnosis {
@@ -85,15 +87,16 @@ fn named_in_form(effect: Effect, variant: usize, forms: &[&str], seed: u64) -> d
     d
 }
 
-/// The named effect's fitted law, shown in the JSON with the textbook form nearest it.
-fn law_shown(d: &diagnose::Diagnosis) -> &FittedLaw {
+/// The named effect's fitted law and the name of the textbook form nearest it, as the JSON
+/// shows them.
+fn law_shown(d: &diagnose::Diagnosis) -> (&FittedLaw, &'static str) {
     assert_eq!(d.laws.len(), 1, "{}", d.answer());
-    let law = &d.laws[0];
-    assert_eq!(law.effect, d.effects[0]);
+    let law = d.laws[0].as_ref().expect("the family has a fitted law");
     let json = diagnose::report::to_json(d);
-    let nearest = law.nearest().unwrap();
-    assert_eq!(json["laws"][0]["nearest"]["form"], nearest.name.as_str());
-    law
+    assert_eq!(json["laws"][0]["effect"], d.effects[0].name());
+    let nearest = law.textbook[law.nearest].name;
+    assert_eq!(json["laws"][0]["nearest"], nearest);
+    (law, nearest)
 }
 
 #[test]
@@ -109,6 +112,40 @@ fn charge_drift_is_named() {
 #[test]
 fn creep_is_named() {
     named(Effect::Creep, 1);
+}
+
+/// A creep of a power-law (fractional) kernel, which neither the grid nor the library's one
+/// time contains (issue 29: a creep of a kernel unlike the library's was named `hysteresis`):
+/// named `creep`, in the form of its spectrum, which the verdict shows weight by weight with
+/// every textbook kernel's distance. Seed 9 draws a power law (alpha 0.34); it was chosen
+/// before it was first diagnosed, and tunes nothing.
+#[test]
+fn a_creep_of_a_fractional_kernel_is_creep_with_its_law() {
+    let truth = Truth::Effect(Effect::Creep);
+    assert!(
+        hidden::hide(truth, 9)
+            .unwrap()
+            .description
+            .contains("power-law")
+    );
+    let d = named_from(truth, Columns::Heights, 9);
+    assert_eq!(d.forms[0].name, "spectrum");
+    let json = diagnose::report::to_json(&d);
+    let law = &json["laws"][0];
+    assert_eq!(law["effect"], "creep");
+    let taus: Vec<f64> = law["points"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|p| p[0].as_f64().unwrap())
+        .collect();
+    assert_eq!(taus, creep::GRID, "{law}");
+    let textbook = law["textbook"].as_array().unwrap();
+    assert_eq!(textbook.len(), 4, "{law}");
+    assert!(
+        textbook.iter().any(|k| k["name"] == law["nearest"]),
+        "{law}"
+    );
 }
 
 #[test]
@@ -189,9 +226,8 @@ fn an_output_stage_with_unequal_limits_is_named_saturation() {
         truth.u_max,
         truth.u_max_neg
     );
-    let law = law_shown(&d);
-    let nearest = &law.nearest().unwrap().name;
-    assert!(nearest.starts_with("unequal"), "{}: {law:?}", law.text);
+    let (law, nearest) = law_shown(&d);
+    assert_eq!(nearest, "unequal clamp", "{}: {law:?}", law.what);
 }
 
 #[test]
@@ -207,9 +243,8 @@ fn a_slewing_amplifier_is_named_amplifier_lag() {
         a.slew,
         truth.slew
     );
-    let law = law_shown(&d);
-    let nearest = &law.nearest().unwrap().name;
-    assert!(nearest.starts_with("hard slew"), "{}: {law:?}", law.text);
+    let (law, nearest) = law_shown(&d);
+    assert_eq!(nearest, "hard slew limit", "{}: {law:?}", law.what);
 }
 
 /// Two mechanisms at once: both named, in either order, each with its form in the JSON, and
@@ -395,5 +430,26 @@ fn a_sensor_lag_neither_names_an_effect_nor_leaves_unexplained() {
     for lag in [0.0, 3.2e-4] {
         let d = diagnose_lab(case.clone().with_sensor_lag(lag), 2);
         assert_eq!(d.verdict, Verdict::None, "lag {lag}: {}", d.answer());
+    }
+}
+
+/// A record mid-run of a device with a static load the model lacks (a preload): the model is
+/// off by about as much everywhere as at rest, and that offset must not hide the start (in
+/// the protocols' benchmark the held-out record of this case was simulated from rest).
+#[test]
+fn a_start_mid_run_is_found_though_the_model_misses_a_static_load() {
+    let protocol = hidden::Protocol::draw(71272).lasting(6.0);
+    assert_eq!(protocol.drive, hidden::Drive::Levels);
+    let case = hidden::hide(Truth::Effect(Effect::Preload), 1).unwrap();
+    let exps = case
+        .with_protocol(protocol)
+        .mid_run(1.3)
+        .experiments(Columns::Heights, 1)
+        .unwrap();
+    let rtol = IdOptions::default().rtol;
+    for exp in &exps {
+        let found = conditions::estimate(&Params::default(), exp, Choice::default(), rtol);
+        let how = found.unwrap().start_how;
+        assert_eq!(how, "detected mid-run, estimated", "{}", exp.name);
     }
 }

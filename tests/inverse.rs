@@ -67,6 +67,19 @@ fn the_holding_voltages_invert_the_equilibrium_of_hasel_linearize() {
     }
 }
 
+/// A tip path that starts at rest: the rest heights come back from the inverse kinematics a
+/// rounding away from the rest, on either side, and are held by 0 V.
+#[test]
+fn the_tip_at_rest_is_held_by_zero_volts() {
+    let model = paper();
+    let rest = model.rest_state().unwrap();
+    let tip = model.kinematics.tip(model.heights(&rest));
+    let (_, u) = feedforward(&model, Inverse::Exact, tip).unwrap();
+    assert_eq!(u, [0.0; 3]);
+    // the paper's closed form is approximate: heights a little off the rest, either side
+    assert!(feedforward(&model, Inverse::ClosedForm, tip).is_ok());
+}
+
 #[test]
 fn heights_without_a_holding_voltage_are_named() {
     let model = paper();

@@ -34,6 +34,7 @@ use std::time::{Duration, Instant};
 use crate::identify::conditions::{Choice, LagChoice, StartChoice};
 use crate::identify::{self, Experiment, FIT_RTOL, Hold, Identification, Options as IdOptions};
 use crate::model::effects::{FittedLaw, Form, Magnitude};
+use crate::model::params::{Rule, parameter};
 use crate::model::{Effect, Params};
 use analysis::Disagreement;
 pub use error::Error;
@@ -223,6 +224,9 @@ pub struct Diagnosis {
     pub effects: Vec<Effect>,
     /// The form of each named effect, in the same order.
     pub forms: Vec<&'static Form>,
+    /// The fitted law of each named effect whose family has a flexible one, in the same order
+    /// (src/diagnose/diagnose.md, "The fitted law").
+    pub laws: Vec<Option<FittedLaw>>,
     pub ambiguous_between: Vec<Effect>,
     /// For `ambiguous`: the experiment that would tell the candidates apart…
     pub separating_experiment: Option<String>,
@@ -244,9 +248,6 @@ pub struct Diagnosis {
     pub outliers: Vec<analysis::Outliers>,
     /// The fits the verdict rests on, against the noise floor.
     pub fits: Fits,
-    /// The fitted law of each named effect whose family has one, in the order named, beside the
-    /// textbook forms nearest it (src/diagnose/diagnose.md, "The fitted law").
-    pub laws: Vec<FittedLaw>,
 }
 
 /// The fits behind a verdict, computed once with it; the report only shows them.
@@ -283,11 +284,8 @@ impl Fits {
                     .collect()
             })
             .collect();
-        let held = if last.validation.is_empty() {
-            &floor[..1]
-        } else {
-            &floor[1..]
-        };
+        let (first, fits) = last.held_out();
+        let held = &floor[first..first + fits.len()];
         let mut sum = BTreeMap::<String, (f64, usize)>::new();
         for (name, f) in held.iter().flatten() {
             let s = sum.entry(name.clone()).or_default();
@@ -324,11 +322,7 @@ impl Diagnosis {
 /// Per-channel NRMSE fits on the held-out experiments (the estimation one when there is
 /// none), averaged over experiments, with the noise floor's fit beside them.
 fn held_out_fits(id: &Identification) -> BTreeMap<String, f64> {
-    let fits = if id.validation.is_empty() {
-        &id.estimation
-    } else {
-        &id.validation
-    };
+    let (_, fits) = id.held_out();
     let mut sum: BTreeMap<String, (f64, usize)> = BTreeMap::new();
     for e in fits {
         for (name, f) in &e.fits {
@@ -450,6 +444,18 @@ fn unknowns(id: &Identification, free: usize) -> usize {
     free + slow
 }
 
+/// How many of the fitted parameters `free` a BIC counts at `params`: every one but a weight of
+/// a series that ended at its bound 0 (src/diagnose/diagnose.md, "The decision rule"): a
+/// flexible law is charged for the weights it uses, not for the length of its grid.
+fn degrees(free: &[String], params: &Params) -> usize {
+    free.iter()
+        .filter(|name| {
+            let weight = parameter(name).is_some_and(|d| d.rule == Rule::Weight);
+            !(weight && params.get(name).is_ok_and(|v| v == 0.0))
+        })
+        .count()
+}
+
 /// BIC over the channels of one experiment: Σ_c N_c ln(RSS_c / N_c) + k ln N.
 fn bic(exp: &Experiment, sim: &[crate::simulation::Sample], k: usize) -> f64 {
     let mut total = 0.0;
@@ -468,12 +474,7 @@ fn held_out_gain(
     before: &Identification,
     after: &Identification,
 ) -> (f64, f64) {
-    // a single record is its own held-out one (`held_or_estimation`)
-    let (fb, fa) = if before.validation.is_empty() {
-        (&before.estimation, &after.estimation)
-    } else {
-        (&before.validation, &after.validation)
-    };
+    let (fb, fa) = (before.held_out().1, after.held_out().1);
     let exps: Vec<&Experiment> = held.iter().collect();
     let (mut gain, mut gap, mut n) = (0.0, 0.0, 0);
     for (k, (b, a)) in fb.iter().zip(fa).enumerate() {
@@ -513,11 +514,7 @@ fn held_or_estimation<'e>(
 
 /// The largest distance of a held-out fit below the noise floor's [points].
 fn worst_gap_to_floor(held: &[Experiment], id: &Identification) -> f64 {
-    let fits = if id.validation.is_empty() {
-        &id.estimation
-    } else {
-        &id.validation
-    };
+    let (_, fits) = id.held_out();
     let mut worst: f64 = 0.0;
     for (e, f) in held.iter().zip(fits) {
         for (name, v) in &f.fits {
@@ -548,11 +545,7 @@ fn remaining(
     last: &Identification,
     after: &[Disagreement],
 ) -> Vec<Remaining> {
-    let (first, fits) = if last.validation.is_empty() {
-        (0, &last.estimation)
-    } else {
-        (1, &last.validation)
-    };
+    let (first, fits) = last.held_out();
     let mut out = Vec::new();
     for ((e, floor), f) in experiments[first..].iter().zip(&floor[first..]).zip(fits) {
         for (name, v) in &f.fits {
@@ -949,14 +942,19 @@ pub fn diagnose(
     let u_peak = analysis::peak_command(&estimation[0]);
     let laws = forms
         .iter()
-        .filter_map(|f| f.effect.family().law)
-        .map(|law| law(&current.params, u_peak))
+        .map(|f| {
+            f.effect
+                .family()
+                .law
+                .map(|law| law(&current.params, u_peak))
+        })
         .collect();
     timing.push(("total".to_string(), began.elapsed().as_secs_f64()));
     Ok(Diagnosis {
         verdict,
         effects,
         forms,
+        laws,
         ambiguous_between,
         separating_experiment,
         separation,
@@ -971,7 +969,6 @@ pub fn diagnose(
         experiments: ordered,
         outliers,
         fits,
-        laws,
     })
 }
 
@@ -1041,11 +1038,11 @@ fn revisit(
                 let delta = bic(
                     &estimation[0],
                     &id.simulated[0],
-                    unknowns(&id, o.free.len()),
+                    unknowns(&id, degrees(&o.free, &id.params)),
                 ) - bic(
                     &estimation[0],
                     &current.simulated[0],
-                    unknowns(current, free_list(forms).len()),
+                    unknowns(current, degrees(&free_list(forms), &current.params)),
                 );
                 let at_floor =
                     worst_gap_to_floor(held_or_estimation(estimation, held), &id) <= FIT_TOLERANCE;
@@ -1176,8 +1173,9 @@ fn judge(
     held: &[Experiment],
     forms: &[&Form],
 ) -> Refit {
-    let k_before = free_list(forms).len();
-    let k_after = k_before + form.free.len();
+    let k_before = degrees(&free_list(forms), &before.params);
+    let with: Vec<&Form> = forms.iter().copied().chain([form]).collect();
+    let k_after = degrees(&free_list(&with), &id.params);
     let delta_bic = bic(&estimation[0], &id.simulated[0], unknowns(&id, k_after))
         - bic(
             &estimation[0],
@@ -1275,14 +1273,47 @@ fn magnitude_interval(
                     .and_then(|e| e.std_error.map(|se| e.value > 1.96 * se.abs()))
                     .unwrap_or(false)
             };
-            let shown = form
-                .magnitudes
-                .iter()
-                .find(|n| excludes(n))
-                .unwrap_or(&form.magnitudes[0]);
-            (ci(shown), excludes(shown))
+            match form.magnitudes.iter().find(|n| excludes(n)) {
+                Some(shown) => (ci(shown), true),
+                None if form.magnitudes.len() > 1 => sum_interval(form.magnitudes, id),
+                None => (ci(form.magnitudes[0]), false),
+            }
         }
     }
+}
+
+/// The 95 % interval of the sum of the positive `magnitudes` (a spectrum's weights, which its
+/// fit may share out between neighbours that are each uncertain) from the covariance, and
+/// whether it excludes 0.
+fn sum_interval(magnitudes: &[&str], id: &Identification) -> (Option<(String, f64, f64)>, bool) {
+    let cov = &id.covariance;
+    // each magnitude's position in the covariance and ∂p/∂(its coordinate)
+    let terms: Vec<(usize, f64)> = magnitudes
+        .iter()
+        .filter_map(|m| {
+            let k = cov.names.iter().position(|n| n == m)?;
+            let v = id.params.get(m).ok()?;
+            Some((k, if cov.log[k] { v } else { 1.0 }))
+        })
+        .collect();
+    let total: f64 = magnitudes
+        .iter()
+        .filter_map(|m| id.params.get(m).ok())
+        .sum();
+    let var: f64 = terms
+        .iter()
+        .flat_map(|&(a, da)| {
+            terms
+                .iter()
+                .map(move |&(b, db)| da * db * cov.matrix[(a, b)])
+        })
+        .sum();
+    let half = 1.96 * var.max(0.0).sqrt();
+    let name = magnitudes.join(" + ");
+    (
+        Some((name, total - half, total + half)),
+        !terms.is_empty() && total > half,
+    )
 }
 
 /// Which experiment tells two effects apart: what exposes each.

@@ -13,6 +13,7 @@ use crate::identify::report::{
 };
 use crate::io::file::{FileError, write_text_atomic};
 use crate::io::params_file;
+use crate::model::Effect;
 use crate::model::effects::FittedLaw;
 use crate::plot::{self, Panel, Series};
 
@@ -63,72 +64,28 @@ fn disagreement_json(d: &Disagreement) -> Value {
     })
 }
 
-fn points_json(points: &[(f64, f64)]) -> Value {
-    points
-        .iter()
-        .map(|&(x, y)| json!([round(x, 4), round(y, 4)]))
-        .collect()
-}
-
-fn law_json(l: &FittedLaw) -> Value {
-    json!({
-        "effect": l.effect.name(),
-        "law": l.text,
-        "axes": [l.axes.0, l.axes.1],
-        "curve": points_json(&l.curve),
-        "nearest": l.nearest().map(|t| json!({"form": t.name, "distance": round(t.distance, 4)})),
-        "textbook": l.textbook.iter().map(|t| json!({
-            "form": t.name,
-            "distance": round(t.distance, 4),
-        })).collect::<Vec<_>>(),
-    })
-}
-
-/// A fitted law, and the textbook form nearest it, in words.
-fn law_sentence(l: &FittedLaw) -> String {
-    let others: Vec<String> = l
-        .textbook
-        .iter()
-        .skip(1)
-        .map(|t| format!("{} {:.1} %", t.name, 100.0 * t.distance))
-        .collect();
-    match l.nearest() {
-        Some(t) => format!(
-            "`{}`: {}. Nearest textbook form: {}, {:.1} % away (RMS difference over the curve, relative to its RMS){}.",
-            l.effect.name(),
-            l.text,
-            t.name,
-            100.0 * t.distance,
-            if others.is_empty() {
-                String::new()
-            } else {
-                format!("; then {}", others.join(", "))
-            }
-        ),
-        None => format!("`{}`: {}.", l.effect.name(), l.text),
-    }
-}
-
-/// The fitted law beside the textbook form nearest it.
-fn law_panel(l: &FittedLaw) -> Panel {
+/// A fitted law drawn beside the textbook form nearest it, where that form has a curve on the
+/// law's axes; a law of few points (a spectrum) as dots.
+fn law_panel(effect: Effect, law: &FittedLaw) -> Panel {
     let mut series = vec![Series {
         label: "fitted".into(),
-        points: l.curve.clone(),
+        points: law.points.clone(),
         color: 1,
-        dots: false,
+        dots: law.points.len() <= TABLED_POINTS,
     }];
-    if let Some(t) = l.nearest() {
+    let near = &law.textbook[law.nearest];
+    if !near.points.is_empty() {
         series.push(Series {
-            label: t.name.clone(),
-            points: t.curve.clone(),
+            label: format!("{} {}", near.name, near.values),
+            points: near.points.clone(),
             color: 0,
             dots: false,
         });
     }
     Panel {
-        title: format!("{}: the fitted law", l.effect.name()),
-        x_label: l.axes.0.into(),
-        y_label: l.axes.1.into(),
+        title: format!("{}: the fitted law", effect.name()),
+        x_label: law.axes[0].into(),
+        y_label: law.axes[1].into(),
         series,
         equal_axes: false,
     }
@@ -180,6 +137,22 @@ pub fn to_json(d: &Diagnosis) -> Value {
         "verdict": d.verdict.name(),
         "effects": d.effects.iter().map(|e| e.name()).collect::<Vec<_>>(),
         "forms": d.forms.iter().map(|f| f.name).collect::<Vec<_>>(),
+        "laws": d.effects.iter().zip(&d.laws).filter_map(|(e, law)| {
+            let law = law.as_ref()?;
+            Some(json!({
+                "effect": e.name(),
+                "what": law.what,
+                "axes": law.axes,
+                "points": law.points.iter().map(|&(x, y)| [x, y]).collect::<Vec<_>>(),
+                "nearest": law.textbook[law.nearest].name,
+                "distance": law.distance,
+                "textbook": law.textbook.iter().map(|k| json!({
+                    "name": k.name,
+                    "values": k.values,
+                    "distance": round(k.distance, 4),
+                })).collect::<Vec<_>>(),
+            }))
+        }).collect::<Vec<_>>(),
         "ambiguous_between": d.ambiguous_between.iter().map(|e| e.name()).collect::<Vec<_>>(),
         "separating_experiment": d.separating_experiment,
         "separation": d.separation.iter().map(|s| json!({
@@ -219,7 +192,6 @@ pub fn to_json(d: &Diagnosis) -> Value {
             }).collect::<Vec<_>>(),
         })).collect::<Vec<_>>(),
         "parameters": effect_params,
-        "laws": d.laws.iter().map(law_json).collect::<Vec<_>>(),
         "estimation": d.estimation,
         "held_out": d.held_out,
         "fits": {
@@ -247,7 +219,7 @@ pub fn to_json(d: &Diagnosis) -> Value {
 
 /// One sentence on the answer.
 fn headline(d: &Diagnosis) -> String {
-    let names = |v: &[crate::model::Effect]| {
+    let names = |v: &[Effect]| {
         v.iter()
             .map(|e| format!("`{}` ({})", e.name(), e.mechanism()))
             .collect::<Vec<_>>()
@@ -381,6 +353,56 @@ fn candidates_table(md: &mut String, cs: &[Candidate]) {
 }
 
 /// Measured, before and after for each output of one experiment, and the residuals.
+/// A law of at most this many points is tabled in the report (a spectrum); a longer one is a
+/// curve, drawn.
+const TABLED_POINTS: usize = 24;
+
+/// The fitted law of each named effect that has one: its points, and the textbook forms with
+/// how far each lies, the nearest first.
+fn laws_section(md: &mut String, d: &Diagnosis) {
+    for (e, law) in d.effects.iter().zip(&d.laws) {
+        let Some(law) = law else { continue };
+        let near = &law.textbook[law.nearest];
+        let _ = writeln!(
+            md,
+            "## The fitted law of `{}`\n\n{}: nearest the textbook form **{}** ({}), {:.1} % away ({}).\n\n| {} | {} |\n|---|---|",
+            e.name(),
+            law.what,
+            near.name,
+            near.values,
+            100.0 * near.distance,
+            law.distance,
+            law.axes[0],
+            law.axes[1]
+        );
+        if law.points.len() <= TABLED_POINTS {
+            for (x, y) in &law.points {
+                let _ = writeln!(md, "| {x:.3} | {y:.4e} |");
+            }
+        } else {
+            let _ = writeln!(
+                md,
+                "| … | {} points in report.json, drawn below |",
+                law.points.len()
+            );
+        }
+        let _ = writeln!(
+            md,
+            "\n| textbook form | fitted values | distance |\n|---|---|---|"
+        );
+        for k in &law.textbook {
+            let _ = writeln!(
+                md,
+                "| {} | {} | {:.1} % |",
+                k.name,
+                k.values,
+                100.0 * k.distance
+            );
+        }
+        let _ = writeln!(md);
+    }
+}
+
 fn figure(d: &Diagnosis, k: usize) -> Vec<Panel> {
     let um = 1e6;
     let exp = &d.experiments[k];
@@ -605,20 +627,22 @@ pub fn write(dir: &Path, d: &Diagnosis) -> Result<(), FileError> {
             }
         }
         let _ = writeln!(md);
+        laws_section(&mut md, d);
     }
-    if !d.laws.is_empty() {
-        let _ = writeln!(md, "## The fitted laws\n");
-        for l in &d.laws {
-            let _ = writeln!(md, "- {}", law_sentence(l));
-        }
-        let panels: Vec<Panel> = d.laws.iter().map(law_panel).collect();
+    let panels: Vec<Panel> = d
+        .effects
+        .iter()
+        .zip(&d.laws)
+        .filter_map(|(&e, law)| Some(law_panel(e, law.as_ref()?)))
+        .collect();
+    if !panels.is_empty() {
         plot::draw(
             &dir.join("laws.png"),
             &panels,
             panels.len(),
             (600 * panels.len() as u32, 400),
         )?;
-        let _ = writeln!(md, "\n![the fitted laws](laws.png)\n");
+        let _ = writeln!(md, "![the fitted laws](laws.png)\n");
     }
     let _ = writeln!(md, "## Fits before and after (NRMSE, MATLAB `compare`)\n");
     fits_table(&mut md, d);

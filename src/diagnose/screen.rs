@@ -5,14 +5,15 @@
 //! scales the probe into a starting value for the refit. Every form of an effect's family has
 //! its own probes, which the family's module writes (src/diagnose/diagnose.md, "Families of
 //! forms"); a form is worth its explained share less the price of its dimensions, in the units
-//! of the BIC.
+//! of the BIC (for a series of non-negative weights, the weights it uses).
 
-use nalgebra::{DMatrix, DVector};
+use nalgebra::{DMatrix, DVector, Dyn, SVD};
 
 use super::Error;
 use super::analysis::noise_level;
 use crate::identify::{Channel, Experiment, simulate};
-use crate::model::effects::{Form, Probe, Scaling};
+use crate::model::effects::{Form, Probe, Scaling, nonnegative_least_squares};
+use crate::model::linalg::bounded_svd;
 use crate::model::{Effect, Params};
 
 /// Probes of every form of every family not yet in `params`, at values that change the response
@@ -62,8 +63,18 @@ pub struct Point<'a> {
     weights: Vec<(Channel, f64)>,
     rtol: f64,
     y0: DVector<f64>,
-    residual: DVector<f64>,
+    /// The directions in which the free parameters move the outputs, B, and its SVD.
     base_directions: DMatrix<f64>,
+    base: SVD<f64, Dyn, Dyn>,
+    /// The residual with what B can do projected out, r⊥ = r − B (B⁺ r).
+    residual_perp: DVector<f64>,
+}
+
+/// The SVD of `m`, bounded in its iterations.
+fn svd(m: DMatrix<f64>) -> Result<SVD<f64, Dyn, Dyn>, Error> {
+    bounded_svd(m).ok_or(Error::Projection(
+        "the SVD of the sensitivities did not converge",
+    ))
 }
 
 impl<'a> Point<'a> {
@@ -92,14 +103,19 @@ impl<'a> Point<'a> {
             p.set(name, v + h)?;
             cols.push(outputs(&p, exp, &weights, rtol)? - &y0);
         }
+        let base_directions = DMatrix::from_columns(&cols);
+        let base = svd(base_directions.clone())?;
+        let residual_perp = &residual
+            - &base_directions * base.solve(&residual, 1e-12).map_err(Error::Projection)?;
         Ok(Point {
             params,
             exp,
             weights,
             rtol,
             y0,
-            residual,
-            base_directions: DMatrix::from_columns(&cols),
+            base_directions,
+            base,
+            residual_perp,
         })
     }
 
@@ -115,18 +131,16 @@ impl<'a> Point<'a> {
         }
         let d = DMatrix::from_columns(&cols);
         // project out the base sensitivities: D⊥ = D − B (B⁺ D)
-        let b = &self.base_directions;
-        let svd = b.clone().svd(true, true);
-        let d_perp = &d - b * svd.solve(&d, 1e-12).map_err(Error::Projection)?;
-        let r_perp = &self.residual
-            - b * svd
-                .solve(&self.residual, 1e-12)
-                .map_err(Error::Projection)?;
-        let coef = d_perp
-            .clone()
-            .svd(true, true)
-            .solve(&r_perp, 1e-9)
-            .map_err(Error::Projection)?;
+        let d_perp =
+            &d - &self.base_directions * self.base.solve(&d, 1e-12).map_err(Error::Projection)?;
+        let r_perp = &self.residual_perp;
+        let coef = if probe.scaling == Scaling::Weights {
+            nonnegative_least_squares(&d_perp, r_perp)
+        } else {
+            svd(d_perp.clone())?
+                .solve(r_perp, 1e-9)
+                .map_err(Error::Projection)?
+        };
         let explained = (&d_perp * &coef).norm_squared();
         let total = r_perp.norm_squared().max(1e-300);
         let mut start = Vec::new();
@@ -152,7 +166,7 @@ impl<'a> Point<'a> {
                 // saturation angles) are kept
                 let value = match probe.scaling {
                     Scaling::Magnitude if i == 0 => v * coef[k].clamp(0.2, 5.0),
-                    Scaling::Signed if i == 0 => v * coef[k],
+                    Scaling::Signed | Scaling::Weights if i == 0 => v * coef[k],
                     _ => v,
                 };
                 start.push((name, value));
@@ -165,11 +179,16 @@ impl<'a> Point<'a> {
             _ => false,
         };
         let explained = if wrong_sign { 0.0 } else { explained };
-        let n = self.residual.len() as f64;
+        let n = self.residual_perp.len() as f64;
+        // a series is charged for the weights it uses, not for the length of its grid
+        let dimensions = match probe.scaling {
+            Scaling::Weights => coef.iter().filter(|&&c| c > 0.0).count(),
+            _ => probe.form.free.len(),
+        };
         Ok(Score {
             form: probe.form,
             score: explained / total,
-            worth: explained - probe.form.free.len() as f64 * n.ln(),
+            worth: explained - dimensions as f64 * n.ln(),
             start,
         })
     }

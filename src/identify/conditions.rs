@@ -7,7 +7,7 @@
 use nalgebra::DMatrix;
 
 use super::experiment::{Channel, Conditions, Experiment};
-use super::fit::{noise_level, robust_sigma, span};
+use super::fit::{median, noise_level, robust_sigma, span};
 use super::{Error, lm, simulate};
 use crate::model::{Params, Platform};
 use crate::simulation::{SimError, Start};
@@ -153,22 +153,22 @@ fn residuals(params: &Params, exp: &Experiment, rtol: f64, r: &mut [f64]) -> Res
 /// Whether the first sample of `exp` stands away from the rest state's outputs by more than
 /// noise and the fit's error elsewhere can. Only the first: at it a record from rest shows the
 /// rest state whatever the input does next, where a later sample shows the response, in which a
-/// missing effect looks like a start elsewhere.
+/// missing effect looks like a start elsewhere. The fit's error is taken about its median: a
+/// model that misses a static load is off by about as much at rest as elsewhere, which is no
+/// sign of a start mid-run, and its offset must not widen the bound a start mid-run has to pass.
 fn starts_mid_run(params: &Params, exp: &Experiment, rtol: f64) -> Result<bool, Error> {
     let mut at_rest = exp.clone();
     at_rest.conditions.start = Start::Rest;
     let sim = simulate(params, &at_rest, rtol)?;
     Ok(exp.channels.iter().any(|(c, y)| {
-        let mut off: Vec<f64> = y
-            .iter()
-            .zip(&sim)
-            .map(|(m, s)| (m - c.of(s)).abs())
-            .collect();
+        let mut off: Vec<f64> = y.iter().zip(&sim).map(|(m, s)| m - c.of(s)).collect();
         let first = off[0];
-        let fit_sigma = robust_sigma(&mut off);
+        let offset = median(&mut off);
+        let mut spread: Vec<f64> = off.iter().map(|r| (r - offset).abs()).collect();
+        let fit_sigma = robust_sigma(&mut spread);
         let (lo, hi) = span(y.iter().copied());
         let sigma = noise_level(&exp.t, y).max(fit_sigma);
-        first > (START_SIGMAS * sigma).max(START_SHARE * (hi - lo))
+        (first - offset).abs() > (START_SIGMAS * sigma).max(START_SHARE * (hi - lo))
     }))
 }
 

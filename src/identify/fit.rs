@@ -67,8 +67,13 @@ pub fn span(values: impl IntoIterator<Item = f64>) -> (f64, f64) {
 
 /// A normal σ from absolute deviations: 1.4826 × their median (reorders `abs`).
 pub fn robust_sigma(abs: &mut [f64]) -> f64 {
-    let mid = abs.len() / 2;
-    1.4826 * *abs.select_nth_unstable_by(mid, f64::total_cmp).1
+    1.4826 * median(abs)
+}
+
+/// The median of `v` (the upper one of an even count; `v` reordered).
+pub fn median(v: &mut [f64]) -> f64 {
+    let mid = v.len() / 2;
+    *v.select_nth_unstable_by(mid, f64::total_cmp).1
 }
 
 #[cfg(test)]

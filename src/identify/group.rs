@@ -19,12 +19,35 @@ pub(super) struct Coordinate {
 }
 
 impl Coordinate {
-    pub(super) fn new(def: &'static ParamDef, prior: f64) -> Coordinate {
-        Coordinate {
-            def,
-            log: def.rule != Rule::Finite && prior > 0.0,
-            scale: prior.abs().max(1e-300),
-        }
+    /// The coordinates of `defs` from `base`: ln p where p must stay positive, otherwise p over
+    /// its start value; a weight of a series (`Rule::Weight`) over the largest start among the
+    /// weights of its unit, or where they all start at 0 among the parameters of its unit (a
+    /// creep's weights against Kb), or else 1 in its unit, so that it can start at 0, leave it
+    /// and come back.
+    fn of(defs: &[&'static ParamDef], base: &Params) -> Vec<Coordinate> {
+        let largest = |weights: bool, unit: &str| {
+            defs.iter()
+                .filter(|d| d.unit == unit && (!weights || d.rule == Rule::Weight))
+                .map(|d| (d.get)(base).abs())
+                .fold(0.0, f64::max)
+        };
+        defs.iter()
+            .map(|&def| {
+                let prior = (def.get)(base);
+                let scale = match def.rule {
+                    Rule::Weight => [largest(true, def.unit), largest(false, def.unit)]
+                        .into_iter()
+                        .find(|&s| s > 0.0)
+                        .unwrap_or(1.0),
+                    _ => prior.abs(),
+                };
+                Coordinate {
+                    def,
+                    log: def.rule.fitted_in_log(prior),
+                    scale: scale.max(1e-300),
+                }
+            })
+            .collect()
     }
     fn to_x(self, p: f64) -> f64 {
         if self.log { p.ln() } else { p / self.scale }
@@ -188,6 +211,8 @@ pub(super) struct GroupResult {
     pub(super) not_identifiable: Vec<(String, String)>,
     pub(super) held_combinations: Vec<Vec<(String, f64)>>,
     pub(super) names: Vec<String>,
+    /// The fit's coordinate of each of `names`.
+    pub(super) coords: Vec<Coordinate>,
     pub(super) covariance: DMatrix<f64>,
     pub(super) iterations: usize,
     pub(super) simulations: usize,
@@ -367,10 +392,7 @@ pub(super) fn fit_group(
                 * e.t.len()
         })
         .sum();
-    let coords: Vec<Coordinate> = defs
-        .iter()
-        .map(|d| Coordinate::new(d, (d.get)(base)))
-        .collect();
+    let coords = Coordinate::of(defs, base);
     let problem = Problem {
         base,
         coords: coords.clone(),
@@ -398,6 +420,7 @@ pub(super) fn fit_group(
             let prior = (c.def.get)(base);
             let default = match c.def.rule {
                 Rule::Positive | Rule::PositiveOrInfinite => (prior / 20.0, prior * 20.0),
+                Rule::Weight => (0.0, f64::INFINITY),
                 Rule::NonNegative => (
                     0.0,
                     if prior > 0.0 {
@@ -463,6 +486,7 @@ pub(super) fn fit_group(
                     not_identifiable,
                     held_combinations: vec![],
                     names: vec![],
+                    coords: vec![],
                     covariance: DMatrix::zeros(0, 0),
                     iterations,
                     simulations,
@@ -547,33 +571,52 @@ pub(super) fn fit_group(
             }
             &inv * meat * &inv
         });
-        // the worst-determined direction, if its 95 % interval is wider than ×/÷ 1.5
+        // the worst-determined direction, if its 95 % interval is wider than ×/÷ 1.5. Weights
+        // of a series are not held for a wide interval: neighbours of a spectrum share what the
+        // data tell of them, the sum is what is judged, and 0 is a value a weight may take
+        // (src/identify/identify.md, "Parameters the data do not determine"); the other
+        // parameters are judged on their marginal covariance
         let worst = match &cov_z {
             None => {
                 let eig = jtj.symmetric_eigen();
                 let (kmin, _) = eig.eigenvalues.argmin();
                 Some((
-                    eig.eigenvectors.column(kmin).into_owned(),
+                    &basis * eig.eigenvectors.column(kmin),
                     "the measured outputs do not depend on it".to_string(),
                 ))
             }
             Some(cov) => {
-                let eig = cov.clone().symmetric_eigen();
-                let (kmax, var) = eig.eigenvalues.argmax();
-                let half = 1.96 * var.max(0.0).sqrt();
-                (half > MAX_LOG_HALF_WIDTH).then(|| {
-                    (
-                        eig.eigenvectors.column(kmax).into_owned(),
-                        format!(
-                            "its 95 % interval would span a factor of {:.3e}",
-                            (2.0 * half).exp()
-                        ),
-                    )
-                })
+                let judged: Vec<usize> = (0..n)
+                    .filter(|&i| coords[i].def.rule != Rule::Weight)
+                    .collect();
+                let cov_x = &basis * cov * basis.transpose();
+                let eig = (!judged.is_empty()).then(|| {
+                    cov_x
+                        .select_rows(&judged)
+                        .select_columns(&judged)
+                        .symmetric_eigen()
+                });
+                eig.as_ref()
+                    .map(|eig| eig.eigenvalues.argmax())
+                    .map(|(kmax, var)| (kmax, 1.96 * var.max(0.0).sqrt()))
+                    .filter(|&(_, half)| half > MAX_LOG_HALF_WIDTH)
+                    .map(|(kmax, half)| {
+                        let vectors = &eig.as_ref().expect("judged above").eigenvectors;
+                        let mut v = DVector::zeros(n);
+                        for (k, &i) in judged.iter().enumerate() {
+                            v[i] = vectors[(k, kmax)];
+                        }
+                        (
+                            v,
+                            format!(
+                                "its 95 % interval would span a factor of {:.3e}",
+                                (2.0 * half).exp()
+                            ),
+                        )
+                    })
             }
         };
-        if let Some((u, reason)) = worst {
-            let mut v = &basis * u;
+        if let Some((mut v, reason)) = worst {
             // a direction mostly along one parameter holds exactly that parameter (when several
             // parameters do nothing at all, their null space is entered one at a time)
             let j = v.iamax();
@@ -646,6 +689,7 @@ pub(super) fn fit_group(
             .iter()
             .map(|&c| coords[c].def.name.to_string())
             .collect();
+        let active_coords = active.iter().map(|&c| coords[c]).collect();
         let covariance = DMatrix::from_fn(active.len(), active.len(), |a, b| {
             cov_x[(active[a], active[b])]
         });
@@ -658,6 +702,7 @@ pub(super) fn fit_group(
                 not_identifiable,
                 held_combinations,
                 names,
+                coords: active_coords,
                 covariance,
                 iterations,
                 simulations,

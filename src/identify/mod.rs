@@ -121,7 +121,7 @@ pub struct ExperimentFit {
 }
 
 /// The covariance of the estimates in the coordinates the fit moved them in: `ln p` for a
-/// parameter that must be positive, `p` itself otherwise (the fit's `p/|prior|`, scaled back).
+/// parameter that must be positive, `p` itself otherwise (the fit's `p` over a scale, scaled back).
 /// Block-diagonal over separately fitted groups; singular along held combinations.
 #[derive(Clone, Debug)]
 pub struct Covariance {
@@ -159,6 +159,19 @@ pub struct Identification {
     /// The conditions estimated for each record, estimation then validation experiments;
     /// empty where they were kept as given (`Options::conditions` = `None`).
     pub conditions: Vec<conditions::Found>,
+}
+
+impl Identification {
+    /// The fits on the held-out records: the validation ones, or the estimation ones where
+    /// there are none (a single record is then its own held-out one), with the index of the
+    /// first of them among all records.
+    pub fn held_out(&self) -> (usize, &[ExperimentFit]) {
+        if self.validation.is_empty() {
+            (0, &self.estimation)
+        } else {
+            (self.estimation.len(), &self.validation)
+        }
+    }
 }
 
 /// Simulates `exp` with `params` under its conditions (from its start, sampled where its
@@ -329,7 +342,7 @@ fn fit(
     let mut estimated: Vec<(String, f64, f64, (f64, f64))> = Vec::new();
     let mut not_identifiable = Vec::new();
     let mut held_combinations = Vec::new();
-    let mut blocks: Vec<(Vec<String>, DMatrix<f64>)> = Vec::new();
+    let mut blocks: Vec<(Vec<String>, Vec<group::Coordinate>, DMatrix<f64>)> = Vec::new();
     let groups = groups(&free, estimation);
     // each group is fitted from `start` on its own: side by side, in threads
     let fitted_groups: Vec<_> = std::thread::scope(|s| {
@@ -353,11 +366,11 @@ fn fit(
         estimated.extend(r.estimates);
         not_identifiable.extend(r.not_identifiable);
         held_combinations.extend(r.held_combinations);
-        blocks.push((r.names, r.covariance));
+        blocks.push((r.names, r.coords, r.covariance));
     }
 
     // correlation over all estimated parameters (zero between separately fitted groups)
-    let names: Vec<String> = blocks.iter().flat_map(|(n, _)| n.clone()).collect();
+    let names: Vec<String> = blocks.iter().flat_map(|(n, _, _)| n.clone()).collect();
     let mut corr = DMatrix::zeros(names.len(), names.len());
     let mut covariance = Covariance {
         names: names.clone(),
@@ -365,15 +378,8 @@ fn fit(
         matrix: DMatrix::zeros(names.len(), names.len()),
     };
     let mut o = 0;
-    for (n, cov) in &blocks {
-        // the fit's coordinate of each parameter: ln p, or p/|prior| (scaled back to p here)
-        let coords: Vec<group::Coordinate> = n
-            .iter()
-            .map(|name| {
-                let d = parameter(name).expect("a fitted parameter is in the table");
-                group::Coordinate::new(d, (d.get)(start))
-            })
-            .collect();
+    for (n, coords, cov) in &blocks {
+        // the fit's coordinate of each parameter: ln p, or p over a scale (scaled back to p)
         let unit = |c: &group::Coordinate| if c.log { 1.0 } else { c.scale };
         for a in 0..n.len() {
             for b in 0..n.len() {

@@ -7,6 +7,7 @@
 pub mod actuator;
 pub mod effects;
 pub mod kinematics;
+pub mod linalg;
 pub mod params;
 pub mod platform;
 pub mod shell;

@@ -117,6 +117,9 @@ pub enum Rule {
     /// Positive, or +∞ where infinity switches a limit off.
     PositiveOrInfinite,
     NonNegative,
+    /// A weight of a non-negative series (src/model/effects/effects.md, "creep"): ≥ 0, and
+    /// fitted in its own units, not its logarithm, so that a fit can set it to 0.
+    Weight,
     Finite,
     /// An index 0, 1, …, n − 1 choosing among n forms.
     Index(u8),
@@ -127,7 +130,7 @@ impl Rule {
         match self {
             Rule::Positive => v.is_finite() && v > 0.0,
             Rule::PositiveOrInfinite => v > 0.0,
-            Rule::NonNegative => v.is_finite() && v >= 0.0,
+            Rule::NonNegative | Rule::Weight => v.is_finite() && v >= 0.0,
             Rule::Finite => v.is_finite(),
             Rule::Index(n) => v >= 0.0 && v < f64::from(n) && v.fract() == 0.0,
         }
@@ -136,10 +139,16 @@ impl Rule {
         match self {
             Rule::Positive => "must be finite and > 0".into(),
             Rule::PositiveOrInfinite => "must be > 0 (inf allowed)".into(),
-            Rule::NonNegative => "must be finite and >= 0".into(),
+            Rule::NonNegative | Rule::Weight => "must be finite and >= 0".into(),
             Rule::Finite => "must be finite".into(),
             Rule::Index(n) => format!("must be one of 0 .. {}", n - 1),
         }
+    }
+
+    /// Whether a fit moves a parameter of this rule, starting at `prior`, in ln p (it must stay
+    /// positive) rather than in p (src/identify/identify.md, "How `hasel identify` estimates").
+    pub fn fitted_in_log(self, prior: f64) -> bool {
+        !matches!(self, Rule::Finite | Rule::Weight) && prior > 0.0
     }
 }
 

@@ -7,6 +7,7 @@ use std::fmt;
 use super::actuator::{self, Actuator, StateInfo};
 use super::effects::terms::{Extra, Terms};
 use super::kinematics::Kinematics;
+use super::linalg::bounded_svd;
 use super::params::{ParamError, Params};
 use super::shell::DomainError;
 
@@ -41,10 +42,6 @@ pub struct Platform {
 /// Newton iterations of [`Platform::settled_state`] at most: the settled states enter ẋ
 /// almost linearly, so two or three reach rounding.
 const SETTLE_NEWTON: usize = 8;
-
-/// Iterations of the settling step's SVD at most: a few dozen converge a matrix of the size of
-/// the states; more means one that never will (NaN entries).
-const SETTLE_SVD_SWEEPS: usize = 1000;
 
 /// Number of states of the paper's model.
 pub const N_STATES: usize = 3 * actuator::N;
@@ -428,10 +425,8 @@ impl Platform {
                 jac[free[c] * n + free[r]] * scale[free[c]] / scale[free[r]]
             });
             let b = nalgebra::DVector::from_fn(m, |r, _| -f[free[r]] / scale[free[r]]);
-            // nalgebra's plain `svd` iterates until it converges, which a NaN never does: a
-            // state the fit tries at the domain's edge hung the whole diagnosis
-            let Some(svd) = nalgebra::SVD::try_new(a, true, true, f64::EPSILON, SETTLE_SVD_SWEEPS)
-            else {
+            // a state the fit tries at the domain's edge must not hang the diagnosis
+            let Some(svd) = bounded_svd(a) else {
                 break;
             };
             let eps = 1e-12 * svd.singular_values.max();

@@ -49,6 +49,11 @@ pub enum StaticsError {
     Effects(Vec<Effect>),
 }
 
+/// How far below the rest height [m] a height is still the rest height: the kinematics
+/// recover heights to 1e-15 m, so a tip path that starts at rest asks for heights a rounding
+/// below it.
+const REST_ROUNDING: f64 = 1e-12;
+
 /// Relative step of θ (of θ*) over which the holding voltage must grow for a stable equilibrium.
 const STABILITY_PROBE: f64 = 1e-7;
 
@@ -77,6 +82,10 @@ fn voltage_at(a: &Actuator, theta: f64, height: f64) -> Result<f64, Unreachable>
     }
     if v2_squared < 0.0 {
         let rest = a.height(a.rest_state()?[0]);
+        // at the rest height ṗ₀ is 0 to rounding, of either sign: held by U = 0
+        if height >= rest - REST_ROUNDING {
+            return Ok(0.0);
+        }
         return Err(Unreachable::BelowRest { height, rest });
     }
     // ga = γ1 cos(γ2 θ) > 0 on the first lobe only: beyond θ* the force's branches repeat

@@ -474,8 +474,7 @@ fn covariance_from_errors(
                 "parameters.{name}: value, prior and std_error must be finite numbers"
             )));
         };
-        let rule = parameter(name).map(|d| d.rule);
-        let l = rule != Some(Rule::Finite) && prior > 0.0;
+        let l = parameter(name).is_some_and(|d| d.rule.fitted_in_log(prior));
         log.push(l);
         // the file gives std_error = value · se(ln p) for a log coordinate
         se.push(if l { error / value } else { error });

@@ -22,6 +22,9 @@ def test_interface_is_the_contract(inverse_fmu_path):
     assert by("output") == OUTPUTS
     # its parameters are the platform's (the kinematics and the actuators)
     assert {"anchor_radius", "L", "Kb_1", "gamma2_3"} <= set(by("parameter"))
+    # direct feedthrough: a master reads the feedforward of the inputs it has just set
+    for output in md.outputs:
+        assert [v.name for v in output.dependencies] == by("input"), output.variable.name
 
 
 class Inverse:
@@ -40,11 +43,18 @@ class Inverse:
     def refs(self, *names):
         return [self.vr[n] for n in names]
 
-    def step(self, t, tip_x, tip_y):
-        """The outputs at t + STEP of the tip held over the step."""
+    def set_tip(self, tip_x, tip_y):
         self.fmu.setReal(self.refs("tip_x", "tip_y", "mean_height"), [tip_x, tip_y, MEAN])
-        self.fmu.doStep(currentCommunicationPoint=t, communicationStepSize=STEP)
+
+    def outputs(self):
         return np.array(self.fmu.getReal(self.refs(*OUTPUTS)))
+
+    def step(self, t, tip_x, tip_y):
+        """The outputs of the tip, read as a master does: inputs set, then a step over which
+        they are held, then the outputs."""
+        self.set_tip(tip_x, tip_y)
+        self.fmu.doStep(currentCommunicationPoint=t, communicationStepSize=STEP)
+        return self.outputs()
 
 
 @pytest.fixture
@@ -67,6 +77,9 @@ def test_the_fmu_gives_what_hasel_inverse_writes(inverse, hasel_path, tmp_path):
     fmu = np.array([inverse.step(tk, x, y) for tk, x, y in tip])
     # the CLI writes 13 significant digits
     np.testing.assert_allclose(fmu, cli, rtol=1e-12, atol=0)
+    # the same before the step: the outputs follow the inputs as they are set
+    inverse.set_tip(*tip[3, 1:])
+    np.testing.assert_allclose(inverse.outputs(), cli[3], rtol=1e-12, atol=0)
 
 
 def test_a_tip_out_of_reach_is_discarded_with_the_reason(inverse, capsys):
@@ -76,5 +89,9 @@ def test_a_tip_out_of_reach_is_discarded_with_the_reason(inverse, capsys):
     # fmpy prints the FMU's log messages
     log = capsys.readouterr().out
     assert "[DISCARD] fmi2DoStep" in log and "where the input gain ga = gamma1 cos(gamma2 theta) vanishes" in log, log
-    # the FMU stays where it was: the last outputs
-    assert list(inverse.fmu.getReal(inverse.refs(*OUTPUTS))) == list(before)
+    # the outputs of that tip cannot be read either, and say why
+    with pytest.raises(FMICallException, match="error"):
+        inverse.outputs()
+    assert "input gain" in capsys.readouterr().out
+    assert inverse.fmu.getReal(inverse.refs("tip_x")) == [1e-3]
+    assert np.isfinite(before).all()

@@ -1,10 +1,9 @@
-//! The inverse FMU's core: stateless apart from what it holds between calls. Each
-//! communication step maps the inputs held over it, the tip's X and Y and the mean height, to
-//! the heights (inverse kinematics from X and Y, src/model/model.md "Inverse kinematics") and
-//! the voltages that hold them ("Statics"), which are the outputs at the step's end. So the
-//! outputs depend on the state the last step left, not directly on the inputs, as the FMI shell's
-//! contract asks (`modelDescription.xml` declares no direct feedthrough); in Initialization Mode
-//! they follow the inputs and parameters set there.
+//! The inverse FMU's core: stateless apart from what it holds between calls. Its outputs map
+//! the current inputs, the tip's X and Y and the mean height, to the heights (inverse
+//! kinematics from X and Y, src/model/model.md "Inverse kinematics") and the voltages that hold
+//! them ("Statics"): direct feedthrough, declared in `modelDescription.xml`, so a master that
+//! sets the inputs reads their feedforward at once, not a step late. A step checks that its
+//! inputs can be reached (and fails otherwise, the core as it was).
 
 use std::path::Path;
 
@@ -25,14 +24,16 @@ const NOT_ME: &str = "HaselInverse has no continuous states: Co-Simulation only"
 /// Heights [m] and voltages [V] of one tip position.
 type Outputs = ([f64; 3], [f64; 3]);
 
-/// The core: parameters and inputs, and the outputs of the last communication point.
+/// The core: parameters and inputs, and the outputs of the inputs last asked for.
 #[derive(Clone, Debug)]
 pub struct InverseCore {
     params: Params,
     /// tip_x, tip_y, mean_height [m].
     inputs: [f64; 3],
-    /// The outputs at the current time, from Initialization Mode's end on.
-    held: Option<Outputs>,
+    /// The inputs the outputs were last computed for, and those outputs (each output read
+    /// would otherwise build the model again).
+    last: Option<([f64; 3], Outputs)>,
+    initialized: bool,
     t: f64,
 }
 
@@ -41,17 +42,26 @@ pub struct InverseCore {
 struct State {
     params: Vec<f64>,
     inputs: [f64; 3],
-    held: Option<Outputs>,
+    initialized: bool,
     t: f64,
 }
 
 impl InverseCore {
     /// The heights and holding voltages of the current inputs.
-    fn outputs(&self) -> Result<Outputs, String> {
+    fn outputs(&mut self) -> Result<Outputs, String> {
+        if let Some((inputs, outputs)) = self.last
+            && inputs == self.inputs
+        {
+            return Ok(outputs);
+        }
         let model = Platform::new(self.params.clone()).map_err(|e| e.to_string())?;
         let [x, y, mean_height] = self.inputs;
-        feedforward(&model, Inverse::Xy { mean_height }, [x, y, 0.0])
-            .map_err(|e| format!("tip ({x:e}, {y:e}) m at the mean height {mean_height:e} m: {e}"))
+        let outputs =
+            feedforward(&model, Inverse::Xy { mean_height }, [x, y, 0.0]).map_err(|e| {
+                format!("tip ({x:e}, {y:e}) m at the mean height {mean_height:e} m: {e}")
+            })?;
+        self.last = Some((self.inputs, outputs));
+        Ok(outputs)
     }
 }
 
@@ -60,17 +70,22 @@ impl FmuCore for InverseCore {
         model_info()
     }
 
-    /// No states; the outputs change at communication points only (no direct feedthrough).
+    /// No states; every output depends on every input directly (the mean height and the
+    /// tip's X and Y set all three heights).
     fn model_structure() -> ModelStructure {
+        let rows = rows().iter().enumerate();
+        let inputs: Vec<u32> = rows
+            .clone()
+            .filter(|(_, r)| matches!(r.slot, Slot::Input(_)))
+            .map(|(vr, _)| vr as u32)
+            .collect();
         ModelStructure {
             derivatives: vec![],
-            outputs: rows()
-                .iter()
-                .enumerate()
+            outputs: rows
                 .filter(|(_, r)| matches!(r.slot, Slot::Height(_) | Slot::Voltage(_)))
                 .map(|(vr, _)| OutputDependency {
                     output: vr as u32,
-                    dependencies: vec![],
+                    dependencies: inputs.clone(),
                 })
                 .collect(),
         }
@@ -87,7 +102,8 @@ impl FmuCore for InverseCore {
         Ok(InverseCore {
             params: resource_params(resource_dir)?,
             inputs: super::variables::START,
-            held: None,
+            last: None,
+            initialized: false,
             t: 0.0,
         })
     }
@@ -97,16 +113,11 @@ impl FmuCore for InverseCore {
     }
 
     fn get_real(&mut self, vr: u32) -> Result<f64, String> {
-        let slot = rows()[vr as usize].slot;
-        let outputs = |core: &Self| match core.held {
-            Some(held) => Ok(held),
-            None => core.outputs(),
-        };
-        Ok(match slot {
+        Ok(match rows()[vr as usize].slot {
             Slot::Input(i) => self.inputs[i],
             Slot::Param(d) => (d.get)(&self.params),
-            Slot::Height(i) => outputs(self)?.0[i],
-            Slot::Voltage(i) => outputs(self)?.1[i],
+            Slot::Height(i) => self.outputs()?.0[i],
+            Slot::Voltage(i) => self.outputs()?.1[i],
         })
     }
 
@@ -119,7 +130,10 @@ impl FmuCore for InverseCore {
                 }
                 self.inputs[i] = value;
             }
-            Slot::Param(d) => self.params.set_param(d, value).map_err(|e| e.to_string())?,
+            Slot::Param(d) => {
+                self.params.set_param(d, value).map_err(|e| e.to_string())?;
+                self.last = None;
+            }
             Slot::Height(_) | Slot::Voltage(_) => {
                 return Err(format!(
                     "{} is computed by the model and cannot be set",
@@ -141,15 +155,16 @@ impl FmuCore for InverseCore {
     }
 
     fn exit_initialization(&mut self) -> Result<(), String> {
-        self.held = Some(self.outputs()?);
+        self.outputs()?;
+        self.initialized = true;
         Ok(())
     }
 
     fn do_step(&mut self, step: f64) -> Result<(), String> {
-        if self.held.is_none() {
+        if !self.initialized {
             return Err("the FMU has not been initialized".into());
         }
-        self.held = Some(self.outputs()?);
+        self.outputs()?;
         self.t += step;
         Ok(())
     }
@@ -204,7 +219,7 @@ impl FmuCore for InverseCore {
         let state = State {
             params: saved_params(&self.params),
             inputs: self.inputs,
-            held: self.held,
+            initialized: self.initialized,
             t: self.t,
         };
         postcard::to_stdvec(&state).expect("serializing to memory cannot fail")
@@ -216,7 +231,8 @@ impl FmuCore for InverseCore {
         Ok(InverseCore {
             params: restored_params(&state.params)?,
             inputs: state.inputs,
-            held: state.held,
+            last: None,
+            initialized: state.initialized,
             t: state.t,
         })
     }
@@ -238,7 +254,7 @@ mod tests {
     }
 
     #[test]
-    fn a_step_gives_the_feedforward_of_the_inputs_held_over_it() {
+    fn the_outputs_are_the_feedforward_of_the_inputs_as_they_are_set() {
         let mut core = InverseCore::instantiate(InstanceKind::CoSimulation, None).unwrap();
         core.enter_initialization(0.0, None, None).unwrap();
         core.exit_initialization().unwrap();
@@ -246,16 +262,20 @@ mod tests {
         for (name, value) in [("tip_x", x), ("tip_y", y), ("mean_height", mean)] {
             core.set_real(vr(name), value).unwrap();
         }
-        // no direct feedthrough: the outputs change at the end of the step
-        let level = outputs(&mut core);
-        core.do_step(1e-3).unwrap();
+        // direct feedthrough: the outputs follow the inputs before the step, and the model's
+        // parameters as they are set
         let model = Platform::new(Params::default()).unwrap();
         let mean_height = mean;
         let (h, u) = feedforward(&model, Inverse::Xy { mean_height }, [x, y, 0.0]).unwrap();
         let expected: Vec<f64> = h.iter().chain(&u).copied().collect();
         assert_eq!(outputs(&mut core), expected);
-        assert_ne!(level, expected);
+        core.do_step(1e-3).unwrap();
+        assert_eq!(outputs(&mut core), expected);
         assert_eq!(core.time(), 1e-3);
+        core.set_real(vr("Kb_1"), 0.31).unwrap();
+        assert_ne!(outputs(&mut core)[3], expected[3]);
+        let dependencies = &InverseCore::model_structure().outputs[0].dependencies;
+        assert_eq!(dependencies, &["tip_x", "tip_y", "mean_height"].map(vr));
     }
 
     #[test]
@@ -263,11 +283,10 @@ mod tests {
         let mut core = InverseCore::instantiate(InstanceKind::CoSimulation, None).unwrap();
         core.enter_initialization(0.0, None, None).unwrap();
         core.exit_initialization().unwrap();
-        let before = outputs(&mut core);
         core.set_real(vr("tip_x"), 1e-3).unwrap();
         let e = core.do_step(1e-3).unwrap_err();
         assert!(e.contains("actuator 2") && e.contains("input gain"), "{e}");
-        assert_eq!(outputs(&mut core), before);
+        assert!(core.get_real(vr("U2")).unwrap_err().contains("input gain"));
         assert_eq!(core.time(), 0.0);
         assert!(core.set_real(vr("h1"), 0.0).is_err());
         assert!(core.set_real(vr("tip_y"), f64::NAN).is_err());

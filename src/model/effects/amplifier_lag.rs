@@ -3,7 +3,7 @@
 //! with r monotone (linear: a first-order lag; saturating: a slew-rate limit), and a second
 //! linear stage in cascade.
 
-use super::family::{FittedLaw, Textbook, golden, sampled};
+use super::family::{FittedLaw, TextbookForm, golden, sampled};
 use super::saturation::rapp;
 use super::terms::{At, Law, Port, States};
 use super::{Drive, Effect, Exposing, Family, Form, Magnitude, Planted, Probe, log_between};
@@ -217,27 +217,24 @@ fn law(params: &Params, u_peak: f64) -> FittedLaw {
             String::new()
         }
     );
-    FittedLaw::new(
-        Effect::AmplifierLag,
+    let linear: TextbookForm = (
+        "linear lag",
+        format!("tau {:.2} ms", 1000.0 * tau),
+        Box::new(move |e| e / tau),
+    );
+    // a limit above the fastest rate the law reaches is the linear lag itself
+    let slew = (s * tau_a < u_peak).then(|| -> TextbookForm {
+        (
+            "hard slew limit",
+            format!("{s:.0} V/s, tau {:.2} ms for small errors", 1000.0 * tau_a),
+            Box::new(move |e| limit(s, e)),
+        )
+    });
+    FittedLaw::of_curve(
         text,
-        ("error U - U_amp [V]", "dU_amp/dt [V/s]"),
+        ["error U - U_amp [V]", "dU_amp/dt [V/s]"],
         curve,
-        vec![Textbook::new(
-            format!("linear lag, {:.2} ms", 1000.0 * tau),
-            move |e| e / tau,
-        )]
-        .into_iter()
-        // a limit above the fastest rate the law reaches is the linear lag itself
-        .chain((s * tau_a < u_peak).then(|| {
-            Textbook::new(
-                format!(
-                    "hard slew limit {s:.0} V/s, {:.2} ms for small errors",
-                    1000.0 * tau_a
-                ),
-                move |e| limit(s, e),
-            )
-        }))
-        .collect(),
+        std::iter::once(linear).chain(slew).collect(),
     )
 }
 

@@ -5,9 +5,12 @@
 //! documents. Its terms (energy, right-hand side, Jacobian, dissipation) are the module's
 //! [`super::terms::Law`].
 
+use nalgebra::{DMatrix, DVector};
+
 use super::{Effect, EffectParams};
 use crate::model::Params;
 use crate::model::actuator::StateInfo;
+use crate::model::linalg::bounded_svd;
 use crate::model::params::ParamDef;
 
 /// One family: a place in the model where a missing mechanism enters, with its forms.
@@ -53,9 +56,38 @@ pub struct Family {
     /// Further hidden forms, by name (their names are hidden cases of the CLI).
     pub variants: &'static [(&'static str, Plant)],
     /// The family's fitted law at the model `params`, drawn over commands up to the peak
-    /// command [V], beside the textbook forms nearest it (src/diagnose/diagnose.md, "The fitted
+    /// command [V] where its variable is the command (src/diagnose/diagnose.md, "The fitted
     /// law"); `None` for a family whose forms are its textbook terms.
     pub law: Option<fn(&Params, f64) -> FittedLaw>,
+}
+
+/// A family's fitted law as the verdict shows it: its points against its variable, and the
+/// textbook forms fitted to it with how far each lies.
+#[derive(Clone, Debug, PartialEq)]
+pub struct FittedLaw {
+    /// The law and its fitted values, in words.
+    pub what: String,
+    /// Names and units of the points' two coordinates.
+    pub axes: [&'static str; 2],
+    pub points: Vec<(f64, f64)>,
+    /// How the distance to a textbook form is measured, in words.
+    pub distance: &'static str,
+    /// The textbook forms fitted to the law, fewest parameters first.
+    pub textbook: Vec<Textbook>,
+    /// The one the law is nearest to: an index into `textbook` (see [`nearest`]).
+    pub nearest: usize,
+}
+
+/// A textbook form fitted to a law.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Textbook {
+    pub name: &'static str,
+    /// Its fitted values, in words.
+    pub values: String,
+    /// The form on the law's axes where it has a curve there (drawn beside the law), else empty.
+    pub points: Vec<(f64, f64)>,
+    /// How far the law lies from it (see [`FittedLaw::distance`]).
+    pub distance: f64,
 }
 
 /// One form of a family: the parameters it frees (its magnitude first) and the settings that
@@ -67,7 +99,7 @@ pub struct Form {
     pub free: &'static [&'static str],
     /// The parameters that switch the form on, any one of which is enough: its first free
     /// parameter, or each of interchangeable ones (the two stages of a second-order amplifier,
-    /// the two creep branches), of which a fit may leave either near 0.
+    /// the weights of the creep's spectrum), of which a fit may leave any near 0.
     pub magnitudes: &'static [&'static str],
     /// Parameters set to select the form, never fitted (e.g. `drift_site`).
     pub settings: &'static [(&'static str, f64)],
@@ -114,7 +146,7 @@ pub enum Magnitude {
 
 /// Effect parameter settings that switch a form of a family on, each giving one direction in
 /// output space; several settings of one probe span a subspace (the preload's three torques,
-/// the coupling's three pairs, the creep's two branches).
+/// the coupling's three pairs, the weights of the creep's spectrum).
 pub struct Probe {
     pub form: &'static Form,
     pub columns: Vec<Vec<(&'static str, f64)>>,
@@ -141,6 +173,10 @@ pub enum Scaling {
     Signed,
     /// A limit (U_max): the probe value is kept.
     Fixed,
+    /// Non-negative weights of a series (the creep's spectrum), column j switching weight j on
+    /// alone: the start is each column's value times its coefficient of the non-negative least
+    /// squares, 0 where that is 0, and the form's worth counts only the weights above 0.
+    Weights,
     /// The coupling's pairs: column j switches pair j on alone at k_c; the start is
     /// k_c c_12 with the weights c_13 / c_12 and c_23 / c_12 (all kept positive).
     Pairs,
@@ -200,84 +236,64 @@ pub fn mean_kb(params: &Params) -> f64 {
     params.act.iter().map(|a| a.kb).sum::<f64>() / 3.0
 }
 
-/// A fitted constitutive law drawn against its variable, with the textbook forms fitted to it
-/// by least squares over the same points, nearest first (src/diagnose/diagnose.md, "The fitted
-/// law").
-#[derive(Clone, Debug)]
-pub struct FittedLaw {
-    pub effect: Effect,
-    /// The law and its fitted values, in words.
-    pub text: String,
-    /// The variable and the law's value, with their units.
-    pub axes: (&'static str, &'static str),
-    pub curve: Vec<(f64, f64)>,
-    pub textbook: Vec<Compared>,
+/// A textbook form within this distance of the closest, with fewer parameters, is the one named
+/// nearest a law (a share of the law's scale).
+const NEAREST_TOLERANCE: f64 = 0.01;
+
+/// The textbook form named nearest a law: of the forms within [`NEAREST_TOLERANCE`] of the
+/// closest, the one of fewest parameters (they come fewest first).
+pub fn nearest(textbook: &[Textbook]) -> usize {
+    let best = textbook
+        .iter()
+        .map(|k| k.distance)
+        .fold(f64::INFINITY, f64::min);
+    textbook
+        .iter()
+        .position(|k| k.distance <= best + NEAREST_TOLERANCE)
+        .unwrap_or(0)
 }
 
-/// A textbook form as fitted to a law.
-#[derive(Clone, Debug)]
-pub struct Compared {
-    /// The form and its fitted values, in words.
-    pub name: String,
-    pub curve: Vec<(f64, f64)>,
-    /// RMS of its difference from the law over the curve's points, relative to the law's RMS.
-    pub distance: f64,
-}
-
-/// A textbook form fitted to a law: its name and values in words, and its curve.
-pub struct Textbook {
-    name: String,
-    f: Box<dyn Fn(f64) -> f64>,
-}
-
-impl Textbook {
-    pub fn new(name: String, f: impl Fn(f64) -> f64 + 'static) -> Textbook {
-        Textbook {
-            name,
-            f: Box::new(f),
-        }
-    }
-}
+/// A textbook form to fit beside a law drawn as a curve: its name, its fitted values in words,
+/// and its function of the law's variable.
+pub type TextbookForm = (&'static str, String, Box<dyn Fn(f64) -> f64>);
 
 impl FittedLaw {
-    /// The law `curve` beside each `textbook` form, evaluated at its points, nearest first.
-    pub fn new(
-        effect: Effect,
-        text: String,
-        axes: (&'static str, &'static str),
-        curve: Vec<(f64, f64)>,
-        textbook: Vec<Textbook>,
+    /// A law drawn as the curve `points` of its variable, beside textbook forms given as
+    /// (name, fitted values, the form's function of the same variable), fewest parameters first;
+    /// each form's distance is its RMS difference from the law over the points, relative to the
+    /// law's RMS.
+    pub fn of_curve(
+        what: String,
+        axes: [&'static str; 2],
+        points: Vec<(f64, f64)>,
+        forms: Vec<TextbookForm>,
     ) -> FittedLaw {
         let rms = |v: &mut dyn Iterator<Item = f64>| {
             let (s, n) = v.fold((0.0, 0), |(s, n), x| (s + x * x, n + 1));
             (s / n.max(1) as f64).sqrt()
         };
-        let scale = rms(&mut curve.iter().map(|p| p.1)).max(1e-300);
-        let mut textbook: Vec<Compared> = textbook
+        let scale = rms(&mut points.iter().map(|p| p.1)).max(f64::MIN_POSITIVE);
+        let textbook: Vec<Textbook> = forms
             .into_iter()
-            .map(|t| {
-                let points: Vec<(f64, f64)> = curve.iter().map(|&(x, _)| (x, (t.f)(x))).collect();
-                let diff = &mut points.iter().zip(&curve).map(|(a, b)| a.1 - b.1);
-                Compared {
-                    name: t.name,
+            .map(|(name, values, f)| {
+                let drawn: Vec<(f64, f64)> = points.iter().map(|&(x, _)| (x, f(x))).collect();
+                let diff = &mut drawn.iter().zip(&points).map(|(a, b)| a.1 - b.1);
+                Textbook {
+                    name,
+                    values,
                     distance: rms(diff) / scale,
-                    curve: points,
+                    points: drawn,
                 }
             })
             .collect();
-        textbook.sort_by(|a, b| a.distance.total_cmp(&b.distance));
         FittedLaw {
-            effect,
-            text,
+            what,
             axes,
-            curve,
+            points,
+            distance: "RMS difference over the drawn curve, relative to the law's RMS",
+            nearest: nearest(&textbook),
             textbook,
         }
-    }
-
-    /// The textbook form nearest the law.
-    pub fn nearest(&self) -> Option<&Compared> {
-        self.textbook.first()
     }
 }
 
@@ -318,4 +334,84 @@ pub fn golden(lo: f64, hi: f64, cost: impl Fn(f64) -> f64) -> f64 {
         }
     }
     (0.5 * (a + b)).exp()
+}
+
+/// min |A x − b| over x ≥ 0, by Lawson and Hanson's active set: the weights of a non-negative
+/// series (a creep's spectrum, its screening's start).
+pub fn nonnegative_least_squares(a: &DMatrix<f64>, b: &DVector<f64>) -> DVector<f64> {
+    let n = a.ncols();
+    let mut x = DVector::zeros(n);
+    let mut passive = vec![false; n];
+    let tol = 1e-12 * a.norm() * b.norm();
+    // each pass frees one coefficient; the inner loop drops the ones its solve makes negative
+    for _ in 0..3 * n {
+        let w = a.transpose() * (b - a * &x);
+        let Some(j) = (0..n)
+            .filter(|&j| !passive[j] && w[j] > tol)
+            .max_by(|&i, &j| w[i].total_cmp(&w[j]))
+        else {
+            break;
+        };
+        passive[j] = true;
+        // each inner pass sets one coefficient back to 0 (bounded: rounding must not spin it)
+        for _ in 0..n {
+            let idx: Vec<usize> = (0..n).filter(|&j| passive[j]).collect();
+            let Some(svd) = bounded_svd(a.select_columns(&idx)) else {
+                return x;
+            };
+            let z = svd.solve(b, 1e-12).expect("U and V were computed");
+            if z.iter().all(|&v| v > 0.0) {
+                for (k, &j) in idx.iter().enumerate() {
+                    x[j] = z[k];
+                }
+                break;
+            }
+            // toward z as far as every coefficient stays ≥ 0; the one that reaches 0 leaves
+            let alpha = idx
+                .iter()
+                .zip(z.iter())
+                .filter(|&(_, &zk)| zk <= 0.0)
+                .map(|(&j, &zk)| x[j] / (x[j] - zk))
+                .fold(1.0f64, f64::min);
+            for (k, &j) in idx.iter().enumerate() {
+                x[j] += alpha * (z[k] - x[j]);
+                if z[k] <= 0.0 && x[j] <= 1e-14 * x.amax().max(f64::MIN_POSITIVE) {
+                    x[j] = 0.0;
+                    passive[j] = false;
+                }
+            }
+            if idx.iter().all(|&j| !passive[j]) {
+                break;
+            }
+        }
+    }
+    x
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn nonnegative_least_squares_drops_what_would_be_negative() {
+        // b = 2 a0 + 1 a1 exactly; a2 would take a negative share of the rest
+        let a = DMatrix::from_row_slice(
+            4,
+            3,
+            &[1.0, 0.0, 1.0, 0.0, 1.0, 1.0, 1.0, 1.0, 0.0, 0.5, 0.0, 1.0],
+        );
+        let b = &a.column(0) * 2.0 + a.column(1);
+        let x = nonnegative_least_squares(&a, &b.into_owned());
+        assert!(
+            (x[0] - 2.0).abs() < 1e-12 && (x[1] - 1.0).abs() < 1e-12 && x[2] == 0.0,
+            "{x}"
+        );
+        // against every column: 0
+        let x = nonnegative_least_squares(&a, &DVector::from_element(4, -1.0));
+        assert!(x.iter().all(|&v| v == 0.0), "{x}");
+        // the unconstrained solution has a negative coefficient: held at 0, the rest refitted
+        let b = &a.column(0) * 1.0 - &a.column(2) * 0.5;
+        let x = nonnegative_least_squares(&a, &b.into_owned());
+        assert!(x[2] == 0.0 && x[0] > 0.0, "{x}");
+    }
 }

@@ -27,8 +27,8 @@ pub mod stiffening;
 use std::fmt;
 
 pub use family::{
-    Compared, Drive, Exposing, Family, FittedLaw, Form, Magnitude, Plant, Planted, Probe, Scaling,
-    log_between,
+    Drive, Exposing, Family, FittedLaw, Form, Magnitude, Plant, Planted, Probe, Scaling, Textbook,
+    log_between, nonnegative_least_squares,
 };
 use terms::{At, Law, Port, States, Torque};
 

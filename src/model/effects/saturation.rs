@@ -4,7 +4,7 @@
 
 use std::f64::consts::PI;
 
-use super::family::{FittedLaw, Textbook, golden, sampled};
+use super::family::{FittedLaw, TextbookForm, golden, sampled};
 use super::terms::{Law, Port, States};
 use super::{Drive, Effect, Exposing, Family, Form, Magnitude, Planted, Probe, Scaling};
 use crate::model::Params;
@@ -282,24 +282,24 @@ fn law(params: &Params, u_peak: f64) -> FittedLaw {
             String::new()
         }
     );
-    FittedLaw::new(
-        Effect::Saturation,
-        text,
-        ("command U [V]", "u_eff [V]"),
-        curve,
-        vec![
-            Textbook::new(format!("symmetric clamp +-{}", limit(both)), move |v| {
-                clamp(both, v)
-            }),
-            Textbook::new(
-                format!("unequal clamp +{} / -{}", limit(up), limit(down)),
-                move |v| v.clamp(-down, up),
-            ),
-            Textbook::new(format!("tanh saturation {soft:.1} V"), move |v| {
-                tanh(soft, v)
-            }),
-        ],
-    )
+    let forms: Vec<TextbookForm> = vec![
+        (
+            "symmetric clamp",
+            format!("+-{}", limit(both)),
+            Box::new(move |v| clamp(both, v)),
+        ),
+        (
+            "tanh saturation",
+            format!("{soft:.1} V"),
+            Box::new(move |v| tanh(soft, v)),
+        ),
+        (
+            "unequal clamp",
+            format!("+{} / -{}", limit(up), limit(down)),
+            Box::new(move |v| v.clamp(-down, up)),
+        ),
+    ];
+    FittedLaw::of_curve(text, ["command U [V]", "u_eff [V]"], curve, forms)
 }
 
 /// The map of the port voltage (effects.md, "saturation").

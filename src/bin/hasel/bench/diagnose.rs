@@ -32,11 +32,8 @@ fn right(t: Truth, d: &diagnose::Diagnosis) -> bool {
 /// The largest distance of a held-out fit below its noise floor [points]; of the estimation
 /// record's where there is no other.
 fn worst_gap(d: &diagnose::Diagnosis) -> f64 {
-    let (floors, fits) = if d.last.validation.is_empty() {
-        (&d.fits.floor[..1], &d.last.estimation)
-    } else {
-        (&d.fits.floor[1..], &d.last.validation)
-    };
+    let (first, fits) = d.last.held_out();
+    let floors = &d.fits.floor[first..];
     floors
         .iter()
         .zip(fits)
