@@ -56,6 +56,10 @@ fn assert_named(effect: Effect, d: &diagnose::Diagnosis) {
         .find(|c| c.effect == effect)
         .unwrap();
     assert!(c.refit.as_ref().unwrap().interval_excludes_neutral);
+    // the estimation data weigh it most, and the weights are a distribution
+    assert_eq!(round.evidence[0].0, Some(effect), "{:?}", round.evidence);
+    let total: f64 = round.evidence.iter().map(|e| e.1).sum();
+    assert!((total - 1.0).abs() < 1e-9, "{:?}", round.evidence);
 }
 
 /// Every held-out fit of the final model is within [`FIT_TOLERANCE`] of its noise floor.

@@ -191,6 +191,9 @@ pub struct Round {
     pub revisits: Vec<Revisit>,
     /// A first effect added provisionally, closing only part of the held-out gap.
     pub provisional: Option<Provisional>,
+    /// The evidence weight of each model the round compared: the one it started from (`None`)
+    /// and each refitted candidate, highest first (src/diagnose/diagnose.md, "Evidence weights").
+    pub evidence: Vec<(Option<Effect>, f64)>,
 }
 
 /// A first effect added although it closes only [`PARTIAL_GAP`] of the held-out gap, not
@@ -904,6 +907,7 @@ pub fn diagnose(
         rounds.push(Round {
             effects_before: round_effects,
             added_form,
+            evidence: evidence_weights(&candidates),
             candidates,
             added,
             revisits,
@@ -1275,11 +1279,46 @@ fn magnitude_interval(
             };
             match form.magnitudes.iter().find(|n| excludes(n)) {
                 Some(shown) => (ci(shown), true),
-                None if form.magnitudes.len() > 1 => sum_interval(form.magnitudes, id),
+                // a sum only of one quantity: two lags, a spectrum's weights; not a lag and a slew
+                None if form.magnitudes.len() > 1 && one_unit(form.magnitudes) => {
+                    sum_interval(form.magnitudes, id)
+                }
                 None => (ci(form.magnitudes[0]), false),
             }
         }
     }
+}
+
+/// Schwarz weights of the models a round compared (src/diagnose/diagnose.md, "Evidence
+/// weights"): the model it started from, ΔBIC 0, and each refitted candidate in its best form,
+/// exp(−ΔBIC/2) normalized to sum 1, highest first. The BIC charges each form its parameters
+/// (a spectrum the weights its fit used), so a flexible law weighs no more for its knobs alone.
+fn evidence_weights(candidates: &[Candidate]) -> Vec<(Option<Effect>, f64)> {
+    let models: Vec<(Option<Effect>, f64)> = std::iter::once((None, 0.0))
+        .chain(
+            candidates
+                .iter()
+                .filter_map(|c| Some((Some(c.effect), c.refit.as_ref()?.delta_bic))),
+        )
+        .collect();
+    let best = models.iter().map(|m| m.1).fold(f64::INFINITY, f64::min);
+    let raw: Vec<f64> = models.iter().map(|m| (-(m.1 - best) / 2.0).exp()).collect();
+    let total: f64 = raw.iter().sum();
+    let mut weights: Vec<(Option<Effect>, f64)> = models
+        .iter()
+        .zip(raw)
+        .map(|(m, w)| (m.0, w / total))
+        .collect();
+    weights.sort_by(|a, b| b.1.total_cmp(&a.1));
+    weights
+}
+
+/// Whether `names` are parameters of one unit, whose sum is a quantity.
+fn one_unit(names: &[&str]) -> bool {
+    let unit = |n: &str| parameter(n).map(|d| d.unit);
+    names
+        .iter()
+        .all(|n| unit(n).is_some() && unit(n) == unit(names[0]))
 }
 
 /// The 95 % interval of the sum of the positive `magnitudes` (a spectrum's weights, which its

@@ -177,6 +177,10 @@ pub fn to_json(d: &Diagnosis) -> Value {
                 "kept": p.kept,
             })),
             "candidates": r.candidates.iter().map(candidate_json).collect::<Vec<_>>(),
+            "evidence": r.evidence.iter().map(|(e, w)| json!({
+                "effect": e.map_or("none", |e| e.name()),
+                "weight": w,
+            })).collect::<Vec<_>>(),
             "revisits": r.revisits.iter().map(|v| {
                 let mut j = json!({
                     "replaced": v.replaced.name(),
@@ -297,6 +301,15 @@ fn forms_cell(c: &Candidate) -> String {
         })
         .collect();
     format!("`{}` (of {})", c.form.name, tried.join(", "))
+}
+
+/// A round's evidence weights in words, the model without a further effect as "no effect".
+fn evidence_line(evidence: &[(Option<Effect>, f64)]) -> String {
+    evidence
+        .iter()
+        .map(|(e, w)| format!("{} {:.3}", e.map_or("no effect", |e| e.name()), w))
+        .collect::<Vec<_>>()
+        .join(", ")
 }
 
 fn candidates_table(md: &mut String, cs: &[Candidate]) {
@@ -542,6 +555,11 @@ pub fn write(dir: &Path, d: &Diagnosis) -> Result<(), FileError> {
             }
         );
         candidates_table(&mut md, &r.candidates);
+        let _ = writeln!(
+            md,
+            "\nEvidence weights (Schwarz, from the estimation BIC): {}.",
+            evidence_line(&r.evidence)
+        );
         let _ = writeln!(
             md,
             "\n{}\n",

@@ -42,6 +42,9 @@ fn outputs(
     Ok(DVector::from_vec(v))
 }
 
+/// How far from its probe value a magnitude's refit may start: a factor either way.
+const MAGNITUDE_RANGE: f64 = 5.0;
+
 /// A probe's outcome: its score and the start values it suggests.
 pub struct Score {
     pub form: &'static Form,
@@ -141,8 +144,16 @@ impl<'a> Point<'a> {
                 .solve(r_perp, 1e-9)
                 .map_err(Error::Projection)?
         };
-        let explained = (&d_perp * &coef).norm_squared();
+        // a form is worth what it explains where its refit starts: a magnitude within a factor
+        // MAGNITUDE_RANGE of the probe's, where the probe's change pictures the form's; a limit
+        // at the probe itself (a slew limit's distortion scaled to a fifth is no slew limit)
+        let realized = match probe.scaling {
+            Scaling::Magnitude => coef.map(|c| c.clamp(1.0 / MAGNITUDE_RANGE, MAGNITUDE_RANGE)),
+            Scaling::Fixed => coef.map(|_| 1.0),
+            _ => coef.clone(),
+        };
         let total = r_perp.norm_squared().max(1e-300);
+        let explained = (total - (r_perp - &d_perp * &realized).norm_squared()).max(0.0);
         let mut start = Vec::new();
         if probe.scaling == Scaling::Pairs {
             // pair j's stiffness is k_c c_j; the weights are relative to pair (1, 2)
@@ -165,7 +176,7 @@ impl<'a> Point<'a> {
                 // the first setting of a column is its magnitude; the others (time constants,
                 // saturation angles) are kept
                 let value = match probe.scaling {
-                    Scaling::Magnitude if i == 0 => v * coef[k].clamp(0.2, 5.0),
+                    Scaling::Magnitude if i == 0 => v * realized[k],
                     Scaling::Signed | Scaling::Weights if i == 0 => v * coef[k],
                     _ => v,
                 };

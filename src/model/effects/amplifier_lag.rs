@@ -126,9 +126,10 @@ pub const FAMILY: Family = Family {
 
 /// One stage, and two of half the time, at a fast and a slow time; a slewing stage at a fast
 /// and a slow time, slewing at 4, 6 or 8 times the peak command per second (the paper's 60 V
-/// sines change by up to 11 times it) (src/diagnose/diagnose.md, "Screening"). A lag and a slew
-/// both delay the response: the screening's linear projection ranks them alike, and the refits
-/// of every form it cannot tell apart decide.
+/// sines change by up to 11 times it), kept as they are: a slew's change does not scale
+/// (src/diagnose/diagnose.md, "Screening"). A lag and a slew both delay the response: the
+/// screening's linear projection ranks them alike, and the refits of every form it cannot tell
+/// apart decide.
 fn probes(_: &Params, u_peak: f64) -> Vec<Probe> {
     let mut out = Vec::new();
     for tau in [0.01, 0.04] {
@@ -141,7 +142,7 @@ fn probes(_: &Params, u_peak: f64) -> Vec<Probe> {
     }
     for tau in [0.005, 0.02] {
         for s in [4.0, 6.0, 8.0] {
-            out.push(Probe::one(
+            out.push(Probe::fixed(
                 &FORMS[2],
                 vec![("tau_a", tau), ("slew", s * u_peak)],
             ));

@@ -162,6 +162,16 @@ impl Probe {
             scaling: Scaling::Magnitude,
         }
     }
+
+    /// One column of `form`, its values kept as they are (a limit, whose change does not scale
+    /// with any of its values).
+    pub fn fixed(form: &'static Form, values: Vec<(&'static str, f64)>) -> Probe {
+        Probe {
+            form,
+            columns: vec![[values, form.settings.to_vec()].concat()],
+            scaling: Scaling::Fixed,
+        }
+    }
 }
 
 /// How a probe's first setting (its magnitude) becomes a start value.
@@ -171,7 +181,8 @@ pub enum Scaling {
     Magnitude,
     /// A magnitude of either sign, scaled by the coefficient.
     Signed,
-    /// A limit (U_max): the probe value is kept.
+    /// A limit (U_max, a slew rate): the probe's values are kept, and it is worth what it
+    /// explains as it is.
     Fixed,
     /// Non-negative weights of a series (the creep's spectrum), column j switching weight j on
     /// alone: the start is each column's value times its coefficient of the non-negative least

@@ -6,7 +6,7 @@ use std::f64::consts::PI;
 
 use super::family::{FittedLaw, TextbookForm, golden, sampled};
 use super::terms::{Law, Port, States};
-use super::{Drive, Effect, Exposing, Family, Form, Magnitude, Planted, Probe, Scaling};
+use super::{Drive, Effect, Exposing, Family, Form, Magnitude, Planted, Probe};
 use crate::model::Params;
 use crate::model::params::common_rows;
 
@@ -175,11 +175,7 @@ pub const FAMILY: Family = Family {
 /// side below the other or not clipping at all (`unequal`), and a soft knee whose limits may lie
 /// above the peak, as a Rapp curve compresses before its limit (`shaped`).
 fn probes(_: &Params, u_peak: f64) -> Vec<Probe> {
-    let fixed = |form: &'static Form, values: Vec<(&'static str, f64)>| Probe {
-        form,
-        columns: vec![values],
-        scaling: Scaling::Fixed,
-    };
+    let fixed = Probe::fixed;
     let mut out: Vec<Probe> = [0.8, 0.9, 0.97]
         .into_iter()
         .map(|f| fixed(&FORMS[0], vec![("U_max", f * u_peak)]))
@@ -191,7 +187,7 @@ fn probes(_: &Params, u_peak: f64) -> Vec<Probe> {
             out.push(fixed(&FORMS[1], limits));
         }
     }
-    for (a, b) in [(1.0, 1.0), (0.9, 1.15), (1.15, 0.9)] {
+    for (a, b) in [(0.8, 0.8), (0.9, 0.9), (1.0, 1.0), (0.9, 1.15), (1.15, 0.9)] {
         let shaped = vec![
             ("U_max", a * u_peak),
             ("U_max_neg", b * u_peak),
