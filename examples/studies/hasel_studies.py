@@ -498,7 +498,7 @@ def read_posterior(path: str) -> Posterior:
     center = {}
     for name, entry in params.items():
         v = entry.get("value") if isinstance(entry, dict) else None
-        center[name] = math.inf if v is None else float(v)  # JSON writes infinity as null
+        center[name] = float(v)
     try:
         return _posterior(doc, params, center)
     except (KeyError, TypeError, ValueError, IndexError) as e:

@@ -274,12 +274,7 @@ fn effect_notes(model: &Platform, x: &[f64], u: [f64; 3]) -> Vec<EffectNote> {
                 .rposition(|e| e.effect == Effect::AmplifierLag);
             let v = amp.map_or(u[i], |k| xi[actuator::N + k]);
             let (_, slope) = sat.map(v);
-            let limits = format!(
-                "limits +{} V / -{} V, dead zone {} V",
-                sat.u_max,
-                sat.negative_limit(),
-                sat.u_dead
-            );
+            let limits = format!("limits {}, dead zone {} V", sat.limits_text(), sat.u_dead);
             let (smooth, text) = if sat.at_corner(v) {
                 (
                     false,

@@ -215,7 +215,7 @@ fn check_variable(v: &Variable) -> Result<(), String> {
             ));
         }
         (_, Some(s)) if s.is_nan() => {
-            // ±∞ is a valid xs:double (INF) and switches a limit off; NaN is not a value
+            // ±∞ is a valid xs:double (INF); NaN is not a value
             return Err(format!("variable {name} has a NaN start value"));
         }
         _ => {}

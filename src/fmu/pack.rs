@@ -325,6 +325,22 @@ mod tests {
         }
     }
 
+    /// An importer reads an infinite start value as an error (OMSimulator: "getReal returned
+    /// +/-inf"): a limit is switched off by 0, not by +∞ (issue: Model Exchange).
+    #[test]
+    fn no_start_value_is_infinite() {
+        for spec in specs() {
+            for v in &spec.variables {
+                assert!(
+                    v.start.is_none_or(f64::is_finite),
+                    "{} starts at {:?}",
+                    v.name,
+                    v.start
+                );
+            }
+        }
+    }
+
     #[test]
     fn committed_model_description_is_the_generated_one() {
         let path =

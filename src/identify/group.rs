@@ -419,7 +419,7 @@ pub(super) fn fit_group(
         .map(|c| {
             let prior = (c.def.get)(base);
             let default = match c.def.rule {
-                Rule::Positive | Rule::PositiveOrInfinite => (prior / 20.0, prior * 20.0),
+                Rule::Positive | Rule::Limit => (prior / 20.0, prior * 20.0),
                 Rule::Weight => (0.0, f64::INFINITY),
                 Rule::NonNegative => (
                     0.0,

@@ -114,8 +114,9 @@ impl Default for Params {
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Rule {
     Positive,
-    /// Positive, or +∞ where infinity switches a limit off.
-    PositiveOrInfinite,
+    /// A limit: finite and > 0, or 0 where 0 switches it off (not +∞: an importer reads an
+    /// infinite start value as an error).
+    Limit,
     NonNegative,
     /// A weight of a non-negative series (src/model/effects/effects.md, "creep"): ≥ 0, and
     /// fitted in its own units, not its logarithm, so that a fit can set it to 0.
@@ -129,8 +130,7 @@ impl Rule {
     fn holds(self, v: f64) -> bool {
         match self {
             Rule::Positive => v.is_finite() && v > 0.0,
-            Rule::PositiveOrInfinite => v > 0.0,
-            Rule::NonNegative | Rule::Weight => v.is_finite() && v >= 0.0,
+            Rule::NonNegative | Rule::Weight | Rule::Limit => v.is_finite() && v >= 0.0,
             Rule::Finite => v.is_finite(),
             Rule::Index(n) => v >= 0.0 && v < f64::from(n) && v.fract() == 0.0,
         }
@@ -138,7 +138,7 @@ impl Rule {
     fn text(self) -> String {
         match self {
             Rule::Positive => "must be finite and > 0".into(),
-            Rule::PositiveOrInfinite => "must be > 0 (inf allowed)".into(),
+            Rule::Limit => "must be finite and >= 0 (0: no limit)".into(),
             Rule::NonNegative | Rule::Weight => "must be finite and >= 0".into(),
             Rule::Finite => "must be finite".into(),
             Rule::Index(n) => format!("must be one of 0 .. {}", n - 1),

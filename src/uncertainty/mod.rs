@@ -20,7 +20,7 @@ use serde_json::Value;
 
 use crate::identify::synth::Normal;
 use crate::model::Params;
-use crate::model::params::{ParamError, Rule, parameter};
+use crate::model::params::{ParamError, parameter};
 use crate::simulation::SimError;
 
 /// What can go wrong in an uncertainty study.
@@ -164,13 +164,8 @@ impl Posterior {
         let mut center = Params::default();
         let mut estimated = Vec::new();
         for (name, entry) in params {
-            let def = parameter(name)
-                .ok_or_else(|| fail(format!("parameters.{name}: unknown parameter")))?;
-            // JSON has no infinity: serde_json writes it as null
-            let value = match entry.get("value") {
-                Some(Value::Null) if def.rule == Rule::PositiveOrInfinite => f64::INFINITY,
-                v => number(v, &format!("parameters.{name}.value"))?,
-            };
+            parameter(name).ok_or_else(|| fail(format!("parameters.{name}: unknown parameter")))?;
+            let value = number(entry.get("value"), &format!("parameters.{name}.value"))?;
             center
                 .set(name, value)
                 .map_err(|e| fail(format!("parameters.{name}: {e}")))?;

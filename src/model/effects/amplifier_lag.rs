@@ -19,7 +19,7 @@ pub struct AmplifierLag {
     pub tau_a: f64,
     /// τ_a2 [s] of a second stage after the first; 0 (the default) is none.
     pub tau_a2: f64,
-    /// The first stage's slew rate S [V/s]: r(e) = S tanh(e / (S τ_a)); +∞ is linear.
+    /// The first stage's slew rate S [V/s]: r(e) = S tanh(e / (S τ_a)); 0 is no limit, linear.
     pub slew: f64,
     /// For synthetic data only (no row of the table): when > 0, the slew's transition is the
     /// Rapp curve of this exponent, r(e) = S x (1 + |x|^p)^(−1/p) with x = e / (S τ_a),
@@ -32,7 +32,7 @@ impl Default for AmplifierLag {
         AmplifierLag {
             tau_a: 0.0,
             tau_a2: 0.0,
-            slew: f64::INFINITY,
+            slew: 0.0,
             rapp_rate: 0.0,
         }
     }
@@ -49,7 +49,7 @@ impl AmplifierLag {
     /// (effects.md, "amplifier_lag"): monotone, 1/τ_a at small errors, tending to ±S.
     pub fn rate(&self, e: f64) -> (f64, f64) {
         let tau = self.tau_a;
-        if self.slew.is_infinite() {
+        if self.slew == 0.0 {
             return (e / tau, 1.0 / tau);
         }
         let width = (self.slew * tau).max(MIN_TRANSITION);
@@ -92,7 +92,7 @@ pub const FAMILY: Family = Family {
     rows: &common_rows! {
         "tau_a", "s", NonNegative, "amplifier_lag: time constant tau_a of the amplifier (0: off)", effects.amplifier_lag.tau_a;
         "tau_a2", "s", NonNegative, "amplifier_lag: time constant tau_a2 of a second stage (0: none)", effects.amplifier_lag.tau_a2;
-        "slew", "V/s", PositiveOrInfinite, "amplifier_lag: slew rate S of the first stage, dU_amp/dt = S tanh((U - U_amp) / (S tau_a)) (inf: linear)", effects.amplifier_lag.slew;
+        "slew", "V/s", Limit, "amplifier_lag: slew rate S of the first stage, dU_amp/dt = S tanh((U - U_amp) / (S tau_a)) (0: no limit, linear)", effects.amplifier_lag.slew;
     },
     choices: &[],
     state: Some(StateInfo {
@@ -207,7 +207,7 @@ fn law(params: &Params, u_peak: f64) -> FittedLaw {
     let text = format!(
         "dU_amp/dt from the error U - U_amp: tau_a {:.2} ms, slew rate {}{}",
         1000.0 * a.tau_a,
-        if a.slew.is_finite() {
+        if a.slew > 0.0 {
             format!("{:.0} V/s", a.slew)
         } else {
             "unlimited".into()

@@ -30,8 +30,8 @@ pub struct Saturation {
 impl Default for Saturation {
     fn default() -> Self {
         Saturation {
-            u_max: f64::INFINITY,
-            u_max_neg: f64::INFINITY,
+            u_max: 0.0,
+            u_max_neg: 0.0,
             knee: 0.0,
             u_dead: 0.0,
             tanh_knee: 0.0,
@@ -60,12 +60,12 @@ pub fn rapp(x: f64, n: f64) -> (f64, f64) {
 impl Saturation {
     /// Whether the map differs from the identity.
     pub fn is_on(&self) -> bool {
-        self.u_max.is_finite() || self.u_max_neg.is_finite() || self.u_dead > 0.0
+        self.u_max > 0.0 || self.u_max_neg > 0.0 || self.u_dead > 0.0
     }
 
     /// The limit of the negative side [V] (positive).
     pub fn negative_limit(&self) -> f64 {
-        if self.u_max_neg.is_finite() {
+        if self.u_max_neg > 0.0 {
             self.u_max_neg
         } else {
             self.u_max
@@ -85,7 +85,7 @@ impl Saturation {
         if self.u_dead > 0.0 && w <= 0.0 {
             return (0.0, 0.0);
         }
-        if limit.is_infinite() {
+        if limit == 0.0 {
             return (w.copysign(v), 1.0);
         }
         let x = w / limit;
@@ -101,6 +101,18 @@ impl Saturation {
             rapp(x, 1.0 / self.knee)
         };
         ((limit * s).copysign(v), slope)
+    }
+
+    /// The limits in words: "+50 V / -45 V", a side without one "none".
+    pub fn limits_text(&self) -> String {
+        let side = |l: f64| {
+            if l > 0.0 {
+                format!("{l:.1} V")
+            } else {
+                "none".to_string()
+            }
+        };
+        format!("+{} / -{}", side(self.u_max), side(self.negative_limit()))
     }
 
     /// Whether the command v sits on a corner of the map, where it has no derivative.
@@ -139,8 +151,8 @@ pub const FAMILY: Family = Family {
     form: "U_eff = clamp(U, -U_max, U_max)",
     forms: &FORMS,
     rows: &common_rows! {
-        "U_max", "V", PositiveOrInfinite, "saturation: the amplifier's output is limited to U_max (and to -U_max unless U_max_neg is set; inf: off)", effects.saturation.u_max;
-        "U_max_neg", "V", PositiveOrInfinite, "saturation: the limit -U_max_neg of the negative side (inf: -U_max, symmetric)", effects.saturation.u_max_neg;
+        "U_max", "V", Limit, "saturation: the amplifier's output is limited to U_max (and to -U_max unless U_max_neg is set; 0: no limit)", effects.saturation.u_max;
+        "U_max_neg", "V", Limit, "saturation: the limit -U_max_neg of the negative side (0: -U_max, symmetric)", effects.saturation.u_max_neg;
         "sat_knee", "1", NonNegative, "saturation: softness of the knee, the Rapp curve of exponent 1/sat_knee (0: the hard clamp)", effects.saturation.knee;
         "U_dead", "V", NonNegative, "saturation: dead zone, commands within +-U_dead give 0 (0: none)", effects.saturation.u_dead;
     },
@@ -268,9 +280,8 @@ fn law(params: &Params, u_peak: f64) -> FittedLaw {
         }
     };
     let text = format!(
-        "u_eff from the command: limits +{:.1} V / -{:.1} V, knee softness {:.3}{}",
-        s.u_max,
-        s.negative_limit(),
+        "u_eff from the command: limits {}, knee softness {:.3}{}",
+        s.limits_text(),
         s.knee,
         if s.u_dead > 0.0 {
             format!(", dead zone +-{:.2} V", s.u_dead)
