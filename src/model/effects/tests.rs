@@ -35,7 +35,11 @@ fn all_on(other_forms: bool) -> Params {
         f.saturation.u_max_neg = 35.0;
         f.saturation.knee = 0.3;
         f.saturation.u_dead = 2.0;
-        f.stiffening.exponent = 6;
+        f.stiffening.series = [0.02, 0.0, 0.01, 0.005];
+        f.stiffening.hidden = super::stiffening::Hardening::Exponential {
+            k: 0.01,
+            theta_s: 0.01,
+        };
         f.preload.law = PreloadLaw::Weight;
     }
     p
