@@ -251,6 +251,19 @@ fn a_slewing_amplifier_is_named_amplifier_lag() {
     assert_eq!(nearest, "hard slew limit", "{}: {law:?}", law.what);
 }
 
+/// A hardening of a power no series term has (7.37, seed 1; seeds 2–4 draw exponential
+/// hardening): stiffening in its convex series, its law nearest the power law of that exponent.
+/// The quartic alone leaves the held-out fit short of the noise floor.
+#[test]
+fn a_random_hardening_is_stiffening_in_its_convex_series() {
+    let d = named_in_form(Effect::Stiffening, 0, &["convex"], 1);
+    let (law, nearest) = law_shown(&d);
+    assert_eq!(nearest, "power law", "{}: {law:?}", law.what);
+    let fitted = &law.textbook[law.nearest].values;
+    let n: f64 = fitted[4..fitted.find(',').unwrap()].parse().unwrap();
+    assert!((n - 7.37).abs() < 1.0, "{fitted}");
+}
+
 /// Two mechanisms at once: both named, in either order, each with its form in the JSON, and
 /// the held-out fit after them at the noise floor.
 fn both_named(case: &str, seed: u64) -> diagnose::Diagnosis {
