@@ -308,6 +308,17 @@ impl FittedLaw {
     }
 }
 
+/// The best non-negative multiple c of the shape `g` for the points of `curve` by least squares,
+/// and its sum of squared errors: a textbook form's scale fitted to a law.
+pub fn scaled_to(curve: &[(f64, f64)], g: &dyn Fn(f64) -> f64) -> (f64, f64) {
+    let (gy, gg) = curve.iter().fold((0.0, 0.0), |(a, b), &(x, y)| {
+        (a + g(x) * y, b + g(x) * g(x))
+    });
+    let c = if gg > 0.0 { (gy / gg).max(0.0) } else { 0.0 };
+    let sse: f64 = curve.iter().map(|&(x, y)| (c * g(x) - y).powi(2)).sum();
+    (c, sse)
+}
+
 /// Points of a law on [lo, hi], where it is drawn and compared.
 pub fn sampled(lo: f64, hi: f64, f: impl Fn(f64) -> f64) -> Vec<(f64, f64)> {
     const POINTS: usize = 201;

@@ -5,7 +5,7 @@
 
 use std::f64::consts::PI;
 
-use super::family::{FittedLaw, TextbookForm, golden, mean_kb, sampled};
+use super::family::{FittedLaw, TextbookForm, golden, mean_kb, sampled, scaled_to};
 use super::terms::{Law, States, Torque};
 use super::{
     Drive, Effect, Exposing, Family, Form, Magnitude, Planted, Probe, Scaling, log_between,
@@ -211,15 +211,7 @@ fn law(params: &Params, _: f64) -> FittedLaw {
     let st = params.effects.stiffening;
     let reach = 2.5 * THETA_REF;
     let curve = sampled(-reach, reach, |th| st.energy_torque_stiffness(th).1);
-    // the best multiple of a shape g by least squares, and its squared error
-    let scaled = |g: &dyn Fn(f64) -> f64| {
-        let (gy, gg) = curve.iter().fold((0.0, 0.0), |(a, b), &(x, y)| {
-            (a + g(x) * y, b + g(x) * g(x))
-        });
-        let c = if gg > 0.0 { (gy / gg).max(0.0) } else { 0.0 };
-        let sse: f64 = curve.iter().map(|&(x, y)| (c * g(x) - y).powi(2)).sum();
-        (c, sse)
-    };
+    let scaled = |g: &dyn Fn(f64) -> f64| scaled_to(&curve, g);
     let cube = |th: f64| th.powi(3);
     let power =
         |n: f64| move |th: f64| (THETA_REF * (th.abs() / THETA_REF).powf(n - 1.0)).copysign(th);

@@ -29,6 +29,12 @@ fn all_on(other_forms: bool) -> Params {
         f.creep.spread[3] = super::creep::Branch { k: 0.01, tau: 0.7 };
         f.hysteresis.r_h = 3.0;
         f.hysteresis.law = HysteresisLaw::Dahl;
+        // plays with weights at 0 among them, and a synthetic element
+        f.hysteresis.grid = [0.01, 0.0, 0.02, 0.0, 0.01];
+        f.hysteresis.spread[2] = super::hysteresis::Element {
+            k: 0.01,
+            theta: 3e-3,
+        };
         f.amplifier_lag.tau_a2 = 0.004;
         // slewing for errors beyond S tau_a = 20 V: the busy state's reach that far
         f.amplifier_lag.slew = 1000.0;
