@@ -604,7 +604,12 @@ mod tests {
             core.set_real(vr(name), value).unwrap();
         }
         if other_forms {
-            for (name, value) in [("tau_a2", 0.005), ("k_v_1s", 0.02), ("r_h", 2.0)] {
+            for (name, value) in [
+                ("tau_a2", 0.005),
+                ("k_v_1s", 0.02),
+                ("r_h", 2.0),
+                ("C3_300ms", 1e-9),
+            ] {
                 core.set_real(vr(name), value).unwrap();
             }
         }
@@ -662,7 +667,7 @@ mod tests {
                 states += 1;
             }
         }
-        assert_eq!(states, 3 * 16);
+        assert_eq!(states, 3 * 22);
     }
 
     #[test]
@@ -678,7 +683,7 @@ mod tests {
     #[test]
     fn the_state_vector_is_the_table_states_with_their_derivatives() {
         let structure = model_structure();
-        assert_eq!(structure.derivatives.len(), 3 * 16);
+        assert_eq!(structure.derivatives.len(), 3 * 22);
         for d in &structure.derivatives {
             let (state, der) = (&rows()[d.state as usize], &rows()[d.derivative as usize]);
             assert_eq!(der.name, format!("der({})", state.name));
