@@ -277,34 +277,30 @@ fn across_the_film(params: &mut Params, between: &mut dyn FnMut(f64, f64) -> f64
 /// at a random strength (effects.md, "Hidden forms for synthetic data").
 fn random_kernel(params: &mut Params, between: &mut dyn FnMut(f64, f64) -> f64) -> Planted {
     let (branches, kernel) = prony::random_kernel(between);
-    // as `across_the_film`: the branches' resistance at the kernel's time a few times R0 + R1
+    // as `across_the_film`: the source holds the film's voltage through R0 + R1, and the
+    // branches take a visible share of the current when their impedance at the paper's drive,
+    // 3π rad/s, is 1 to 4 times R0 + R1 (one branch of ω τ3 ≫ 1: its R3)
     let r01 = params.act[0].r0 + params.act[0].r1;
-    let tau = one_over_e(&branches);
     let f = log_between(between, 1.0, 4.0);
-    let c = tau / (f * r01);
+    let c = 1.0 / (f * r01 * admittance(&branches, 3.0 * std::f64::consts::PI));
     params.effects.charge_drift.spread = branches.map(|b| Branch {
         weight: c * b.weight,
         ..b
     });
     Planted::text(format!(
-        "dielectric absorption across the film of {kernel}, C = {c:.3e} F (tau / C = {f:.2} (R0 + R1) at its 1/e time {tau:.2} s)"
+        "dielectric absorption across the film of {kernel}, C = {c:.3e} F (impedance {f:.2} (R0 + R1) at 3 pi rad/s)"
     ))
 }
 
-/// The time [s] at which the relaxation Σ w_b exp(−t/τ_b) of `branches` (Σ w_b = 1) has
-/// fallen to 1/e, by bisection in ln t over 0.1 ms to 1000 s.
-fn one_over_e(branches: &[Branch]) -> f64 {
-    let g = |t: f64| -> f64 { branches.iter().map(|b| b.weight * (-t / b.tau).exp()).sum() };
-    let (mut lo, mut hi) = (1e-4f64.ln(), 1e3f64.ln());
-    for _ in 0..60 {
-        let mid = 0.5 * (lo + hi);
-        if g(mid.exp()) > (-1.0f64).exp() {
-            lo = mid;
-        } else {
-            hi = mid;
-        }
-    }
-    (0.5 * (lo + hi)).exp()
+/// |Σ_b w_b jω / (1 + jω τ_b)|: the admittance at ω [rad/s] of R–C branches of capacitances
+/// w_b, per farad.
+fn admittance(branches: &[Branch], omega: f64) -> f64 {
+    let (re, im) = branches.iter().fold((0.0, 0.0), |(re, im), b| {
+        let wt = omega * b.tau;
+        let d = 1.0 + wt * wt;
+        (re + b.weight * omega * wt / d, im + b.weight * omega / d)
+    });
+    re.hypot(im)
 }
 
 /// The absorption's weights: capacitances.
@@ -316,21 +312,14 @@ const WEIGHT: prony::Weight = prony::Weight {
 
 /// The absorption across the film and the electrode as a spectrum, with the textbook kernel
 /// it is nearest (effects.md, "charge_drift", "The fitted law"; [`prony::law`]): the branches
-/// (τ_b, C_b), the spectrum's capacitances of 0 too (the fit set them there), the one branch
-/// if it is on; `None` for the series stage alone, which absorbs nothing across the film.
+/// (τ_b, C_b), the one branch if it is on and the spectrum's ([`prony::points`]); `None` for
+/// the series stage alone, which absorbs nothing across the film.
 fn absorption_law(cd: &ChargeDrift) -> Option<FittedLaw> {
     let branch = (cd.site != DriftSite::Series && cd.c3 > 0.0).then_some((cd.tau3, cd.c3));
-    let grid = GRID
-        .iter()
-        .copied()
-        .zip(cd.grid)
-        .filter(|_| cd.spectrum_on());
-    let spread = cd
-        .spread
-        .iter()
-        .filter(|b| b.weight > 0.0)
-        .map(|b| (b.tau, b.weight));
-    let points: Vec<(f64, f64)> = branch.into_iter().chain(grid).chain(spread).collect();
+    let points: Vec<(f64, f64)> = branch
+        .into_iter()
+        .chain(prony::points(&cd.grid, &cd.spread))
+        .collect();
     (!points.is_empty()).then(|| {
         prony::law(
             points,

@@ -185,22 +185,14 @@ const WEIGHT: prony::Weight = prony::Weight {
 };
 
 /// The creep's relaxation spectrum with the textbook kernel it is nearest (effects.md,
-/// "creep", "The fitted law"; [`prony::law`]): the branches (τ_b, k_b), the spectrum's weights
-/// of 0 too (the fit set them there).
+/// "creep", "The fitted law"; [`prony::law`]): the branches (τ_b, k_b), the free one and the
+/// spectrum's ([`prony::points`]).
 fn spectrum_law(creep: &Creep) -> FittedLaw {
     let free = (creep.k_v > 0.0).then_some((creep.tau_v, creep.k_v));
-    let grid = GRID
-        .iter()
-        .copied()
-        .zip(creep.grid)
-        .filter(|_| creep.spectrum_on());
-    let spread = creep
-        .spread
-        .iter()
-        .filter(|b| b.weight > 0.0)
-        .map(|b| (b.tau, b.weight));
     prony::law(
-        free.into_iter().chain(grid).chain(spread).collect(),
+        free.into_iter()
+            .chain(prony::points(&creep.grid, &creep.spread))
+            .collect(),
         "relaxation spectrum: the stiffness of each spring-dashpot branch against its relaxation time".into(),
         &WEIGHT,
     )

@@ -101,6 +101,19 @@ pub fn spread(offset: f64, g: impl Fn(f64) -> f64) -> [Branch; SPREAD] {
     out
 }
 
+/// A spectrum's points (τ_b, w_b): the grid's, weights of 0 included (a fit set them there),
+/// if any weight is > 0, and the synthetic branches switched on.
+pub fn points<'a>(
+    grid: &'a [f64; 6],
+    spread: &'a [Branch],
+) -> impl Iterator<Item = (f64, f64)> + 'a {
+    let on = grid.iter().any(|&w| w > 0.0);
+    let grid = GRID.iter().copied().zip(grid.iter().copied());
+    let spread = spread.iter().filter(|b| b.weight > 0.0);
+    grid.filter(move |_| on)
+        .chain(spread.map(|b| (b.tau, b.weight)))
+}
+
 /// `n` times spaced evenly in log from `lo` to `hi` [s].
 fn log_times(lo: f64, hi: f64, n: usize) -> Vec<f64> {
     (0..n)
