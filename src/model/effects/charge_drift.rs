@@ -144,12 +144,7 @@ pub const FAMILY: Family = Family {
         "R3", "Ohm", NonNegative, "charge_drift: resistance R3 of a (C3 || R3) stage in series (0: off; drift_site 0)", effects.charge_drift.r3;
         "tau3", "s", Positive, "charge_drift: time constant tau3 = R3 C3 of the drift element", effects.charge_drift.tau3;
         "C3", "F", NonNegative, "charge_drift: capacitance C3 of an R3-C3 absorption branch (0: off; drift_site 1 or 2)", effects.charge_drift.c3;
-        "C3_30ms", "F", Weight, "charge_drift: capacitance of the spectrum's absorption branch across the film at tau = 0.03 s (0: off)", effects.charge_drift.grid[0];
-        "C3_100ms", "F", Weight, "charge_drift: capacitance of the spectrum's absorption branch across the film at tau = 0.1 s (0: off)", effects.charge_drift.grid[1];
-        "C3_300ms", "F", Weight, "charge_drift: capacitance of the spectrum's absorption branch across the film at tau = 0.3 s (0: off)", effects.charge_drift.grid[2];
-        "C3_1s", "F", Weight, "charge_drift: capacitance of the spectrum's absorption branch across the film at tau = 1 s (0: off)", effects.charge_drift.grid[3];
-        "C3_3s", "F", Weight, "charge_drift: capacitance of the spectrum's absorption branch across the film at tau = 3 s (0: off)", effects.charge_drift.grid[4];
-        "C3_10s", "F", Weight, "charge_drift: capacitance of the spectrum's absorption branch across the film at tau = 10 s (0: off)", effects.charge_drift.grid[5];
+        grid "C3", "F", "charge_drift: capacitance of the spectrum's absorption branch across the film", charge_drift;
     },
     choices: &[ParamDef {
         name: "drift_site",

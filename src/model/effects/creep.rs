@@ -88,12 +88,7 @@ pub const FAMILY: Family = Family {
     rows: &common_rows! {
         "k_v", "N.m/rad", NonNegative, "creep: stiffness k_v of the branch at the free time tau_v (0: off)", effects.creep.k_v;
         "tau_v", "s", Positive, "creep: relaxation time tau_v = eta / k_v", effects.creep.tau_v;
-        "k_v_30ms", "N.m/rad", Weight, "creep: weight of the spectrum at tau = 0.03 s (0: off)", effects.creep.grid[0];
-        "k_v_100ms", "N.m/rad", Weight, "creep: weight of the spectrum at tau = 0.1 s (0: off)", effects.creep.grid[1];
-        "k_v_300ms", "N.m/rad", Weight, "creep: weight of the spectrum at tau = 0.3 s (0: off)", effects.creep.grid[2];
-        "k_v_1s", "N.m/rad", Weight, "creep: weight of the spectrum at tau = 1 s (0: off)", effects.creep.grid[3];
-        "k_v_3s", "N.m/rad", Weight, "creep: weight of the spectrum at tau = 3 s (0: off)", effects.creep.grid[4];
-        "k_v_10s", "N.m/rad", Weight, "creep: weight of the spectrum at tau = 10 s (0: off)", effects.creep.grid[5];
+        grid "k_v", "N.m/rad", "creep: weight of the spectrum", creep;
     },
     choices: &[],
     state: Some(StateInfo {
