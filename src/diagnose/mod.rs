@@ -950,7 +950,7 @@ pub fn diagnose(
             f.effect
                 .family()
                 .law
-                .map(|law| law(&current.params, u_peak))
+                .and_then(|law| law(&current.params, u_peak))
         })
         .collect();
     timing.push(("total".to_string(), began.elapsed().as_secs_f64()));

@@ -609,6 +609,7 @@ mod tests {
                 ("k_v_1s", 0.02),
                 ("r_h", 2.0),
                 ("k_h_2mrad", 0.02),
+                ("C3_300ms", 1e-9),
             ] {
                 core.set_real(vr(name), value).unwrap();
             }
@@ -667,7 +668,7 @@ mod tests {
                 states += 1;
             }
         }
-        assert_eq!(states, 3 * 21);
+        assert_eq!(states, 3 * 27);
     }
 
     #[test]
@@ -683,7 +684,7 @@ mod tests {
     #[test]
     fn the_state_vector_is_the_table_states_with_their_derivatives() {
         let structure = model_structure();
-        assert_eq!(structure.derivatives.len(), 3 * 21);
+        assert_eq!(structure.derivatives.len(), 3 * 27);
         for d in &structure.derivatives {
             let (state, der) = (&rows()[d.state as usize], &rows()[d.derivative as usize]);
             assert_eq!(der.name, format!("der({})", state.name));

@@ -213,8 +213,28 @@ macro_rules! actuator_rows {
     };
 }
 
+/// After the rows, `grid PREFIX, UNIT, DESCRIPTION, MODULE;` adds the six weights of a Prony
+/// series' grid (src/model/effects/effects.md, "Prony series"; `effects::prony::GRID`),
+/// `PREFIX_30ms` … `PREFIX_10s`, of rule `Weight`: `effects.MODULE.grid[0]` … `[5]`.
 macro_rules! common_rows {
     ($($name:literal, $unit:literal, $rule:ident, $desc:literal, $($field:ident).+ $([$idx:literal])?;)*) => {
+        // no grid: its six rows repeated over nothing
+        $crate::model::params::common_rows!(@grid
+            [$($name, $unit, $rule, $desc, $($field).+ $([$idx])?;)*]
+            "", "", "", no_grid;
+        )
+    };
+    ($($name:literal, $unit:literal, $rule:ident, $desc:literal, $($field:ident).+ $([$idx:literal])?;)*
+     grid $prefix:literal, $gunit:literal, $gdesc:literal, $module:ident;) => {
+        $crate::model::params::common_rows!(@grid
+            [$($name, $unit, $rule, $desc, $($field).+ $([$idx])?;)*]
+            $prefix, $gunit, $gdesc, $module;
+            0 "_30ms" "0.03", 1 "_100ms" "0.1", 2 "_300ms" "0.3", 3 "_1s" "1", 4 "_3s" "3", 5 "_10s" "10"
+        )
+    };
+    (@grid [$($name:literal, $unit:literal, $rule:ident, $desc:literal, $($field:ident).+ $([$idx:literal])?;)*]
+     $prefix:literal, $gunit:literal, $gdesc:literal, $module:ident;
+     $($g:literal $suffix:literal $tau:literal),*) => {
         [$(
             $crate::model::params::ParamDef {
                 name: $name,
@@ -224,6 +244,17 @@ macro_rules! common_rows {
                 actuator: None,
                 get: |p| p.$($field).+ $([$idx])?,
                 set: |p, v| p.$($field).+ $([$idx])? = v,
+            },
+        )*
+        $(
+            $crate::model::params::ParamDef {
+                name: concat!($prefix, $suffix),
+                unit: $gunit,
+                description: concat!($gdesc, " at tau = ", $tau, " s (0: off)"),
+                rule: $crate::model::params::Rule::Weight,
+                actuator: None,
+                get: |p| p.effects.$module.grid[$g],
+                set: |p, v| p.effects.$module.grid[$g] = v,
             },
         )*]
     };

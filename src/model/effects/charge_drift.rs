@@ -1,8 +1,14 @@
 //! `charge_drift` (src/model/effects/effects.md, "charge_drift"): a slow charge-retention
-//! element, in series with the circuit or as an absorption branch across part of the film.
+//! element, in series with the circuit or as an absorption branch across part of the film; and
+//! dielectric absorption as a Prony series of R–C branches across the film (Debye relaxations)
+//! with non-negative capacitances on a fixed logarithmic grid of times (the spectrum).
 
+use super::prony::{self, Branch, GRID, SPREAD};
 use super::terms::{At, Law, States};
-use super::{Drive, Effect, Exposing, Family, Form, Magnitude, Planted, Probe, log_between};
+use super::{
+    Drive, Effect, Exposing, Family, FittedLaw, Form, Magnitude, Planted, Probe, Scaling,
+    log_between,
+};
 use crate::model::Params;
 use crate::model::actuator::{self, Actuator, Q1, Q2, StateInfo, THETA};
 use crate::model::params::{ParamDef, Rule, common_rows};
@@ -37,8 +43,22 @@ impl DriftSite {
     }
 }
 
+/// The spectrum's capacitances, rows of the parameter table, one per time of [`GRID`].
+pub const GRID_NAMES: [&str; 6] = [
+    "C3_30ms", "C3_100ms", "C3_300ms", "C3_1s", "C3_3s", "C3_10s",
+];
+
+/// The stage of the first of the spectrum's states (`Q32` … `Q37`), after the element's.
+const GRID_STAGE: usize = 1;
+/// The stage of the synthetic second trap's state, after the spectrum's.
+const SECOND_TRAP_STAGE: usize = GRID_STAGE + GRID.len();
+/// The stage of the first synthetic branch's state.
+const SPREAD_STAGE: usize = SECOND_TRAP_STAGE + 1;
+
 /// A slow charge-retention element: in series (R3, τ3 = R3 C3, off at R3 = 0) or as an
-/// absorption branch across part of the film (C3, τ3 = R3 C3, off at C3 = 0).
+/// absorption branch across part of the film (C3, τ3 = R3 C3, off at C3 = 0); and absorption
+/// branches across the film, (C_b, τ_b) with R_b = τ_b / C_b, on the grid (the spectrum) and,
+/// for synthetic data, at any times.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ChargeDrift {
     /// R3 [Ω] of the series stage; 0 switches it off.
@@ -51,6 +71,12 @@ pub struct ChargeDrift {
     /// Only for synthetic data (series site): true splits the stage into two traps in series,
     /// (R3/2, τ3/3) and (R3/2, 3 τ3): a spread of trapping times.
     pub two_stages: bool,
+    /// The spectrum: the capacitance C_b [F] of the absorption branch across the film at each
+    /// time of [`GRID`].
+    pub grid: [f64; 6],
+    /// Absorption branches across the film at any times (weight C_b [F]), for synthetic data
+    /// only (no row of the table reaches them): a kernel the grid does not contain.
+    pub spread: [Branch; SPREAD],
 }
 
 impl Default for ChargeDrift {
@@ -61,11 +87,28 @@ impl Default for ChargeDrift {
             c3: 0.0,
             site: DriftSite::Series,
             two_stages: false,
+            grid: [0.0; 6],
+            spread: [Branch::OFF; SPREAD],
         }
     }
 }
 
-const FORMS: [Form; 3] = [
+impl ChargeDrift {
+    /// Is the element (the series stage or the one branch) on at its magnitude?
+    fn element_on(&self) -> bool {
+        match self.site {
+            DriftSite::Series => self.r3 > 0.0,
+            _ => self.c3 > 0.0,
+        }
+    }
+
+    /// Is the spectrum on?
+    fn spectrum_on(&self) -> bool {
+        self.grid.iter().any(|&c| c > 0.0)
+    }
+}
+
+const FORMS: [Form; 4] = [
     Form::new(
         Effect::ChargeDrift,
         "series",
@@ -84,6 +127,11 @@ const FORMS: [Form; 3] = [
         &["C3", "tau3"],
         &[("drift_site", 2.0)],
     ),
+    // across the film whatever `drift_site`: no setting
+    Form {
+        magnitudes: &GRID_NAMES,
+        ..Form::new(Effect::ChargeDrift, "spectrum", &GRID_NAMES, &[])
+    },
 ];
 
 pub const FAMILY: Family = Family {
@@ -96,6 +144,7 @@ pub const FAMILY: Family = Family {
         "R3", "Ohm", NonNegative, "charge_drift: resistance R3 of a (C3 || R3) stage in series (0: off; drift_site 0)", effects.charge_drift.r3;
         "tau3", "s", Positive, "charge_drift: time constant tau3 = R3 C3 of the drift element", effects.charge_drift.tau3;
         "C3", "F", NonNegative, "charge_drift: capacitance C3 of an R3-C3 absorption branch (0: off; drift_site 1 or 2)", effects.charge_drift.c3;
+        grid "C3", "F", "charge_drift: capacitance of the spectrum's absorption branch across the film", charge_drift;
     },
     choices: &[ParamDef {
         name: "drift_site",
@@ -109,13 +158,15 @@ pub const FAMILY: Family = Family {
     state: Some(StateInfo {
         name: "Q3",
         unit: "C",
-        description: "charge Q3 of the drift stage's capacitor C3",
+        description: "charge Q3 of a drift stage's or an absorption branch's capacitor",
     }),
-    table_stages: 1,
+    // the element and the grid's branches
+    table_stages: 1 + GRID.len(),
     is_active: |p| is_on(&p.charge_drift),
     on: |f| {
         f.charge_drift.r3 = 2e4;
         f.charge_drift.tau3 = 0.5;
+        f.charge_drift.grid = [1e-9, 0.0, 2e-9, 0.0, 1e-9, 3e-9];
     },
     structures: &[
         |f| {
@@ -136,25 +187,27 @@ pub const FAMILY: Family = Family {
         t_end: 20.0,
     },
     hidden: two_traps,
-    variants: &[("charge_drift_film", across_the_film)],
-    law: None,
+    variants: &[
+        ("charge_drift_film", across_the_film),
+        ("charge_drift_kernel", random_kernel),
+    ],
+    law: Some(|p, _| absorption_law(&p.effects.charge_drift)),
 };
 
-/// The element is on at its magnitude: R3 in series, C3 across the film.
+/// The element is on at its magnitude (R3 in series, C3 across the film), or an absorption
+/// branch of the spectrum or a synthetic one.
 fn is_on(cd: &ChargeDrift) -> bool {
-    match cd.site {
-        DriftSite::Series => cd.r3 > 0.0,
-        _ => cd.c3 > 0.0,
-    }
+    cd.element_on() || cd.spectrum_on() || cd.spread.iter().any(|b| b.weight > 0.0)
 }
 
-/// Each site at three time constants (src/diagnose/diagnose.md, "Screening").
+/// Each site at three time constants; the spectrum, one column per capacitance
+/// (src/diagnose/diagnose.md, "Screening").
 fn probes(params: &Params, _: f64) -> Vec<Probe> {
     // the film's voltage is held by the source through R0 + R1: a branch across it shows
     // when its R3 = tau3 / C3 is a few times R0 + R1
     let r01 = params.act[0].r0 + params.act[0].r1;
     let mut out = Vec::new();
-    for form in &FORMS {
+    for form in &FORMS[..3] {
         for tau in [0.3, 1.0, 3.0] {
             let magnitude = if form.name == "series" {
                 ("R3", 3e4)
@@ -164,6 +217,16 @@ fn probes(params: &Params, _: f64) -> Vec<Probe> {
             out.push(Probe::one(form, vec![magnitude, ("tau3", tau)]));
         }
     }
+    // each branch of the grid as the film's branches are probed: R_b = 3 (R0 + R1)
+    out.push(Probe {
+        form: &FORMS[3],
+        columns: GRID
+            .iter()
+            .zip(GRID_NAMES)
+            .map(|(&tau, n)| vec![(n, tau / (3.0 * r01))])
+            .collect(),
+        scaling: Scaling::Weights,
+    });
     out
 }
 
@@ -204,40 +267,114 @@ fn across_the_film(params: &mut Params, between: &mut dyn FnMut(f64, f64) -> f64
     ))
 }
 
-/// The drift element's terms (effects.md, "charge_drift").
+/// Dielectric absorption across the film of a kernel the grid does not contain
+/// ([`prony::random_kernel`]: two times off the grid, a stretched exponential, a power law),
+/// at a random strength (effects.md, "Hidden forms for synthetic data").
+fn random_kernel(params: &mut Params, between: &mut dyn FnMut(f64, f64) -> f64) -> Planted {
+    let (branches, kernel) = prony::random_kernel(between);
+    // as `across_the_film`: the source holds the film's voltage through R0 + R1, and the
+    // branches take a visible share of the current when their impedance at the paper's drive,
+    // 3π rad/s, is 1 to 4 times R0 + R1 (one branch of ω τ3 ≫ 1: its R3)
+    let r01 = params.act[0].r0 + params.act[0].r1;
+    let f = log_between(between, 1.0, 4.0);
+    let c = 1.0 / (f * r01 * admittance(&branches, 3.0 * std::f64::consts::PI));
+    params.effects.charge_drift.spread = branches.map(|b| Branch {
+        weight: c * b.weight,
+        ..b
+    });
+    Planted::text(format!(
+        "dielectric absorption across the film of {kernel}, C = {c:.3e} F (impedance {f:.2} (R0 + R1) at 3 pi rad/s)"
+    ))
+}
+
+/// |Σ_b w_b jω / (1 + jω τ_b)|: the admittance at ω [rad/s] of R–C branches of capacitances
+/// w_b, per farad.
+fn admittance(branches: &[Branch], omega: f64) -> f64 {
+    let (re, im) = branches.iter().fold((0.0, 0.0), |(re, im), b| {
+        let wt = omega * b.tau;
+        let d = 1.0 + wt * wt;
+        (re + b.weight * omega * wt / d, im + b.weight * omega / d)
+    });
+    re.hypot(im)
+}
+
+/// The absorption's weights: capacitances.
+const WEIGHT: prony::Weight = prony::Weight {
+    symbol: "C",
+    unit: "F",
+    axis: "C [F]",
+};
+
+/// The absorption across the film and the electrode as a spectrum, with the textbook kernel
+/// it is nearest (effects.md, "charge_drift", "The fitted law"; [`prony::law`]): the branches
+/// (τ_b, C_b), the one branch if it is on and the spectrum's ([`prony::points`]); `None` for
+/// the series stage alone, which absorbs nothing across the film.
+fn absorption_law(cd: &ChargeDrift) -> Option<FittedLaw> {
+    let branch = (cd.site != DriftSite::Series && cd.c3 > 0.0).then_some((cd.tau3, cd.c3));
+    let points: Vec<(f64, f64)> = branch
+        .into_iter()
+        .chain(prony::points(&cd.grid, &cd.spread))
+        .collect();
+    (!points.is_empty()).then(|| {
+        prony::law(
+            points,
+            "absorption spectrum: the capacitance of each R-C absorption branch against its time R C".into(),
+            &WEIGHT,
+        )
+    })
+}
+
+/// The drift element's and the absorption branches' terms (effects.md, "charge_drift").
 #[derive(Clone, Debug)]
 pub struct Terms {
     /// (index, R, τ) per series stage.
     stages: Vec<(usize, f64, f64)>,
-    /// The absorption branch across part of the film: (index, C3, τ3, site).
-    branch: Option<(usize, f64, f64, DriftSite)>,
+    /// The absorption branches across part of the film: (index, C, τ, site), R = τ / C; a
+    /// branch of the spectrum may have C = 0.
+    branches: Vec<(usize, f64, f64, DriftSite)>,
+    /// Per state in block order, the capacitance whose charge at 100 V is its scale; `None`
+    /// for a series stage.
+    scales: Vec<Option<f64>>,
     tau3: f64,
 }
 
 impl Law for Terms {
     type Params = ChargeDrift;
 
+    /// Stage 0 is the element (a series stage or one branch), 1 … 6 the grid's branches, 7 the
+    /// synthetic second trap, the synthetic branches after it. The grid's branches come all
+    /// together, a capacitance of 0 among them included: a fit moves weights to and from 0, and
+    /// a state that came and went with its weight would have no sensitivity.
     fn new(cd: &ChargeDrift, states: &mut States) -> Terms {
         let mut t = Terms {
             stages: Vec::new(),
-            branch: None,
+            branches: Vec::new(),
+            scales: Vec::new(),
             tau3: cd.tau3,
         };
-        if !is_on(cd) {
-            return t;
-        }
-        if cd.site == DriftSite::Series {
-            let stages = if cd.two_stages {
-                vec![(0.5 * cd.r3, cd.tau3 / 3.0), (0.5 * cd.r3, 3.0 * cd.tau3)]
+        let series = cd.element_on() && cd.site == DriftSite::Series;
+        if series {
+            let (r, tau) = if cd.two_stages {
+                (0.5 * cd.r3, cd.tau3 / 3.0)
             } else {
-                vec![(cd.r3, cd.tau3)]
+                (cd.r3, cd.tau3)
             };
-            for (k, (rk, tk)) in stages.into_iter().enumerate() {
-                t.stages.push((states.push(Effect::ChargeDrift, k), rk, tk));
+            t.stage(states, 0, r, tau);
+        } else if cd.element_on() {
+            t.branch(states, 0, (cd.c3, cd.tau3, cd.site), cd.c3);
+        }
+        if cd.spectrum_on() {
+            let total = cd.grid.iter().sum();
+            for (b, (&tau, c)) in GRID.iter().zip(cd.grid).enumerate() {
+                t.branch(states, GRID_STAGE + b, (c, tau, DriftSite::Film), total);
             }
-        } else {
-            let k = states.push(Effect::ChargeDrift, 0);
-            t.branch = Some((k, cd.c3, cd.tau3, cd.site));
+        }
+        if series && cd.two_stages {
+            t.stage(states, SECOND_TRAP_STAGE, 0.5 * cd.r3, 3.0 * cd.tau3);
+        }
+        for (j, b) in cd.spread.iter().enumerate().filter(|(_, b)| b.weight > 0.0) {
+            let branch = (b.weight, b.tau, DriftSite::Film);
+            t.branch(states, SPREAD_STAGE + j, branch, b.weight);
         }
         t
     }
@@ -263,14 +400,18 @@ impl Law for Terms {
                 dx[k] = i0 - xi[k] / tk;
             }
         }
-        if let Some((k, _, _, site)) = self.branch {
-            // the branch takes i3 from the part of the film it spans
-            let i3 = self.branch_current(&act.voltages(xi)?, xi);
-            dx[Q2] -= i3;
-            if site == DriftSite::Film {
-                dx[Q1] -= i3;
+        if !self.branches.is_empty() {
+            let v = act.voltages(xi)?;
+            for &branch in &self.branches {
+                // each branch takes i_b from the part of the film it spans
+                let (k, _, _, site) = branch;
+                let i = branch_current(branch, &v, xi);
+                dx[Q2] -= i;
+                if site == DriftSite::Film {
+                    dx[Q1] -= i;
+                }
+                dx[k] = i;
             }
-            dx[k] = i3;
         }
         Ok(())
     }
@@ -306,24 +447,25 @@ impl Law for Terms {
                 add(o + k, o + k, -1.0 / tk);
             }
         }
-        if let Some((k, c3, t3, site)) = self.branch {
+        if !self.branches.is_empty() {
             let v = act.voltages(xi)?;
-            // ∂i3/∂x, entered in the branch's row and (negated) in the rows it takes from
-            let mut d = vec![
-                (THETA, c3 * v.v2_t / t3),
-                (actuator::L_P, c3 * v.v2_l / t3),
-                (Q2, c3 / (v.c2 * t3)),
-                (k, -1.0 / t3),
-            ];
-            let mut rows = vec![Q2];
-            if site == DriftSite::Film {
-                d.push((Q1, c3 / (act.par.c1 * t3)));
-                rows.push(Q1);
-            }
-            for (col, value) in d {
-                add(o + k, o + col, value);
-                for &r in &rows {
-                    add(o + r, o + col, -value);
+            for &(k, c, tau, site) in &self.branches {
+                // ∂i_b/∂x = (C_b ∂V_across/∂x − ∂Q3_b/∂x) / τ_b, entered in the branch's row
+                // and (negated) in the rows it takes from
+                let film = site == DriftSite::Film;
+                let d = [
+                    (THETA, c * v.v2_t / tau),
+                    (actuator::L_P, c * v.v2_l / tau),
+                    (Q2, c / (v.c2 * tau)),
+                    (Q1, if film { c / (act.par.c1 * tau) } else { 0.0 }),
+                    (k, -1.0 / tau),
+                ];
+                for (col, value) in d {
+                    add(o + k, o + col, value);
+                    add(o + Q2, o + col, -value);
+                    if film {
+                        add(o + Q1, o + col, -value);
+                    }
                 }
             }
         }
@@ -336,8 +478,10 @@ impl Law for Terms {
             for &(k, r, t) in &self.stages {
                 e += 0.5 * r * xi[k] * xi[k] / t;
             }
-            if let Some((k, c3, _, _)) = self.branch {
-                e += 0.5 * xi[k] * xi[k] / c3;
+            // Σ Q3_b² / (2 C_b); a branch of C_b = 0 holds no charge (its Q3_b' = −Q3_b / τ_b
+            // from 0 at rest) and stores nothing
+            for &(k, c, _, _) in self.branches.iter().filter(|b| b.1 > 0.0) {
+                e += 0.5 * xi[k] * xi[k] / c;
             }
         }
         e
@@ -349,7 +493,8 @@ impl Law for Terms {
         act.g0 * act.ga(xi[THETA]) * at.port.u_eff * self.drift_voltage(xi)
     }
 
-    /// The stage's resistor, with the source resistor's share of V3; the branch's resistor.
+    /// The stage's resistor, with the source resistor's share of V3; each branch's resistor
+    /// R_b = τ_b / C_b (none where C_b = 0: no current flows there).
     fn dissipation(&self, act: &Actuator, xi: &[f64]) -> Result<f64, DomainError> {
         let mut p = 0.0;
         if !self.stages.is_empty() {
@@ -361,47 +506,65 @@ impl Law for Terms {
                 p += vk * vk / r;
             }
         }
-        if let Some((_, c3, t3, _)) = self.branch {
-            // the branch's resistor R3 = τ3 / C3
-            let i3 = self.branch_current(&act.voltages(xi)?, xi);
-            p += i3 * i3 * t3 / c3;
+        if !self.branches.is_empty() {
+            let v = act.voltages(xi)?;
+            for &branch in self.branches.iter().filter(|b| b.1 > 0.0) {
+                let (_, c, tau, _) = branch;
+                p += branch_current(branch, &v, xi).powi(2) * tau / c;
+            }
         }
         Ok(p)
     }
 
     fn rest(&self, _: f64, out: &mut Vec<f64>) {
-        out.extend(self.stages.iter().map(|_| 0.0));
-        out.extend(self.branch.iter().map(|_| 0.0));
+        out.extend(self.scales.iter().map(|_| 0.0));
     }
 
-    /// The charge at the stage's voltage i R3, with C3 = τ3 / R3; a branch's C3 at the
-    /// film's 100 V.
+    /// The charge at the stage's voltage i R3, with C3 = τ3 / R3; a branch's C at the film's
+    /// 100 V, a branch of the spectrum the spectrum's whole capacitance.
     fn scales(&self, a: &Actuator, _: f64, out: &mut Vec<f64>) {
         let i_dc = a.par.gamma1 * 100.0 / (a.par.r0 + a.par.r1 + a.par.r2);
-        out.extend(self.stages.iter().map(|_| i_dc * self.tau3));
-        out.extend(self.branch.iter().map(|&(_, c3, _, _)| 100.0 * c3));
+        out.extend(
+            self.scales
+                .iter()
+                .map(|c| c.map_or(i_dc * self.tau3, |c| 100.0 * c)),
+        );
     }
 }
 
 impl Terms {
+    /// Adds a series stage (R, τ) with its state, stage `stage`.
+    fn stage(&mut self, states: &mut States, stage: usize, r: f64, tau: f64) {
+        self.stages
+            .push((states.push(Effect::ChargeDrift, stage), r, tau));
+        self.scales.push(None);
+    }
+
+    /// Adds an absorption branch (C, τ, site) with its state, stage `stage`, whose charge is
+    /// scaled at that of capacitance `scale` at 100 V.
+    fn branch(&mut self, states: &mut States, stage: usize, b: (f64, f64, DriftSite), scale: f64) {
+        let k = states.push(Effect::ChargeDrift, stage);
+        self.branches.push((k, b.0, b.1, b.2));
+        self.scales.push(Some(scale));
+    }
+
     /// Voltage over the drift stages, Σ R_k Q_k / τ_k [V].
     fn drift_voltage(&self, xi: &[f64]) -> f64 {
         self.stages.iter().map(|&(k, r, t)| r * xi[k] / t).sum()
     }
+}
 
-    /// Current into the absorption branch, i3 = (C3 V_across − Q3) / τ3 (effects.md,
-    /// "charge_drift"), V_across = V2 across the electrode, V1 + V2 across the film.
-    fn branch_current(&self, v: &actuator::Voltages, xi: &[f64]) -> f64 {
-        match self.branch {
-            Some((k, c3, t3, site)) => {
-                let across = if site == DriftSite::Film {
-                    v.v1 + v.v2
-                } else {
-                    v.v2
-                };
-                (c3 * across - xi[k]) / t3
-            }
-            None => 0.0,
-        }
-    }
+/// Current into an absorption branch, i_b = (C_b V_across − Q3_b) / τ_b (effects.md,
+/// "charge_drift"), V_across = V2 across the electrode, V1 + V2 across the film.
+fn branch_current(
+    (k, c, tau, site): (usize, f64, f64, DriftSite),
+    v: &actuator::Voltages,
+    xi: &[f64],
+) -> f64 {
+    let across = if site == DriftSite::Film {
+        v.v1 + v.v2
+    } else {
+        v.v2
+    };
+    (c * across - xi[k]) / tau
 }

@@ -57,8 +57,9 @@ pub struct Family {
     pub variants: &'static [(&'static str, Plant)],
     /// The family's fitted law at the model `params`, drawn over commands up to the peak
     /// command [V] where its variable is the command (src/diagnose/diagnose.md, "The fitted
-    /// law"); `None` for a family whose forms are its textbook terms.
-    pub law: Option<fn(&Params, f64) -> FittedLaw>,
+    /// law"); `None` for a family whose forms are its textbook terms, and from the function
+    /// for a form of the family the law does not describe (charge_drift's series stage).
+    pub law: Option<fn(&Params, f64) -> Option<FittedLaw>>,
 }
 
 /// A family's fitted law as the verdict shows it: its points against its variable, and the

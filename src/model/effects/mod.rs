@@ -21,6 +21,7 @@ pub mod creep;
 pub mod delay;
 pub mod hysteresis;
 pub mod preload;
+pub mod prony;
 pub mod saturation;
 pub mod stiffening;
 

@@ -24,9 +24,19 @@ fn all_on(other_forms: bool) -> Params {
     if other_forms {
         f.coupling.weights = [1.0, 0.5, 1.5];
         f.charge_drift.two_stages = true;
+        // the absorption spectrum with capacitances at 0 among its branches, and a synthetic
+        // branch
+        f.charge_drift.grid = [1e-9, 0.0, 3e-9, 0.0, 2e-9, 1e-9];
+        f.charge_drift.spread[5] = super::prony::Branch {
+            weight: 2e-9,
+            tau: 0.7,
+        };
         // a spectrum with weights at 0 among its branches, and a synthetic branch
         f.creep.grid = [0.02, 0.0, 0.01, 0.0, 0.03, 0.01];
-        f.creep.spread[3] = super::creep::Branch { k: 0.01, tau: 0.7 };
+        f.creep.spread[3] = super::prony::Branch {
+            weight: 0.01,
+            tau: 0.7,
+        };
         f.hysteresis.r_h = 3.0;
         f.hysteresis.law = HysteresisLaw::Dahl;
         // plays with weights at 0 among them, and a synthetic element
@@ -59,8 +69,9 @@ fn synthetic_input_path() -> Params {
     p
 }
 
-/// The library form, the other forms, the input path's synthetic shapes, and the other forms
-/// with the drift element across the zipping capacitor and across the film.
+/// The library form, the other forms (the absorption spectrum among them), the input path's
+/// synthetic shapes, and the other forms with the drift element across the zipping capacitor and
+/// across the film.
 fn configurations() -> Vec<(String, Params)> {
     let mut out = vec![
         ("library forms".to_string(), all_on(false)),
@@ -91,7 +102,15 @@ fn busy_state(m: &Platform) -> Vec<f64> {
             "p" => 3e-8 * (i - 2.0) + 1e-9,
             "Q1" => 2e-9,
             "Q2" => 3e-8,
-            "Q3" | "Q32" => 1e-7 * i,
+            // an absorption branch's charge at tens of volts, none where its C is 0
+            b if b.starts_with("Q3") => {
+                let cd = &m.params().effects.charge_drift;
+                match b[2..].parse::<usize>().map_or(0, |n| n - 1) {
+                    s @ 1..=6 => 40.0 * i * cd.grid[s - 1],
+                    s @ 8.. => 40.0 * i * cd.spread[s - 8].weight,
+                    _ => 1e-7 * i,
+                }
+            }
             b if b.starts_with("z_v") => theta * 0.7,
             "z_h" => 4e-4 * (i - 1.5),
             _ => 20.0 * i, // amplifier stages
@@ -189,21 +208,21 @@ fn a_textbook_law_is_nearest_itself() {
     let mut p = Params::default();
     p.effects.saturation.u_max = 54.5;
     p.effects.saturation.u_max_neg = 88.0;
-    let law = (Effect::Saturation.family().law.unwrap())(&p, 60.0);
+    let law = (Effect::Saturation.family().law.unwrap())(&p, 60.0).unwrap();
     let nearest = &law.textbook[law.nearest];
     assert_eq!(nearest.name, "unequal clamp", "{law:?}");
     assert_eq!(nearest.values, "+54.5 V / -none", "{law:?}");
     assert!(nearest.distance < 1e-6, "{law:?}");
     let mut p = Params::default();
     p.effects.amplifier_lag.tau_a = 0.02;
-    let law = (Effect::AmplifierLag.family().law.unwrap())(&p, 60.0);
+    let law = (Effect::AmplifierLag.family().law.unwrap())(&p, 60.0).unwrap();
     let nearest = &law.textbook[law.nearest];
     assert_eq!(nearest.name, "linear lag", "{law:?}");
     assert_eq!(nearest.values, "tau 20.00 ms", "{law:?}");
     assert!(nearest.distance < 1e-6, "{law:?}");
     // a slew far below the fastest error: nearest the hard slew limit
     p.effects.amplifier_lag.slew = 100.0;
-    let law = (Effect::AmplifierLag.family().law.unwrap())(&p, 60.0);
+    let law = (Effect::AmplifierLag.family().law.unwrap())(&p, 60.0).unwrap();
     let nearest = &law.textbook[law.nearest];
     assert_eq!(nearest.name, "hard slew limit", "{law:?}");
     assert!(nearest.values.starts_with("100 V/s"), "{law:?}");
