@@ -191,6 +191,23 @@ impl Actuator {
         })
     }
 
+    /// The loop current [A] of the DC circuit at the port voltage u (src/model/model.md,
+    /// "Statics"): with Q̇1 = Q̇2 = 0 the capacitors carry no current, so one current
+    /// i = ga(θ) u / (R0 + R1 + R2) runs through the three resistors.
+    pub fn dc_current(&self, theta: f64, u: f64) -> f64 {
+        self.ga(theta) * u / (self.par.r0 + self.par.r1 + self.par.r2)
+    }
+
+    /// The state at (θ, l_p) at rest (p = 0) with the DC circuit carrying the loop current
+    /// i [A]: V1 = R1 i, V2 = R2 i, so Q1 = C1 R1 i and Q2 = C2(θ, l_p) R2 i.
+    pub fn dc_state(&self, theta: f64, l_p: f64, i: f64) -> Result<[f64; N], DomainError> {
+        let (q1, q2) = (
+            self.par.c1 * self.par.r1 * i,
+            self.c2(theta, l_p)? * self.par.r2 * i,
+        );
+        Ok([theta, l_p, 0.0, q1, q2])
+    }
+
     /// dh/dθ = ½ Lv cos θ [m/rad].
     pub fn height_slope(&self, theta: f64) -> f64 {
         0.5 * self.lv * theta.cos()

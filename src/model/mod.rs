@@ -10,6 +10,7 @@ pub mod kinematics;
 pub mod linalg;
 pub mod params;
 pub mod platform;
+pub mod reduced;
 pub mod shell;
 pub mod statics;
 
@@ -17,3 +18,4 @@ pub use effects::{Effect, EffectParams};
 pub use kinematics::Kinematics;
 pub use params::{ParamError, Params};
 pub use platform::{ModelError, Platform};
+pub use reduced::{Reduction, UnknownReduction};
