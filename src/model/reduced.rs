@@ -137,8 +137,10 @@ impl Platform {
     }
 
     /// The full state on the slow manifold at this model's state `z` and command `u`: l_p on
-    /// its curve where the model drops it, the fast states the root of their rows of f,
-    /// started from the DC circuit's charges at rest.
+    /// its curve where the model drops it, the charges of the DC circuit and, in the slow model,
+    /// the momentum of the force balance. Without effects that is the root of the fast rows of
+    /// f (the circuit's rows are linear in the charges, ṗ affine in p with slope −b/I); with
+    /// them, Newton goes on from there to the root.
     fn lift(&self, z: &[f64], u: [f64; 3]) -> Result<Vec<f64>, ModelError> {
         let mut x = vec![0.0; 3 * self.nb];
         for (k, &v) in z.iter().enumerate() {
@@ -162,8 +164,25 @@ impl Platform {
             x[o + L_P] = dc[L_P];
             x[o + fast..o + N].copy_from_slice(&dc[fast..]);
         }
-        self.settle(&mut x, u, |k| self.is_fast(k))?;
+        if self.reduction.kept() <= P {
+            self.balance_momentum(&mut x, u)?;
+        }
+        if !self.terms.neutral {
+            self.settle(&mut x, u, |k| self.is_fast(k))?;
+        }
         Ok(x)
+    }
+
+    /// Sets each actuator's momentum where ṗ = 0 from the p in `x`, along ṗ's slope in p
+    /// without effects, ∂ṗ/∂p = −b/I (src/model/actuator.rs, module doc).
+    fn balance_momentum(&self, x: &mut [f64], u: [f64; 3]) -> Result<(), ModelError> {
+        let mut f = vec![0.0; x.len()];
+        self.full_rhs(x, u, &mut f)?;
+        for (i, a) in self.actuators.iter().enumerate() {
+            let k = self.nb * i + P;
+            x[k] += f[k] * a.inertia / a.par.b;
+        }
+        Ok(())
     }
 
     pub(super) fn reduced_rhs(
@@ -347,6 +366,66 @@ mod tests {
         m.project(&x)
     }
 
+    /// Every effect on in its library form: the drift stage in the circuit, the effects'
+    /// torques (hysteresis's through the velocity) in the force balance.
+    fn with_effects(r: Reduction) -> Platform {
+        let mut p = Params::default();
+        let f = &mut p.effects;
+        f.coupling.k_c = 40.0;
+        f.charge_drift.r3 = 2e4;
+        f.charge_drift.tau3 = 0.5;
+        f.creep.k_v = 0.05;
+        f.creep.tau_v = 0.3;
+        f.hysteresis.k_h = 0.04;
+        f.hysteresis.theta_h = 2e-3;
+        f.amplifier_lag.tau_a = 0.02;
+        f.saturation.u_max = 50.0;
+        f.stiffening.k3 = 30.0;
+        f.preload.tau0 = [1e-4, -2e-4, 3e-4];
+        Platform::reduced(p, r).unwrap()
+    }
+
+    /// Mid-stroke with every effect's state off rest, in this model's coordinates.
+    fn moving_state_with_effects(m: &Platform) -> Vec<f64> {
+        let full = with_effects(Reduction::Full);
+        let mut x = full
+            .settled_state([0.004, 0.008, 0.002], &[], [40.0, 25.0, -30.0])
+            .unwrap();
+        let (nb, scales) = (full.n_states() / 3, full.state_scales());
+        for i in 0..3 {
+            // moving (|ω| has a kink at 0)
+            x[nb * i + P] = 3e-8 * (i as f64 - 1.0) + 1e-9;
+            // off rest and off the kinks of the hysteresis law at z_h = 0
+            for k in nb * i + N..nb * (i + 1) {
+                x[k] = 0.8 * x[k] + 0.1 * scales[k];
+            }
+        }
+        m.project(&x)
+    }
+
+    const U_EFFECTS: [f64; 3] = [40.0, 25.0, -30.0];
+
+    #[test]
+    fn with_effects_the_lift_roots_the_fast_rows_and_the_jacobian_holds() {
+        for r in [Reduction::QuasiStatic, Reduction::Slow] {
+            let m = with_effects(r);
+            let z = moving_state_with_effects(&m);
+            let x = m.lift(&z, U_EFFECTS).unwrap();
+            let mut f = vec![0.0; x.len()];
+            m.full_rhs(&x, U_EFFECTS, &mut f).unwrap();
+            let scales = m.full_state_scales();
+            for k in (0..x.len()).filter(|&k| m.is_fast(k)) {
+                assert!(
+                    f[k].abs() < 1e-6 * scales[k],
+                    "{:?} state {k}: {:e}",
+                    r,
+                    f[k]
+                );
+            }
+            assert_jacobian_matches(&m, &z, U_EFFECTS);
+        }
+    }
+
     #[test]
     fn names_parse_and_unknown_names_list_the_allowed_ones() {
         for r in Reduction::ALL {
@@ -427,10 +506,19 @@ mod tests {
     #[test]
     fn power_balance_holds_pointwise() {
         // dH_r/dt along ż (central difference in time) = supplied − dissipated
-        let u = [40.0, 55.0, 20.0];
-        for r in [Reduction::QuasiStatic, Reduction::Slow] {
-            let m = reduced(r);
-            let z = moving_state(&m);
+        for (r, effects) in [Reduction::QuasiStatic, Reduction::Slow]
+            .into_iter()
+            .flat_map(|r| [(r, false), (r, true)])
+        {
+            let (m, z, u) = if effects {
+                let m = with_effects(r);
+                let z = moving_state_with_effects(&m);
+                (m, z, U_EFFECTS)
+            } else {
+                let m = reduced(r);
+                let z = moving_state(&m);
+                (m, z, [40.0, 55.0, 20.0])
+            };
             let mut f = vec![0.0; z.len()];
             m.rhs(&z, u, &mut f).unwrap();
             let eps = 1e-7;
