@@ -11,6 +11,7 @@ pub mod linalg;
 pub mod params;
 pub mod platform;
 pub mod reduced;
+pub mod reduction;
 pub mod shell;
 pub mod statics;
 
@@ -18,4 +19,4 @@ pub use effects::{Effect, EffectParams};
 pub use kinematics::Kinematics;
 pub use params::{ParamError, Params};
 pub use platform::{ModelError, Platform};
-pub use reduced::{Reduction, UnknownReduction};
+pub use reduction::{Reduction, UnknownReduction};

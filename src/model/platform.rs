@@ -9,7 +9,7 @@ use super::effects::terms::{Extra, Terms};
 use super::kinematics::Kinematics;
 use super::linalg::bounded_svd;
 use super::params::{ParamError, Params};
-use super::reduced::Reduction;
+use super::reduction::Reduction;
 use super::shell::DomainError;
 
 /// The model cannot be evaluated at a state.
@@ -109,6 +109,20 @@ impl Platform {
         self.reduction == Reduction::Full
     }
 
+    /// `full(self, arg)` for the full model, `reduced(self, arg)` for a reduction.
+    fn per_model<A, T>(
+        &self,
+        arg: A,
+        full: impl FnOnce(&Self, A) -> T,
+        reduced: impl FnOnce(&Self, A) -> T,
+    ) -> T {
+        if self.is_full() {
+            full(self, arg)
+        } else {
+            reduced(self, arg)
+        }
+    }
+
     /// States per actuator block of this model: the paper's states it keeps, then the
     /// effect states.
     pub(super) fn rb(&self) -> usize {
@@ -199,11 +213,11 @@ impl Platform {
 
     /// ẋ = f(x, U) of this model (of the full one: [`Platform::full_rhs`]).
     pub fn rhs(&self, x: &[f64], u: [f64; 3], dx: &mut [f64]) -> Result<(), ModelError> {
-        if self.is_full() {
-            self.full_rhs(x, u, dx)
-        } else {
-            self.reduced_rhs(x, u, dx)
-        }
+        self.per_model(
+            dx,
+            |m, dx| m.full_rhs(x, u, dx),
+            |m, dx| m.reduced_rhs(x, u, dx),
+        )
     }
 
     /// ẋ = f(x, U) of the full model: each actuator at the voltage its port receives, then the
@@ -245,11 +259,11 @@ impl Platform {
         u: [f64; 3],
         add: impl FnMut(usize, usize, f64),
     ) -> Result<(), ModelError> {
-        if self.is_full() {
-            self.full_jacobian_entries(x, u, add)
-        } else {
-            self.reduced_jacobian_entries(x, u, add)
-        }
+        self.per_model(
+            add,
+            |m, add| m.full_jacobian_entries(x, u, add),
+            |m, add| m.reduced_jacobian_entries(x, u, add),
+        )
     }
 
     /// The entries of the full model's ∂f/∂x, as [`Platform::jacobian_entries`]: each
@@ -303,11 +317,11 @@ impl Platform {
         u: [f64; 3],
         add: impl FnMut(usize, usize, f64),
     ) -> Result<(), ModelError> {
-        if self.is_full() {
-            self.full_input_jacobian_entries(x, u, add)
-        } else {
-            self.reduced_input_jacobian_entries(x, u, add)
-        }
+        self.per_model(
+            add,
+            |m, add| m.full_input_jacobian_entries(x, u, add),
+            |m, add| m.reduced_input_jacobian_entries(x, u, add),
+        )
     }
 
     /// The entries of the full model's ∂f/∂U, as [`Platform::input_jacobian_entries`].
@@ -418,7 +432,7 @@ impl Platform {
 
     /// This model's state of the full model's state `x` (`x` itself, or its reduced coordinates).
     fn own_state(&self, x: Vec<f64>) -> Vec<f64> {
-        if self.is_full() { x } else { self.project(&x) }
+        self.per_model(x, |_, x| x, |m, x| m.project(&x))
     }
 
     fn full_rest_state(&self) -> Result<Vec<f64>, ModelError> {
@@ -579,11 +593,7 @@ impl Platform {
 
     /// Stored energy H [J] of this model, the effects' terms included.
     pub fn energy(&self, x: &[f64]) -> Result<f64, ModelError> {
-        if self.is_full() {
-            self.full_energy(x)
-        } else {
-            self.reduced_energy(x)
-        }
+        self.per_model(x, Self::full_energy, Self::reduced_energy)
     }
 
     pub(super) fn full_energy(&self, x: &[f64]) -> Result<f64, ModelError> {
@@ -598,11 +608,11 @@ impl Platform {
     /// Power supplied to this model [W]: of the full one, through the electrical ports at the
     /// voltages they receive.
     pub fn supplied_power(&self, x: &[f64], u: [f64; 3]) -> Result<f64, ModelError> {
-        if self.is_full() {
-            self.full_supplied_power(x, u)
-        } else {
-            self.reduced_supplied_power(x, u)
-        }
+        self.per_model(
+            x,
+            |m, x| m.full_supplied_power(x, u),
+            |m, x| m.reduced_supplied_power(x, u),
+        )
     }
 
     pub(super) fn full_supplied_power(&self, x: &[f64], u: [f64; 3]) -> Result<f64, ModelError> {
@@ -628,11 +638,9 @@ impl Platform {
     /// and hysteretic work included [W]. Only a reduced model's depends on `u`: its
     /// quasi-static charges (and momentum) follow the command.
     pub fn dissipated_power_at(&self, x: &[f64], u: [f64; 3]) -> Result<f64, ModelError> {
-        if self.is_full() {
-            self.full_dissipated_power(x)
-        } else {
-            self.reduced_dissipated_power(x, u)
-        }
+        self.per_model(x, Self::full_dissipated_power, |m, x| {
+            m.reduced_dissipated_power(x, u)
+        })
     }
 
     pub(super) fn full_dissipated_power(&self, x: &[f64]) -> Result<f64, ModelError> {
@@ -647,11 +655,11 @@ impl Platform {
 
     /// dH/dt along the flow with the large electrical terms cancelled analytically [W].
     pub fn stored_power(&self, x: &[f64], u: [f64; 3]) -> Result<f64, ModelError> {
-        if self.is_full() {
-            self.full_stored_power(x, u)
-        } else {
-            self.reduced_stored_power(x, u)
-        }
+        self.per_model(
+            x,
+            |m, x| m.full_stored_power(x, u),
+            |m, x| m.reduced_stored_power(x, u),
+        )
     }
 
     pub(super) fn full_stored_power(&self, x: &[f64], u: [f64; 3]) -> Result<f64, ModelError> {

@@ -51,64 +51,11 @@
 //! and the DC loop's resistors, the effects' terms included), and the balance
 //! dH_r/dt = supplied − dissipated holds exactly along its trajectories.
 
-use std::str::FromStr;
-
 use nalgebra::DMatrix;
 
 use super::actuator::{L_P, N, P, Q2, THETA};
 use super::platform::{ModelError, Platform};
 use super::shell::Shell;
-
-/// Which model of the platform runs.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub enum Reduction {
-    /// The paper's model: θ, l_p, p, Q1, Q2 per actuator.
-    #[default]
-    Full,
-    /// The charges on their quasi-static values: θ, l_p, p per actuator.
-    QuasiStatic,
-    /// The charges and the momentum quasi-static, l_p on its curve: θ per actuator.
-    Slow,
-}
-
-impl Reduction {
-    /// Every model, in the order of its states' number.
-    pub const ALL: [Reduction; 3] = [Reduction::Full, Reduction::QuasiStatic, Reduction::Slow];
-
-    /// The name the command line and the tables use.
-    pub fn name(self) -> &'static str {
-        match self {
-            Reduction::Full => "full",
-            Reduction::QuasiStatic => "quasi-static",
-            Reduction::Slow => "slow",
-        }
-    }
-
-    /// How many of the paper's five states per actuator it keeps: a prefix of
-    /// (θ, l_p, p, Q1, Q2).
-    pub fn kept(self) -> usize {
-        match self {
-            Reduction::Full => N,
-            Reduction::QuasiStatic => P + 1,
-            Reduction::Slow => THETA + 1,
-        }
-    }
-}
-
-/// A model name that is none of [`Reduction::ALL`].
-#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
-#[error("unknown model {0:?}: one of full, quasi-static, slow")]
-pub struct UnknownReduction(pub String);
-
-impl FromStr for Reduction {
-    type Err = UnknownReduction;
-    fn from_str(s: &str) -> Result<Reduction, UnknownReduction> {
-        Reduction::ALL
-            .into_iter()
-            .find(|r| r.name() == s)
-            .ok_or_else(|| UnknownReduction(s.to_string()))
-    }
-}
 
 impl Platform {
     /// Index in the full state of this model's state `k`.
@@ -200,12 +147,17 @@ impl Platform {
         Ok(())
     }
 
-    /// The full model's ∂f/∂x at `x`, dense.
-    fn full_jacobian_at(&self, x: &[f64], u: [f64; 3]) -> Result<DMatrix<f64>, ModelError> {
+    /// The lifted state of `z` at `u` and the full model's ∂f/∂x there, dense.
+    fn lifted_with_jacobian(
+        &self,
+        z: &[f64],
+        u: [f64; 3],
+    ) -> Result<(Vec<f64>, DMatrix<f64>), ModelError> {
+        let x = self.lift(z, u)?;
         let n = x.len();
         let mut j = DMatrix::zeros(n, n);
-        self.full_jacobian_entries(x, u, |r, c, v| j[(r, c)] += v)?;
-        Ok(j)
+        self.full_jacobian_entries(&x, u, |r, c, v| j[(r, c)] += v)?;
+        Ok((x, j))
     }
 
     /// Completes the derivative `t` of the lifted state (columns: the directions) on the
@@ -239,8 +191,7 @@ impl Platform {
         u: [f64; 3],
         mut add: impl FnMut(usize, usize, f64),
     ) -> Result<(), ModelError> {
-        let x = self.lift(z, u)?;
-        let jac = self.full_jacobian_at(&x, u)?;
+        let (x, jac) = self.lifted_with_jacobian(z, u)?;
         let (n, m) = (x.len(), z.len());
         // T = dx/dz: the identity on z, dL/dθ = d(θ, L) for l_p on its curve, then the fast rows
         let mut t = DMatrix::zeros(n, m);
@@ -273,8 +224,7 @@ impl Platform {
         u: [f64; 3],
         mut add: impl FnMut(usize, usize, f64),
     ) -> Result<(), ModelError> {
-        let x = self.lift(z, u)?;
-        let jac = self.full_jacobian_at(&x, u)?;
+        let (x, jac) = self.lifted_with_jacobian(z, u)?;
         let n = x.len();
         let mut b = DMatrix::zeros(n, 3);
         self.full_input_jacobian_entries(&x, u, |r, j, v| b[(r, j)] += v)?;
@@ -348,6 +298,7 @@ impl Platform {
 mod tests {
     use super::*;
     use crate::model::Params;
+    use crate::model::Reduction;
     use crate::model::platform::tests::assert_jacobian_matches;
 
     fn reduced(r: Reduction) -> Platform {
@@ -366,22 +317,22 @@ mod tests {
         m.project(&x)
     }
 
-    /// Every effect on in its library form: the drift stage in the circuit, the effects'
-    /// torques (hysteresis's through the velocity) in the force balance.
+    /// Effects that change the fast rows: the coupling that links the actuators, the clipping
+    /// and the drift stage in the circuit, hysteresis's torque through the velocity in the force
+    /// balance, the amplifier's lag before the port.
     fn with_effects(r: Reduction) -> Platform {
         let mut p = Params::default();
-        let f = &mut p.effects;
-        f.coupling.k_c = 40.0;
-        f.charge_drift.r3 = 2e4;
-        f.charge_drift.tau3 = 0.5;
-        f.creep.k_v = 0.05;
-        f.creep.tau_v = 0.3;
-        f.hysteresis.k_h = 0.04;
-        f.hysteresis.theta_h = 2e-3;
-        f.amplifier_lag.tau_a = 0.02;
-        f.saturation.u_max = 50.0;
-        f.stiffening.k3 = 30.0;
-        f.preload.tau0 = [1e-4, -2e-4, 3e-4];
+        for (name, value) in [
+            ("k_c", 40.0),
+            ("U_max", 50.0),
+            ("k_h", 0.04),
+            ("theta_h", 2e-3),
+            ("R3", 2e4),
+            ("tau3", 0.5),
+            ("tau_a", 0.02),
+        ] {
+            p.set(name, value).unwrap();
+        }
         Platform::reduced(p, r).unwrap()
     }
 
@@ -410,18 +361,7 @@ mod tests {
         for r in [Reduction::QuasiStatic, Reduction::Slow] {
             let m = with_effects(r);
             let z = moving_state_with_effects(&m);
-            let x = m.lift(&z, U_EFFECTS).unwrap();
-            let mut f = vec![0.0; x.len()];
-            m.full_rhs(&x, U_EFFECTS, &mut f).unwrap();
-            let scales = m.full_state_scales();
-            for k in (0..x.len()).filter(|&k| m.is_fast(k)) {
-                assert!(
-                    f[k].abs() < 1e-6 * scales[k],
-                    "{:?} state {k}: {:e}",
-                    r,
-                    f[k]
-                );
-            }
+            assert_fast_rows_rooted(&m, &z, U_EFFECTS);
             assert_jacobian_matches(&m, &z, U_EFFECTS);
         }
     }
@@ -446,24 +386,28 @@ mod tests {
         assert_eq!(&names[..4], ["theta_1", "l_p_1", "p_1", "theta_2"]);
     }
 
+    /// The lifted state of `z` at `u` has its fast rows at 0.
+    fn assert_fast_rows_rooted(m: &Platform, z: &[f64], u: [f64; 3]) {
+        let x = m.lift(z, u).unwrap();
+        let mut f = vec![0.0; x.len()];
+        m.full_rhs(&x, u, &mut f).unwrap();
+        let scales = m.full_state_scales();
+        for k in (0..x.len()).filter(|&k| m.is_fast(k)) {
+            // the fast rates relax in ns to µs: 1e-6 scale/s is 1e-12 of the scale away
+            assert!(
+                f[k].abs() < 1e-6 * scales[k],
+                "{:?} state {k}: {:e}",
+                m.reduction(),
+                f[k]
+            );
+        }
+    }
+
     #[test]
     fn the_lift_roots_the_fast_rows() {
-        let u = [40.0, 55.0, 20.0];
         for r in [Reduction::QuasiStatic, Reduction::Slow] {
             let m = reduced(r);
-            let x = m.lift(&moving_state(&m), u).unwrap();
-            let mut f = vec![0.0; x.len()];
-            m.full_rhs(&x, u, &mut f).unwrap();
-            let scales = m.full_state_scales();
-            for k in (0..x.len()).filter(|&k| m.is_fast(k)) {
-                // the fast rates relax in ns to µs: 1e-6 scale/s is 1e-12 of the scale away
-                assert!(
-                    f[k].abs() < 1e-6 * scales[k],
-                    "{:?} state {k}: {:e}",
-                    r,
-                    f[k]
-                );
-            }
+            assert_fast_rows_rooted(&m, &moving_state(&m), [40.0, 55.0, 20.0]);
         }
     }
 
