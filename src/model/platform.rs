@@ -9,6 +9,7 @@ use super::effects::terms::{Extra, Terms};
 use super::kinematics::Kinematics;
 use super::linalg::bounded_svd;
 use super::params::{ParamError, Params};
+use super::reduced::Curve;
 use super::reduction::Reduction;
 use super::shell::DomainError;
 
@@ -40,6 +41,8 @@ pub struct Platform {
     pub(super) nb: usize,
     /// The full model or one of its reductions (`reduced`), which keeps a prefix of the five.
     pub(super) reduction: Reduction,
+    /// Each actuator's invariant curve l_p(θ), tabulated for the slow model (empty otherwise).
+    pub(super) curves: Vec<Curve>,
 }
 
 /// Newton iterations of [`Platform::settled_state`] at most: the settled states enter ẋ
@@ -88,14 +91,23 @@ impl Platform {
             terms,
             params,
             reduction: Reduction::Full,
+            curves: Vec::new(),
         })
     }
 
     /// The reduced model `reduction` of the platform of `params` (src/model/reduced.rs).
     pub fn reduced(params: Params, reduction: Reduction) -> Result<Platform, ParamError> {
+        let full = Platform::new(params)?;
+        let curves = if reduction.kept() <= actuator::L_P {
+            let lv = full.params.lv;
+            full.actuators.iter().map(|a| Curve::new(a, lv)).collect()
+        } else {
+            Vec::new()
+        };
         Ok(Platform {
             reduction,
-            ..Platform::new(params)?
+            curves,
+            ..full
         })
     }
 
