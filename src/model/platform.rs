@@ -9,7 +9,7 @@ use super::effects::terms::{Extra, Terms};
 use super::kinematics::Kinematics;
 use super::linalg::bounded_svd;
 use super::params::{ParamError, Params};
-use super::reduced::Curve;
+use super::reduced::{Curve, Wrt};
 use super::reduction::Reduction;
 use super::shell::DomainError;
 
@@ -274,7 +274,7 @@ impl Platform {
         self.per_model(
             add,
             |m, add| m.full_jacobian_entries(x, u, add),
-            |m, add| m.reduced_jacobian_entries(x, u, add),
+            |m, add| m.reduced_entries(x, u, Wrt::States, add),
         )
     }
 
@@ -332,7 +332,7 @@ impl Platform {
         self.per_model(
             add,
             |m, add| m.full_input_jacobian_entries(x, u, add),
-            |m, add| m.reduced_input_jacobian_entries(x, u, add),
+            |m, add| m.reduced_entries(x, u, Wrt::Inputs, add),
         )
     }
 

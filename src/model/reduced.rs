@@ -138,6 +138,13 @@ impl Curve {
     }
 }
 
+/// What a reduced Jacobian differentiates by: the reduced states or the commands.
+#[derive(Clone, Copy)]
+pub(super) enum Wrt {
+    States,
+    Inputs,
+}
+
 impl Platform {
     /// Index in the full state of this model's state `k`.
     fn full_index(&self, k: usize) -> usize {
@@ -275,58 +282,59 @@ impl Platform {
         self.terms.links_actuators() || r / self.rb() == c / self.rb()
     }
 
-    pub(super) fn reduced_jacobian_entries(
+    /// The entries of ∂ż/∂z (`wrt` [`Wrt::States`]) or ∂ż/∂U ([`Wrt::Inputs`]) through
+    /// `add(row, col, value)`, as the full model's: the derivative of the lifted state along
+    /// each direction (module doc, "Jacobian"), then the full model's f along it.
+    pub(super) fn reduced_entries(
         &self,
         z: &[f64],
         u: [f64; 3],
+        wrt: Wrt,
         mut add: impl FnMut(usize, usize, f64),
     ) -> Result<(), ModelError> {
         let (x, jac) = self.lifted_with_jacobian(z, u)?;
         let (n, m) = (x.len(), z.len());
-        // T = dx/dz: the identity on z, dL/dθ = d(θ, L) for l_p on its curve, then the fast rows
-        let mut t = DMatrix::zeros(n, m);
-        for c in 0..m {
-            t[(self.full_index(c), c)] = 1.0;
-        }
-        for k in (0..n).filter(|&k| self.on_curve(k)) {
-            let theta = k - L_P + THETA;
-            let i = k / self.nb;
-            let shell =
-                Shell::new(x[theta], x[k], self.params().lv).map_err(|cause| ModelError {
-                    actuator: i + 1,
-                    cause,
-                })?;
-            t[(k, i * self.rb() + THETA)] = shell.d;
-        }
-        self.through_fast_states(&jac, &mut t, &DMatrix::zeros(n, m));
-        let jz = &jac * &t;
+        let (mut t, direct) = match wrt {
+            Wrt::States => (self.slow_tangent(&x, m)?, DMatrix::zeros(n, m)),
+            Wrt::Inputs => {
+                let mut b = DMatrix::zeros(n, 3);
+                self.full_input_jacobian_entries(&x, u, |r, j, v| b[(r, j)] += v)?;
+                (DMatrix::zeros(n, 3), b)
+            }
+        };
+        self.through_fast_states(&jac, &mut t, &direct);
+        let d = &jac * &t + &direct;
+        // a command's column reaches the rows of its actuator's block
+        let block_of = |c: usize| match wrt {
+            Wrt::States => c,
+            Wrt::Inputs => c * self.rb(),
+        };
         for r in 0..m {
-            for c in (0..m).filter(|&c| self.linked(r, c)) {
-                add(r, c, jz[(self.full_index(r), c)]);
+            for c in (0..d.ncols()).filter(|&c| self.linked(r, block_of(c))) {
+                add(r, c, d[(self.full_index(r), c)]);
             }
         }
         Ok(())
     }
 
-    pub(super) fn reduced_input_jacobian_entries(
-        &self,
-        z: &[f64],
-        u: [f64; 3],
-        mut add: impl FnMut(usize, usize, f64),
-    ) -> Result<(), ModelError> {
-        let (x, jac) = self.lifted_with_jacobian(z, u)?;
-        let n = x.len();
-        let mut b = DMatrix::zeros(n, 3);
-        self.full_input_jacobian_entries(&x, u, |r, j, v| b[(r, j)] += v)?;
-        let mut t = DMatrix::zeros(n, 3);
-        self.through_fast_states(&jac, &mut t, &b);
-        let bz = &jac * &t + &b;
-        for r in 0..z.len() {
-            for j in (0..3).filter(|&j| self.linked(r, j * self.rb())) {
-                add(r, j, bz[(self.full_index(r), j)]);
-            }
+    /// dx/dz off the fast states: the identity on z, dL/dθ = d(θ, L) for l_p on its curve.
+    fn slow_tangent(&self, x: &[f64], m: usize) -> Result<DMatrix<f64>, ModelError> {
+        let mut t = DMatrix::zeros(x.len(), m);
+        for c in 0..m {
+            t[(self.full_index(c), c)] = 1.0;
         }
-        Ok(())
+        for k in (0..x.len()).filter(|&k| self.on_curve(k)) {
+            let i = k / self.nb;
+            let shell =
+                Shell::new(x[k - L_P + THETA], x[k], self.params().lv).map_err(|cause| {
+                    ModelError {
+                        actuator: i + 1,
+                        cause,
+                    }
+                })?;
+            t[(k, i * self.rb() + THETA)] = shell.d;
+        }
+        Ok(t)
     }
 
     /// P_e = −(∂E_F/∂θ θ̇ + ∂E_F/∂l_p l̇_p) at the full state `x` along ẋ = f (module doc):
