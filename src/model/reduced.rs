@@ -276,10 +276,12 @@ impl Platform {
         }
     }
 
-    /// Whether ∂ż_r/∂z_c can be nonzero: within an actuator's block, or anywhere when the
-    /// effects link the actuators.
+    /// Whether ∂ż_r/∂z_c can be nonzero: within an actuator's block, or across through the
+    /// angle θ_c when the effects link the actuators (the coupling's energy depends on the
+    /// heights alone; src/model/effects/effects.md, "Jacobian").
     fn linked(&self, r: usize, c: usize) -> bool {
-        self.terms.links_actuators() || r / self.rb() == c / self.rb()
+        let rb = self.rb();
+        r / rb == c / rb || (self.terms.links_actuators() && c % rb == THETA)
     }
 
     /// The entries of ∂ż/∂z (`wrt` [`Wrt::States`]) or ∂ż/∂U ([`Wrt::Inputs`]) through
@@ -304,13 +306,13 @@ impl Platform {
         };
         self.through_fast_states(&jac, &mut t, &direct);
         let d = &jac * &t + &direct;
-        // a command's column reaches the rows of its actuator's block
-        let block_of = |c: usize| match wrt {
-            Wrt::States => c,
-            Wrt::Inputs => c * self.rb(),
+        // a command reaches the rows of its actuator's block only: the coupling takes angles
+        let linked = |r: usize, c: usize| match wrt {
+            Wrt::States => self.linked(r, c),
+            Wrt::Inputs => r / self.rb() == c,
         };
         for r in 0..m {
-            for c in (0..d.ncols()).filter(|&c| self.linked(r, block_of(c))) {
+            for c in (0..d.ncols()).filter(|&c| linked(r, c)) {
                 add(r, c, d[(self.full_index(r), c)]);
             }
         }
@@ -548,10 +550,19 @@ mod tests {
 
     #[test]
     fn input_jacobians_match_finite_differences() {
-        let u = [40.0, 55.0, 20.0];
-        for r in [Reduction::QuasiStatic, Reduction::Slow] {
-            let m = reduced(r);
-            let z = moving_state(&m);
+        for (r, effects) in [Reduction::QuasiStatic, Reduction::Slow]
+            .into_iter()
+            .flat_map(|r| [(r, false), (r, true)])
+        {
+            let (m, z, u) = if effects {
+                let m = with_effects(r);
+                let z = moving_state_with_effects(&m);
+                (m, z, U_EFFECTS)
+            } else {
+                let m = reduced(r);
+                let z = moving_state(&m);
+                (m, z, [40.0, 55.0, 20.0])
+            };
             let n = m.n_states();
             let mut b = vec![0.0; n * 3];
             m.input_jacobian(&z, u, &mut b).unwrap();
