@@ -548,21 +548,23 @@ mod tests {
         }
     }
 
+    /// Each reduced model moving, without effects and with them: the model, its state, the
+    /// commands and whether the effects are on.
+    fn moving_cases() -> Vec<(Platform, Vec<f64>, [f64; 3], bool)> {
+        let mut cases = Vec::new();
+        for r in [Reduction::QuasiStatic, Reduction::Slow] {
+            let m = reduced(r);
+            cases.push((m.clone(), moving_state(&m), [40.0, 55.0, 20.0], false));
+            let m = with_effects(r);
+            cases.push((m.clone(), moving_state_with_effects(&m), U_EFFECTS, true));
+        }
+        cases
+    }
+
     #[test]
     fn input_jacobians_match_finite_differences() {
-        for (r, effects) in [Reduction::QuasiStatic, Reduction::Slow]
-            .into_iter()
-            .flat_map(|r| [(r, false), (r, true)])
-        {
-            let (m, z, u) = if effects {
-                let m = with_effects(r);
-                let z = moving_state_with_effects(&m);
-                (m, z, U_EFFECTS)
-            } else {
-                let m = reduced(r);
-                let z = moving_state(&m);
-                (m, z, [40.0, 55.0, 20.0])
-            };
+        for (m, z, u, effects) in moving_cases() {
+            let r = m.reduction();
             let n = m.n_states();
             let mut b = vec![0.0; n * 3];
             m.input_jacobian(&z, u, &mut b).unwrap();
@@ -573,12 +575,12 @@ mod tests {
                 um[j] -= 1e-3;
                 m.rhs(&z, up, &mut fp).unwrap();
                 m.rhs(&z, um, &mut fm).unwrap();
-                for r in 0..n {
-                    let fd = (fp[r] - fm[r]) / 2e-3;
-                    let an = b[j * n + r];
+                for k in 0..n {
+                    let fd = (fp[k] - fm[k]) / 2e-3;
+                    let an = b[j * n + k];
                     assert!(
                         (an - fd).abs() <= 1e-6 * an.abs().max(fd.abs()) + 1e-300,
-                        "{r:?} d{r}/dU{j}: analytic {an:e} vs fd {fd:e}"
+                        "{r:?}, effects {effects}: d{k}/dU{j}: analytic {an:e} vs fd {fd:e}"
                     );
                 }
             }
@@ -588,19 +590,8 @@ mod tests {
     #[test]
     fn power_balance_holds_pointwise() {
         // dH_r/dt along ż (central difference in time) = supplied − dissipated
-        for (r, effects) in [Reduction::QuasiStatic, Reduction::Slow]
-            .into_iter()
-            .flat_map(|r| [(r, false), (r, true)])
-        {
-            let (m, z, u) = if effects {
-                let m = with_effects(r);
-                let z = moving_state_with_effects(&m);
-                (m, z, U_EFFECTS)
-            } else {
-                let m = reduced(r);
-                let z = moving_state(&m);
-                (m, z, [40.0, 55.0, 20.0])
-            };
+        for (m, z, u, effects) in moving_cases() {
+            let r = m.reduction();
             let mut f = vec![0.0; z.len()];
             m.rhs(&z, u, &mut f).unwrap();
             let eps = 1e-7;
@@ -613,11 +604,11 @@ mod tests {
             let dissipated = m.dissipated_power_at(&z, u).unwrap();
             let stored = m.stored_power(&z, u).unwrap();
             println!(
-                "{r:?}: dH/dt {dh:e}, supplied {supplied:e}, dissipated {dissipated:e}, stored {stored:e}"
+                "{r:?}, effects {effects}: dH/dt {dh:e}, supplied {supplied:e}, dissipated {dissipated:e}, stored {stored:e}"
             );
             assert!(
                 (dh - stored).abs() < 1e-6 * stored.abs(),
-                "{r:?}: dH/dt {dh:e} vs stored {stored:e}"
+                "{r:?}, effects {effects}: dH/dt {dh:e} vs stored {stored:e}"
             );
             assert!(
                 (stored - (supplied - dissipated)).abs() < 1e-12 * (supplied.abs() + dissipated),
