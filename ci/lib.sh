@@ -13,6 +13,11 @@ INVERSE_LIB="$INVERSE_TARGET_DIR/$FMU_TARGET/release/libhasel_fmu.so"
 # the FMI 3.0 build (--features fmi3), likewise in a target folder of its own
 FMU3_TARGET_DIR="$ROOT/target/fmi3"
 FMU3_LIB="$FMU3_TARGET_DIR/$FMU_TARGET/release/libhasel_fmu.so"
+# the slow model's FMU (feature reduced-fmu), FMI 2.0 and 3.0, each in a target folder of its own
+REDUCED_TARGET_DIR="$ROOT/target/reduced"
+REDUCED_LIB="$REDUCED_TARGET_DIR/$FMU_TARGET/release/libhasel_fmu.so"
+REDUCED3_TARGET_DIR="$ROOT/target/reduced-fmi3"
+REDUCED3_LIB="$REDUCED3_TARGET_DIR/$FMU_TARGET/release/libhasel_fmu.so"
 
 step() { printf '\n== [%d s] %s\n' "$SECONDS" "$*"; }
 
@@ -88,8 +93,9 @@ zigbuild_fmu_lib() {
 }
 
 # Builds the FMUs' shared libraries against glibc 2.17 (so they load on older hosts): the
-# platform's for FMI 2.0 and 3.0 and the inverse FMU's, the CLI, and packs fmu/HaselPlatform.fmu,
-# fmu/HaselPlatform-fmi3.fmu and fmu/HaselInverse.fmu.
+# platform's for FMI 2.0 and 3.0, the slow model's for both, the inverse FMU's, the CLI, and packs
+# fmu/HaselPlatform.fmu, fmu/HaselPlatform-fmi3.fmu, fmu/HaselPlatformReduced.fmu,
+# fmu/HaselPlatformReduced-fmi3.fmu and fmu/HaselInverse.fmu.
 build_fmu() {
     ensure_venv
     ensure_zigbuild
@@ -106,6 +112,12 @@ build_fmu() {
     seed_target_dir "$INVERSE_TARGET_DIR"
     zigbuild_fmu_lib --features inverse-fmu --target-dir "$INVERSE_TARGET_DIR"
     ./target/release/hasel fmu --model inverse --lib "$INVERSE_LIB"
+    step "build the slow model's libraries (feature reduced-fmu, FMI 2.0 and 3.0) and pack fmu/HaselPlatformReduced.fmu and -fmi3.fmu"
+    seed_target_dir "$REDUCED_TARGET_DIR"
+    zigbuild_fmu_lib --features reduced-fmu --target-dir "$REDUCED_TARGET_DIR"
+    seed_target_dir "$REDUCED3_TARGET_DIR"
+    zigbuild_fmu_lib --features reduced-fmu,fmi3 --target-dir "$REDUCED3_TARGET_DIR"
+    ./target/release/hasel fmu --model reduced --lib "$REDUCED_LIB" --lib-fmi3 "$REDUCED3_LIB"
 }
 
 # ---- the other platforms' libraries and commands (ci/platforms.sh; ci/test.sh builds some) ----

@@ -33,6 +33,37 @@ fn simulate_writes_the_trajectory_and_the_figure() {
 }
 
 #[test]
+fn an_unknown_model_is_refused_with_the_allowed_ones() {
+    let o = hasel(&["simulate", "--model", "reduced", "--t-end", "0.1"]);
+    assert!(!o.status.success());
+    let err = stderr(&o);
+    assert!(
+        err.contains("'reduced'") && err.contains("--model"),
+        "{err}"
+    );
+    assert!(err.contains("full, quasi-static, slow"), "{err}");
+}
+
+#[test]
+fn a_reduced_model_runs_from_the_command_line() {
+    let dir = scratch("slow");
+    let csv = dir.join("run.csv");
+    let o = hasel(&[
+        "simulate",
+        "--model",
+        "slow",
+        "--sine",
+        "60,11",
+        "--t-end",
+        "0.2",
+        "--out",
+        s(&csv),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert_eq!(Table::read(&csv).unwrap().rows.len(), 201);
+}
+
+#[test]
 fn a_sampled_input_file_drives_the_run() {
     let dir = scratch("input");
     let input = dir.join("u.csv");

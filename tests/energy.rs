@@ -1,9 +1,11 @@
 //! The energy balance dH/dt = y·U − dissipation along a trajectory (src/model/model.md, "Energy
 //! balance"), the first check of any implementation. The stored power is integrated as an extra
 //! state by the same solver; the balance is measured against the energy supplied through the
-//! ports, since the circuit's port power (~1e5 W peak) dwarfs the mechanical power (mW).
+//! ports, since the circuit's port power (~1e5 W peak) dwarfs the mechanical power (mW). The
+//! reduced models keep the balance of their own storage (src/model/reduced.rs,
+//! "Port-Hamiltonian form").
 
-use hasel_fmu::model::{Params, Platform};
+use hasel_fmu::model::{Params, Platform, Reduction};
 use hasel_fmu::simulation::Input;
 use hasel_fmu::solver::{OdeSystem, Radau5, RhsError, Tolerances};
 
@@ -45,9 +47,18 @@ impl OdeSystem for WithEnergy<'_> {
 
 #[test]
 fn stored_energy_follows_supplied_minus_dissipated_power() {
-    let model = Platform::new(Params::default()).unwrap();
+    for reduction in Reduction::ALL {
+        balance_holds(&Platform::reduced(Params::default(), reduction).unwrap());
+    }
+}
+
+/// Over 2 s of the paper's sine, the change of `model`'s energy against its integrated power
+/// balance (the stored power, checked pointwise against supplied − dissipated by the unit
+/// tests).
+fn balance_holds(model: &Platform) {
+    let name = model.reduction().name();
     let sys = WithEnergy {
-        model: &model,
+        model,
         input: Input::sine(60.0, 3.0 * std::f64::consts::PI),
     };
     let n = model.n_states();
@@ -70,14 +81,17 @@ fn stored_energy_follows_supplied_minus_dissipated_power() {
     }
     let y = solver.y();
     println!(
-        "after 2 s: H - H0 = {:.3e} J, supplied {:.3e} J; worst imbalance {worst_abs:.2e} J = {worst:.2e} of the supplied energy",
+        "{name}: after 2 s: H - H0 = {:.3e} J, supplied {:.3e} J; worst imbalance {worst_abs:.2e} J = {worst:.2e} of the supplied energy",
         model.energy(&y[..n]).unwrap() - h0,
         y[n + 1]
     );
     // the stored energy changes by ~1e-4 J while ~1e5 J flow through the ports
-    assert!(worst < 1e-10, "imbalance {worst:e} of the supplied energy");
+    assert!(
+        worst < 1e-10,
+        "{name}: imbalance {worst:e} of the supplied energy"
+    );
     assert!(
         worst_abs < 1e-3 * stored_max,
-        "imbalance {worst_abs:e} J against stored {stored_max:e} J"
+        "{name}: imbalance {worst_abs:e} J against stored {stored_max:e} J"
     );
 }

@@ -1,21 +1,24 @@
 //! The HaselPlatform model core: the mapping of FMI calls onto the model, parameters until
 //! initialization ends, then a running simulation (Co-Simulation) or the importer's time and
 //! states (Model Exchange). The generic FMI shell does every check of the standard around it;
-//! the variable table says what each value reference is.
+//! the variable table says what each value reference is. One core for each FMU of the platform:
+//! the full model's (HaselPlatform) and the slow model's (HaselPlatformReduced), told apart by
+//! their [`FmuModel`].
 
+use std::marker::PhantomData;
 use std::path::Path;
 
 use serde::{Deserialize, Serialize};
 
 use super::structure::model_structure;
-use super::variables::{Slot, rows, variables};
-use super::{RESOURCE_PARAMS, model_info};
+use super::variables::{Slot, rows_of, variables};
+use super::{FmuModel, RESOURCE_PARAMS};
 use crate::fmi_common::model_api::{FmuCore, InstanceKind, ModelStructure};
 use crate::fmi_common::variables::{ModelInfo, Variable};
 use crate::io::params_file;
 use crate::model::params::{ParamDef, parameters};
 use crate::model::platform::BlockState;
-use crate::model::{Params, Platform};
+use crate::model::{Params, Platform, Reduction};
 use crate::simulation::{DEFAULT_RTOL, Simulator, Snapshot, check_rtol};
 
 /// Reads the packed start values from `resources/parameters.toml`, if the FMU has one.
@@ -51,9 +54,10 @@ pub fn restored_params(values: &[f64]) -> Result<Params, String> {
     Ok(params)
 }
 
-/// The core: parameters until initialization ends, then a run.
+/// The core of the FMU of the model `K`: parameters until initialization ends, then a run.
 #[derive(Clone, Debug)]
-pub struct HaselCore {
+pub struct PlatformCore<K: FmuModel> {
+    model: PhantomData<K>,
     kind: InstanceKind,
     params: Params,
     rtol: f64,
@@ -99,10 +103,10 @@ enum SavedRun {
     Importer { t: f64, x: Vec<f64> },
 }
 
-/// The continuous states in the order of the state vector: the table's state variables, in
-/// value-reference order ([`model_structure`]).
-fn table_states() -> impl Iterator<Item = (usize, BlockState)> {
-    rows().iter().filter_map(|r| match r.slot {
+/// The continuous states in the order of the state vector: the table's state variables of the
+/// model `reduction`, in value-reference order ([`model_structure`]).
+fn table_states(reduction: Reduction) -> impl Iterator<Item = (usize, BlockState)> {
+    rows_of(reduction).iter().filter_map(|r| match r.slot {
         Slot::State { actuator, state } => Some((actuator, state)),
         _ => None,
     })
@@ -149,7 +153,7 @@ impl<'m> Jacobians<'m> {
     }
 
     fn unknown(&self, vr: u32) -> Result<Unknown, String> {
-        let row = &rows()[vr as usize];
+        let row = &rows_of(self.model.reduction())[vr as usize];
         match row.slot {
             Slot::Derivative { actuator, state } => Ok(Unknown::Derivative(
                 self.model.state_position(actuator, state),
@@ -164,7 +168,7 @@ impl<'m> Jacobians<'m> {
     }
 
     fn known(&self, vr: u32) -> Result<Known, String> {
-        let row = &rows()[vr as usize];
+        let row = &rows_of(self.model.reduction())[vr as usize];
         match row.slot {
             Slot::State { actuator, state } => {
                 Ok(Known::State(self.model.state_position(actuator, state)))
@@ -216,11 +220,16 @@ impl<'m> Jacobians<'m> {
     }
 }
 
-impl HaselCore {
+impl<K: FmuModel> PlatformCore<K> {
+    /// The model at the parameters `params`.
+    fn model(params: Params) -> Result<Platform, String> {
+        Platform::reduced(params, K::REDUCTION).map_err(|e| e.to_string())
+    }
+
     /// The model at the current parameters and its rest state: the initial state, and what
     /// outputs show in Initialization Mode.
     fn at_rest(&self) -> Result<(Platform, Vec<f64>), String> {
-        let model = Platform::new(self.params.clone()).map_err(|e| e.to_string())?;
+        let model = Self::model(self.params.clone())?;
         let x = model.rest_state().map_err(|e| e.to_string())?;
         Ok((model, x))
     }
@@ -286,22 +295,23 @@ impl HaselCore {
             },
             Slot::Energy => ok(model.energy(x))?,
             Slot::SuppliedPower => ok(model.supplied_power(x, self.u))?,
-            Slot::DissipatedPower => ok(model.dissipated_power(x))?,
+            Slot::DissipatedPower => ok(model.dissipated_power_at(x, self.u))?,
         })
     }
 }
 
-impl FmuCore for HaselCore {
+impl<K: FmuModel> FmuCore for PlatformCore<K> {
     fn model_info() -> ModelInfo {
-        model_info()
+        K::model_info()
     }
 
     fn model_structure() -> ModelStructure {
-        model_structure()
+        model_structure(K::REDUCTION)
     }
 
     fn instantiate(kind: InstanceKind, resource_dir: Option<&Path>) -> Result<Self, String> {
-        Ok(HaselCore {
+        Ok(PlatformCore {
+            model: PhantomData,
             kind,
             params: resource_params(resource_dir)?,
             rtol: DEFAULT_RTOL,
@@ -314,11 +324,11 @@ impl FmuCore for HaselCore {
     }
 
     fn variables(&self) -> Vec<Variable> {
-        variables(&self.params, self.rtol)
+        variables(K::REDUCTION, &self.params, self.rtol)
     }
 
     fn get_real(&mut self, vr: u32) -> Result<f64, String> {
-        let row = &rows()[vr as usize];
+        let row = &rows_of(K::REDUCTION)[vr as usize];
         match row.slot {
             Slot::Input(i) => return Ok(self.u[i]),
             Slot::Param(d) => return Ok((d.get)(&self.params)),
@@ -339,7 +349,7 @@ impl FmuCore for HaselCore {
     }
 
     fn set_real(&mut self, vr: u32, value: f64) -> Result<(), String> {
-        let row = &rows()[vr as usize];
+        let row = &rows_of(K::REDUCTION)[vr as usize];
         match row.slot {
             Slot::Input(i) => {
                 if !value.is_finite() {
@@ -427,7 +437,7 @@ impl FmuCore for HaselCore {
 
     fn continuous_states(&mut self, out: &mut [f64]) -> Result<(), String> {
         self.evaluate(|model, x| {
-            for (v, (actuator, state)) in out.iter_mut().zip(table_states()) {
+            for (v, (actuator, state)) in out.iter_mut().zip(table_states(K::REDUCTION)) {
                 *v = model.state_position(actuator, state).map_or(0.0, |k| x[k]);
             }
             Ok(())
@@ -436,11 +446,13 @@ impl FmuCore for HaselCore {
 
     fn set_continuous_states(&mut self, values: &[f64]) -> Result<(), String> {
         if let Some((v, k)) = values.iter().zip(0..).find(|(v, _)| !v.is_finite()) {
-            let name = &rows()[model_structure().derivatives[k].state as usize].name;
+            let name = &rows_of(K::REDUCTION)
+                [model_structure(K::REDUCTION).derivatives[k].state as usize]
+                .name;
             return Err(format!("state {name} = {v}: must be finite"));
         }
         let (model, _, x) = self.importer_states()?;
-        for (&v, (actuator, state)) in values.iter().zip(table_states()) {
+        for (&v, (actuator, state)) in values.iter().zip(table_states(K::REDUCTION)) {
             // an effect that is off keeps its state at 0
             if let Some(k) = model.state_position(actuator, state) {
                 x[k] = v;
@@ -454,7 +466,7 @@ impl FmuCore for HaselCore {
         self.evaluate(|model, x| {
             let mut dx = vec![0.0; model.n_states()];
             model.rhs(x, u, &mut dx).map_err(|e| e.to_string())?;
-            for (v, (actuator, state)) in out.iter_mut().zip(table_states()) {
+            for (v, (actuator, state)) in out.iter_mut().zip(table_states(K::REDUCTION)) {
                 *v = model.state_position(actuator, state).map_or(0.0, |k| dx[k]);
             }
             Ok(())
@@ -463,9 +475,9 @@ impl FmuCore for HaselCore {
 
     /// The model's state scales; 1 for the state of an effect that is off (it stays 0).
     fn nominals(&self, out: &mut [f64]) -> Result<(), String> {
-        let model = Platform::new(self.params.clone()).map_err(|e| e.to_string())?;
+        let model = Self::model(self.params.clone())?;
         let scales = model.state_scales();
-        for (v, (actuator, state)) in out.iter_mut().zip(table_states()) {
+        for (v, (actuator, state)) in out.iter_mut().zip(table_states(K::REDUCTION)) {
             *v = model
                 .state_position(actuator, state)
                 .map_or(1.0, |k| scales[k]);
@@ -540,7 +552,7 @@ impl FmuCore for HaselCore {
         let params = restored_params(&state.params)?;
         let run = match state.run {
             Some(saved) => {
-                let model = Platform::new(params.clone()).map_err(|e| format!("state: {e}"))?;
+                let model = Self::model(params.clone()).map_err(|e| format!("state: {e}"))?;
                 Some(match saved {
                     SavedRun::Steps(snapshot) => Run::Steps(Box::new(
                         Simulator::from_snapshot(model, *snapshot)
@@ -564,7 +576,8 @@ impl FmuCore for HaselCore {
             }
             None => None,
         };
-        Ok(HaselCore {
+        Ok(PlatformCore {
+            model: PhantomData,
             kind,
             params,
             rtol: state.rtol,
@@ -580,15 +593,25 @@ impl FmuCore for HaselCore {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::fmu::variables::rows;
+    use crate::fmu::{FullModel, HaselCore, HaselReducedCore, SlowModel};
 
-    /// The value reference of the variable `name`.
+    /// The value reference of the variable `name` in the FMU of the model `K`.
+    fn vr_in<K: FmuModel>(name: &str) -> u32 {
+        rows_of(K::REDUCTION)
+            .iter()
+            .position(|r| r.name == name)
+            .unwrap() as u32
+    }
+
+    /// The value reference of the variable `name` in HaselPlatform.
     fn vr(name: &str) -> u32 {
-        rows().iter().position(|r| r.name == name).unwrap() as u32
+        vr_in::<FullModel>(name)
     }
 
     /// The effects with states on (with their second stages and the hysteresis' relaxation,
     /// when `other_forms`), and the coupling that links the actuators.
-    fn effects_on(core: &mut HaselCore, other_forms: bool) {
+    fn effects_on<K: FmuModel>(core: &mut PlatformCore<K>, other_forms: bool) {
         let effects = [
             ("R3", 2e4),
             ("tau3", 0.5),
@@ -618,7 +641,11 @@ mod tests {
 
     /// A core of `kind` past initialization.
     fn started(kind: InstanceKind, effects: bool) -> HaselCore {
-        let mut core = HaselCore::instantiate(kind, None).unwrap();
+        started_as(kind, effects)
+    }
+
+    fn started_as<K: FmuModel>(kind: InstanceKind, effects: bool) -> PlatformCore<K> {
+        let mut core = PlatformCore::<K>::instantiate(kind, None).unwrap();
         if effects {
             effects_on(&mut core, false);
         }
@@ -628,13 +655,17 @@ mod tests {
     }
 
     fn n_states() -> usize {
-        model_structure().derivatives.len()
+        model_structure(Reduction::Full).derivatives.len()
     }
 
     /// A Co-Simulation core in motion, 0.5 ms after the commands changed, and its states
     /// (in motion: the hysteresis has a kink where θ̇ = 0).
     fn simulated(effects: bool) -> (HaselCore, Vec<f64>) {
-        let mut core = started(InstanceKind::CoSimulation, effects);
+        simulated_as(effects)
+    }
+
+    fn simulated_as<K: FmuModel>(effects: bool) -> (PlatformCore<K>, Vec<f64>) {
+        let mut core = started_as::<K>(InstanceKind::CoSimulation, effects);
         for (k, name) in ["U1", "U2", "U3"].iter().enumerate() {
             core.set_real(vr(name), 30.0 + 10.0 * k as f64).unwrap();
         }
@@ -643,7 +674,7 @@ mod tests {
             core.set_real(vr(name), u).unwrap();
         }
         core.do_step(5e-4).unwrap();
-        let mut x = vec![0.0; n_states()];
+        let mut x = vec![0.0; model_structure(K::REDUCTION).derivatives.len()];
         core.continuous_states(&mut x).unwrap();
         (core, x)
     }
@@ -683,7 +714,7 @@ mod tests {
 
     #[test]
     fn the_state_vector_is_the_table_states_with_their_derivatives() {
-        let structure = model_structure();
+        let structure = model_structure(Reduction::Full);
         assert_eq!(structure.derivatives.len(), 3 * 27);
         for d in &structure.derivatives {
             let (state, der) = (&rows()[d.state as usize], &rows()[d.derivative as usize]);
@@ -714,7 +745,7 @@ mod tests {
         let mut me = started(InstanceKind::ModelExchange, false);
         let mut x = vec![0.0; n_states()];
         me.continuous_states(&mut x).unwrap();
-        let k = model_structure()
+        let k = model_structure(Reduction::Full)
             .derivatives
             .iter()
             .position(|d| d.state == vr("Q3_2"))
@@ -733,7 +764,7 @@ mod tests {
         let mut nominal = vec![0.0; n_states()];
         me.nominals(&mut nominal).unwrap();
         let at = |name: &str| {
-            let k = model_structure()
+            let k = model_structure(Reduction::Full)
                 .derivatives
                 .iter()
                 .position(|d| d.state == vr(name));
@@ -776,8 +807,8 @@ mod tests {
     /// against central differences of the derivatives and outputs, each row relative to its
     /// scale: the state's nominal per second for a derivative, 1 µm for an output.
     /// `nonzero` columns must be nonzero (the others are the states of effects that are off).
-    fn check_directional_derivatives(core: &mut HaselCore, nonzero: usize) {
-        let structure = model_structure();
+    fn check_directional_derivatives<K: FmuModel>(core: &mut PlatformCore<K>, nonzero: usize) {
+        let structure = model_structure(K::REDUCTION);
         let outputs: Vec<u32> = structure.outputs.iter().map(|o| o.output).collect();
         let unknowns: Vec<u32> = structure
             .derivatives
@@ -800,7 +831,7 @@ mod tests {
         let mut x = vec![0.0; n];
         core.continuous_states(&mut x).unwrap();
         // the derivatives and outputs at the states and inputs moved along `known` by `h`
-        let evaluate = |core: &mut HaselCore, known: usize, h: f64| -> Vec<f64> {
+        let evaluate = |core: &mut PlatformCore<K>, known: usize, h: f64| -> Vec<f64> {
             let mut c = core.clone();
             if let Some(Run::Steps(sim)) = &core.run {
                 // a Co-Simulation core is moved through its Model Exchange twin
@@ -848,8 +879,8 @@ mod tests {
                 .map(|(d, s)| (d * scale / s).abs())
                 .fold(0.0, f64::max);
             for (r, ((a, f), s)) in dd.iter().zip(&fd).zip(&row_scale).enumerate() {
-                let name = &rows()[unknowns[r] as usize].name;
-                let known_name = &rows()[known as usize].name;
+                let name = &rows_of(K::REDUCTION)[unknowns[r] as usize].name;
+                let known_name = &rows_of(K::REDUCTION)[known as usize].name;
                 assert!(
                     ((a - f) * scale / s).abs() <= 1e-6 * size,
                     "d {name} / d {known_name}: analytic {a:e}, central differences {f:e}"
@@ -869,6 +900,39 @@ mod tests {
             let mut me = started(InstanceKind::ModelExchange, effects);
             me.u = cs.u;
             me.set_continuous_states(&x).unwrap();
+            check_directional_derivatives(&mut me, nonzero);
+        }
+    }
+
+    /// HaselPlatformReduced: one angle per actuator (and the effects' states) whose derivatives
+    /// are the slow model's, the same in Model Exchange as in Co-Simulation, and directional
+    /// derivatives that match central differences.
+    #[test]
+    fn the_reduced_core_runs_the_slow_model() {
+        let structure = model_structure(Reduction::Slow);
+        // the full FMU's states but l_p, p, Q1 and Q2 of each actuator
+        let full = model_structure(Reduction::Full).derivatives.len();
+        assert_eq!(structure.derivatives.len(), full - 3 * 4);
+        let theta_1 = vr_in::<SlowModel>("theta_1");
+        assert_eq!(structure.derivatives[0].state, theta_1);
+        // 3 angles and 3 inputs; with the effects, their 12 states too
+        for (effects, nonzero) in [(false, 6), (true, 18)] {
+            let (mut cs, x) = simulated_as::<SlowModel>(effects);
+            let Some(Run::Steps(sim)) = cs.run.clone() else {
+                panic!("a Co-Simulation run")
+            };
+            assert_eq!(sim.model().reduction(), Reduction::Slow);
+            let mut me: HaselReducedCore = started_as(InstanceKind::ModelExchange, effects);
+            me.u = cs.u;
+            me.set_continuous_states(&x).unwrap();
+            let (mut dx_me, mut dx_cs) = (vec![0.0; x.len()], vec![0.0; x.len()]);
+            me.derivatives(&mut dx_me).unwrap();
+            cs.derivatives(&mut dx_cs).unwrap();
+            assert_eq!(dx_me, dx_cs);
+            let mut f = vec![0.0; sim.model().n_states()];
+            sim.model().rhs(sim.state(), cs.u, &mut f).unwrap();
+            assert_eq!(dx_cs[0], f[0], "der(theta_1)");
+            check_directional_derivatives(&mut cs, nonzero);
             check_directional_derivatives(&mut me, nonzero);
         }
     }
@@ -902,7 +966,7 @@ mod tests {
 
     #[test]
     fn the_structure_is_the_block_structure_with_the_coupling() {
-        let structure = model_structure();
+        let structure = model_structure(Reduction::Full);
         let actuator_of = |vr: u32| match rows()[vr as usize].slot {
             Slot::State { actuator, .. } | Slot::Input(actuator) => actuator,
             ref other => panic!(

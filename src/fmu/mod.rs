@@ -1,8 +1,10 @@
 //! The HaselPlatform FMU: its variable table ([`variables`]), the model core that maps FMI
 //! calls onto a simulation ([`hasel_core`]), and the archive with its documentation
 //! ([`pack`]). The generic FMI 2.0 shell of [`crate::fmi2`] does every check of the standard
-//! around the core. Beside it the HaselInverse FMU for feedforward ([`inverse`]), served by the
-//! same shell from a build of the library with the feature `inverse-fmu`.
+//! around the core. Beside it the HaselPlatformReduced FMU, the same core around the slow model
+//! (src/model/reduced.rs), from a build of the library with the feature `reduced-fmu`, and the
+//! HaselInverse FMU for feedforward ([`inverse`]), served by the same shell from a build with the
+//! feature `inverse-fmu`.
 
 #[cfg(feature = "tools")]
 pub mod binary;
@@ -13,13 +15,59 @@ pub mod pack;
 pub mod structure;
 pub mod variables;
 
-pub use hasel_core::HaselCore;
+pub use hasel_core::PlatformCore;
 
 use crate::fmi_common::variables::{DefaultExperiment, ModelInfo};
+use crate::model::Reduction;
 use crate::simulation::DEFAULT_RTOL;
 
 /// `modelIdentifier` and the shared libraries' name in `binaries/<platform>/`.
 pub const MODEL_IDENTIFIER: &str = "HaselPlatform";
+
+/// `modelIdentifier` of the slow model's FMU.
+pub const REDUCED_MODEL_IDENTIFIER: &str = "HaselPlatformReduced";
+
+/// Which model an FMU of the platform runs, with its model-level data.
+pub trait FmuModel: Clone + std::fmt::Debug + Send + 'static {
+    const REDUCTION: Reduction;
+    fn model_info() -> ModelInfo;
+}
+
+/// The full model: HaselPlatform.
+#[derive(Clone, Debug)]
+pub struct FullModel;
+
+/// The slow model (src/model/reduced.rs): HaselPlatformReduced.
+#[derive(Clone, Debug)]
+pub struct SlowModel;
+
+impl FmuModel for FullModel {
+    const REDUCTION: Reduction = Reduction::Full;
+    fn model_info() -> ModelInfo {
+        model_info()
+    }
+}
+
+impl FmuModel for SlowModel {
+    const REDUCTION: Reduction = Reduction::Slow;
+    fn model_info() -> ModelInfo {
+        model_info_of(
+            REDUCED_MODEL_IDENTIFIER,
+            "The HaselPlatform FMU's slow model: the charges and the momentum of each HASEL \
+             actuator on their quasi-steady values (singular perturbation), one angle per \
+             actuator, for Model Exchange with any integrator, fixed-step and real-time targets; \
+             the same inputs U1..U3 [V], outputs and parameters",
+            DEFAULT_RTOL,
+            true,
+        )
+    }
+}
+
+/// The core of HaselPlatform.
+pub type HaselCore = PlatformCore<FullModel>;
+
+/// The core of HaselPlatformReduced.
+pub type HaselReducedCore = PlatformCore<SlowModel>;
 
 /// The parameter file inside the FMU's `resources/` that `hasel fmu --params` packs; its values
 /// are the parameters' start values.
@@ -68,13 +116,25 @@ pub fn model_info_of(
 /// The 44 C functions of the platform's FMI 2.0 binary, around [`HaselCore`]; in a module of
 /// their own, as the macro imports the C types where it is invoked. The features `fmi3` and
 /// `inverse-fmu` build the library of another FMU instead (a cdylib exports one set).
-#[cfg(not(any(feature = "fmi3", feature = "inverse-fmu")))]
+#[cfg(not(any(feature = "fmi3", feature = "inverse-fmu", feature = "reduced-fmu")))]
 mod fmi2_functions {
     crate::export_fmi2!(super::HaselCore);
 }
 
 /// The C functions of the FMI 3.0 binary (`--features fmi3`), around the same core.
-#[cfg(feature = "fmi3")]
+#[cfg(all(feature = "fmi3", not(feature = "reduced-fmu")))]
 mod fmi3_functions {
     crate::export_fmi3!(super::HaselCore);
+}
+
+/// The FMI 2.0 functions of HaselPlatformReduced (`--features reduced-fmu`).
+#[cfg(all(feature = "reduced-fmu", not(feature = "fmi3")))]
+mod reduced_fmi2_functions {
+    crate::export_fmi2!(super::HaselReducedCore);
+}
+
+/// The FMI 3.0 functions of HaselPlatformReduced (`--features reduced-fmu,fmi3`).
+#[cfg(all(feature = "reduced-fmu", feature = "fmi3"))]
+mod reduced_fmi3_functions {
+    crate::export_fmi3!(super::HaselReducedCore);
 }

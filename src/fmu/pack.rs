@@ -12,14 +12,14 @@ use super::binary::{Platform, platform_of};
 use super::inverse::{self as inverse_fmu, InverseCore};
 use super::structure::model_structure;
 use super::variables::variables;
-use super::{RESOURCE_PARAMS, model_info};
+use super::{FmuModel, RESOURCE_PARAMS, SlowModel, model_info};
 use crate::fmi_common::model_api::{FmuCore, ModelStructure};
 use crate::fmi_common::variables::{Causality, ModelInfo, Variable};
 use crate::fmi2::model_description::{guid_for, model_description_xml};
 use crate::fmi3::model_description as fmi3_description;
 use crate::io::file::{FileError, write_bytes_atomic};
 use crate::io::params_file;
-use crate::model::Params;
+use crate::model::{Params, Reduction};
 use crate::simulation::DEFAULT_RTOL;
 
 /// One FMU of this crate: its model data, its variables with their start values, its structure
@@ -35,8 +35,8 @@ pub struct Spec {
 pub fn platform(params: &Params) -> Spec {
     Spec {
         info: model_info(),
-        variables: variables(params, DEFAULT_RTOL),
-        structure: model_structure(),
+        variables: variables(Reduction::Full, params, DEFAULT_RTOL),
+        structure: model_structure(Reduction::Full),
         about: "Each actuator is the port-Hamiltonian system of Feregrino et al.: state (theta, \
                 l_p, p, Q1, Q2), energy H, dynamics dx/dt = (J - R) grad H + g U; the heights \
                 h_i = 1/2 Lv sin(theta_i) drive the 3PS platform, whose forward kinematics gives \
@@ -48,6 +48,28 @@ pub fn platform(params: &Params) -> Spec {
                 an effect that is off keeps its state at 0); the transport delay tau_d needs \
                 Co-Simulation. Directional derivatives (both interfaces) come from the model's \
                 analytic Jacobian. The simulation starts from the U = 0 equilibrium under gravity.",
+    }
+}
+
+/// The HaselPlatformReduced FMU with the start values `params`: what `hasel fmu --model
+/// reduced` packs.
+pub fn reduced(params: &Params) -> Spec {
+    Spec {
+        info: SlowModel::model_info(),
+        variables: variables(Reduction::Slow, params, DEFAULT_RTOL),
+        structure: model_structure(Reduction::Slow),
+        about: "The slow model of the HaselPlatform FMU (singular perturbation of the same \
+                port-Hamiltonian model, same parameters and effects): the charges on the DC \
+                circuit's values and the momentum on the force balance, so each actuator keeps \
+                one state, its angle theta, moving as dtheta/dt = -(dH/dtheta + d dH/dl_p)/b with \
+                the top film on its invariant curve, plus the states of the effects that are on. \
+                Without the nanosecond and microsecond modes of the full model its Model Exchange \
+                runs under any importer's integrator, fixed-step ones included; it follows the \
+                full model within about 0.2 um (the error table is in the project's README, \
+                \"Reduced models\"). H is the reduced storage (without the charges' and the \
+                momentum's energy), P_supplied adds the electrode's electromechanical power. \
+                Co-Simulation runs the same model with the internal Radau IIA solver; directional \
+                derivatives come from the reduced model's analytic Jacobian.",
     }
 }
 
@@ -467,7 +489,7 @@ mod tests {
         assert!(
             v3.contains("fmiVersion=\"3.0\"") && v3.contains(&FmiVersion::V3.token(&platform(&p)))
         );
-        for v in variables(&p, DEFAULT_RTOL) {
+        for v in variables(Reduction::Full, &p, DEFAULT_RTOL) {
             let declared = format!(
                 "name=\"{}\" valueReference=\"{}\"",
                 v.name, v.value_reference

@@ -8,10 +8,9 @@
 use std::collections::{BTreeMap, BTreeSet};
 use std::sync::OnceLock;
 
-use super::variables::{Slot, rows, state_vr};
+use super::variables::{Slot, rows_of, state_vr};
 use crate::fmi_common::model_api::{ModelStructure, OutputDependency, StateDerivative};
-use crate::model::Effect;
-use crate::model::{Params, Platform};
+use crate::model::{Effect, Params, Platform, Reduction};
 
 /// Every family on, every form the FMU's parameters reach at once (each family's `on`).
 fn all_on() -> Params {
@@ -43,25 +42,28 @@ fn configurations() -> Vec<Params> {
     all
 }
 
-fn vr_of(slot: impl Fn(&Slot) -> bool) -> u32 {
-    rows()
+fn vr_of(reduction: Reduction, slot: impl Fn(&Slot) -> bool) -> u32 {
+    rows_of(reduction)
         .iter()
         .position(|r| slot(&r.slot))
         .expect("the table has the variable") as u32
 }
 
-/// The structure, built once.
-pub fn model_structure() -> ModelStructure {
-    static STRUCTURE: OnceLock<ModelStructure> = OnceLock::new();
-    STRUCTURE.get_or_init(build).clone()
+/// The structure of the FMU of the model `reduction`, built once for each model.
+pub fn model_structure(reduction: Reduction) -> ModelStructure {
+    static STRUCTURE: [OnceLock<ModelStructure>; 3] =
+        [OnceLock::new(), OnceLock::new(), OnceLock::new()];
+    STRUCTURE[reduction as usize]
+        .get_or_init(|| build(reduction))
+        .clone()
 }
 
-fn build() -> ModelStructure {
-    let input = |j: usize| vr_of(|s| matches!(s, Slot::Input(i) if *i == j));
+fn build(reduction: Reduction) -> ModelStructure {
+    let input = |j: usize| vr_of(reduction, |s| matches!(s, Slot::Input(i) if *i == j));
     let mut state_deps: BTreeMap<u32, BTreeSet<u32>> = BTreeMap::new();
     let mut output_deps: [BTreeSet<u32>; 6] = Default::default();
     for params in configurations() {
-        let m = Platform::new(params).expect("the configurations are valid");
+        let m = Platform::reduced(params, reduction).expect("the configurations are valid");
         // the entries' positions do not depend on the state: any state in the domain will do
         let x = m
             .uncoupled_rest_state()
@@ -69,7 +71,7 @@ fn build() -> ModelStructure {
         // value reference of each position of the model's state vector
         let vrs: Vec<u32> = (0..3)
             .flat_map(|i| m.block_states().map(move |s| (i, s)))
-            .map(|(i, s)| state_vr(i, s).expect("library forms have table states only"))
+            .map(|(i, s)| state_vr(reduction, i, s).expect("library forms have table states only"))
             .collect();
         let mut depend = |r: usize, on: u32| {
             state_deps.entry(vrs[r]).or_default().insert(on);
@@ -82,13 +84,13 @@ fn build() -> ModelStructure {
             output_deps[o].insert(vrs[c]);
         });
     }
-    let derivatives = rows()
+    let derivatives = rows_of(reduction)
         .iter()
         .enumerate()
         .filter_map(|(vr, row)| match row.slot {
             Slot::State { actuator, state } => Some(StateDerivative {
                 state: vr as u32,
-                derivative: vr_of(|s| matches!(s, Slot::Derivative { actuator: a, state: b } if *a == actuator && *b == state)),
+                derivative: vr_of(reduction, |s| matches!(s, Slot::Derivative { actuator: a, state: b } if *a == actuator && *b == state)),
                 dependencies: state_deps
                     .get(&(vr as u32))
                     .map_or(Vec::new(), |d| d.iter().copied().collect()),
@@ -96,7 +98,7 @@ fn build() -> ModelStructure {
             _ => None,
         })
         .collect();
-    let outputs = rows()
+    let outputs = rows_of(reduction)
         .iter()
         .enumerate()
         .filter_map(|(vr, row)| {

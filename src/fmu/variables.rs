@@ -7,11 +7,10 @@ use std::sync::OnceLock;
 
 use crate::fmi_common::units;
 use crate::fmi_common::variables::{Causality, Initial, Variability, Variable};
-use crate::model::Params;
-use crate::model::actuator;
 use crate::model::effects::terms::Extra;
 use crate::model::params::{ParamDef, parameters};
 use crate::model::platform::BlockState;
+use crate::model::{Params, Reduction};
 
 /// What a value reference stands for.
 #[derive(Clone, Copy)]
@@ -44,10 +43,11 @@ pub struct Row {
     pub description: String,
 }
 
-/// The states every actuator shows: the paper's five and every effect state the parameter
-/// table can switch on (synthetic data's further stages are not variables).
-fn fmu_states() -> impl Iterator<Item = BlockState> {
-    (0..actuator::N)
+/// The states every actuator shows: the paper's states the model `reduction` keeps and every
+/// effect state the parameter table can switch on (synthetic data's further stages are not
+/// variables).
+fn fmu_states(reduction: Reduction) -> impl Iterator<Item = BlockState> {
+    (0..reduction.kept())
         .map(BlockState::Paper)
         .chain(Extra::table_states().map(BlockState::Extra))
 }
@@ -65,10 +65,16 @@ fn state_description(state: BlockState, actuator: usize) -> String {
     }
 }
 
-/// The variable table, in value-reference order; built once.
+/// HaselPlatform's variable table (the full model's), in value-reference order.
 pub fn rows() -> &'static [Row] {
-    static ROWS: OnceLock<Vec<Row>> = OnceLock::new();
-    ROWS.get_or_init(|| {
+    rows_of(Reduction::Full)
+}
+
+/// The variable table of the FMU of the model `reduction`, in value-reference order; built
+/// once for each model.
+pub fn rows_of(reduction: Reduction) -> &'static [Row] {
+    static ROWS: [OnceLock<Vec<Row>>; 3] = [OnceLock::new(), OnceLock::new(), OnceLock::new()];
+    ROWS[reduction as usize].get_or_init(|| {
         let mut rows = Vec::new();
         let mut add = |name: String, slot, unit, description: String| {
             rows.push(Row {
@@ -100,7 +106,7 @@ pub fn rows() -> &'static [Row] {
                     fmi2SetupExperiment takes precedence)";
         add("rtol".into(), Slot::Rtol, "1", desc.into());
         for actuator in 0..3 {
-            for state in fmu_states() {
+            for state in fmu_states(reduction) {
                 let name = format!("{}_{}", state.name(), actuator + 1);
                 let desc = state_description(state, actuator + 1);
                 add(
@@ -123,7 +129,7 @@ pub fn rows() -> &'static [Row] {
             desc.into(),
         );
         for actuator in 0..3 {
-            for state in fmu_states() {
+            for state in fmu_states(reduction) {
                 let name = format!("der({}_{})", state.name(), actuator + 1);
                 let unit = units::per_second(state.info().unit)
                     .expect("the unit table has the rate of every state's unit");
@@ -172,15 +178,17 @@ pub fn variable(vr: usize, name: &str, unit: &str, description: &str, kind: Kind
     }
 }
 
-/// The value reference of actuator `actuator`'s (0-based) state `state`.
-pub fn state_vr(actuator: usize, state: BlockState) -> Option<u32> {
+/// The value reference of actuator `actuator`'s (0-based) state `state` in the FMU of the model
+/// `reduction`.
+pub fn state_vr(reduction: Reduction, actuator: usize, state: BlockState) -> Option<u32> {
     let is = |r: &Row| matches!(r.slot, Slot::State { actuator: a, state: s } if a == actuator && s == state);
-    rows().iter().position(is).map(|k| k as u32)
+    rows_of(reduction).iter().position(is).map(|k| k as u32)
 }
 
-/// The FMI variables with the start values of `params` and `rtol`.
-pub fn variables(params: &Params, rtol: f64) -> Vec<Variable> {
-    rows()
+/// The FMI variables of the FMU of the model `reduction` with the start values of `params`
+/// and `rtol`.
+pub fn variables(reduction: Reduction, params: &Params, rtol: f64) -> Vec<Variable> {
+    rows_of(reduction)
         .iter()
         .enumerate()
         .map(|(vr, row)| {
@@ -202,7 +210,7 @@ pub fn variables(params: &Params, rtol: f64) -> Vec<Variable> {
             };
             Variable {
                 derivative: match row.slot {
-                    Slot::Derivative { actuator, state } => state_vr(actuator, state),
+                    Slot::Derivative { actuator, state } => state_vr(reduction, actuator, state),
                     _ => None,
                 },
                 ..variable(vr, &row.name, row.unit, &row.description, kind)

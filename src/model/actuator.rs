@@ -191,6 +191,23 @@ impl Actuator {
         })
     }
 
+    /// The loop current [A] of the DC circuit at the port voltage u (src/model/model.md,
+    /// "Statics"): with Q̇1 = Q̇2 = 0 the capacitors carry no current, so one current
+    /// i = ga(θ) u / (R0 + R1 + R2) runs through the three resistors.
+    pub fn dc_current(&self, theta: f64, u: f64) -> f64 {
+        self.ga(theta) * u / (self.par.r0 + self.par.r1 + self.par.r2)
+    }
+
+    /// The state at (θ, l_p) at rest (p = 0) with the DC circuit carrying the loop current
+    /// i [A]: V1 = R1 i, V2 = R2 i, so Q1 = C1 R1 i and Q2 = C2(θ, l_p) R2 i.
+    pub fn dc_state(&self, theta: f64, l_p: f64, i: f64) -> Result<[f64; N], DomainError> {
+        let (q1, q2) = (
+            self.par.c1 * self.par.r1 * i,
+            self.c2(theta, l_p)? * self.par.r2 * i,
+        );
+        Ok([theta, l_p, 0.0, q1, q2])
+    }
+
     /// dh/dθ = ½ Lv cos θ [m/rad].
     pub fn height_slope(&self, theta: f64) -> f64 {
         0.5 * self.lv * theta.cos()
@@ -389,17 +406,21 @@ impl Actuator {
     pub fn l_p_on_curve(&self, theta: f64) -> Result<f64, DomainError> {
         const STEPS: usize = 16;
         let dt = theta / STEPS as f64;
-        let slope = |t: f64, l: f64| Shell::new(t, l, self.lv).map(|s| s.d);
         let mut l = self.lp;
         for k in 0..STEPS {
-            let t = k as f64 * dt;
-            let k1 = slope(t, l)?;
-            let k2 = slope(t + 0.5 * dt, l + 0.5 * dt * k1)?;
-            let k3 = slope(t + 0.5 * dt, l + 0.5 * dt * k2)?;
-            let k4 = slope(t + dt, l + dt * k3)?;
-            l += dt / 6.0 * (k1 + 2.0 * k2 + 2.0 * k3 + k4);
+            l = self.curve_step(k as f64 * dt, l, dt)?;
         }
         Ok(l)
+    }
+
+    /// One classical RK4 step of dl_p/dθ = d(θ, l_p) from (θ, l) over dt: l_p at θ + dt.
+    pub(super) fn curve_step(&self, theta: f64, l: f64, dt: f64) -> Result<f64, DomainError> {
+        let slope = |t: f64, l: f64| Shell::new(t, l, self.lv).map(|s| s.d);
+        let k1 = slope(theta, l)?;
+        let k2 = slope(theta + 0.5 * dt, l + 0.5 * dt * k1)?;
+        let k3 = slope(theta + 0.5 * dt, l + 0.5 * dt * k2)?;
+        let k4 = slope(theta + dt, l + dt * k3)?;
+        Ok(l + dt / 6.0 * (k1 + 2.0 * k2 + 2.0 * k3 + k4))
     }
 
     /// The U = 0 equilibrium under gravity on the curve through (0, Lp), with p = Q1 = Q2 = 0

@@ -6,10 +6,13 @@
 
 pub mod actuator;
 pub mod effects;
+mod invariant_curve;
 pub mod kinematics;
 pub mod linalg;
 pub mod params;
 pub mod platform;
+pub mod reduced;
+pub mod reduction;
 pub mod shell;
 pub mod statics;
 
@@ -17,3 +20,4 @@ pub use effects::{Effect, EffectParams};
 pub use kinematics::Kinematics;
 pub use params::{ParamError, Params};
 pub use platform::{ModelError, Platform};
+pub use reduction::{Reduction, UnknownReduction};

@@ -6,10 +6,19 @@ use std::fmt;
 
 use super::actuator::{self, Actuator, StateInfo};
 use super::effects::terms::{Extra, Terms};
+use super::invariant_curve::Curve;
 use super::kinematics::Kinematics;
 use super::linalg::bounded_svd;
 use super::params::{ParamError, Params};
+use super::reduction::Reduction;
 use super::shell::DomainError;
+
+/// What a reduced Jacobian differentiates by: the reduced states or the commands.
+#[derive(Clone, Copy)]
+pub(super) enum Wrt {
+    States,
+    Inputs,
+}
 
 /// The model cannot be evaluated at a state.
 #[derive(Clone, Debug, PartialEq)]
@@ -34,9 +43,13 @@ pub struct Platform {
     params: Params,
     pub actuators: [Actuator; 3],
     pub kinematics: Kinematics,
-    terms: Terms,
-    /// States per actuator block: its five, then its effect states.
-    nb: usize,
+    pub(super) terms: Terms,
+    /// States per actuator block of the full model: its five, then its effect states.
+    pub(super) nb: usize,
+    /// The full model or one of its reductions (`reduced`), which keeps a prefix of the five.
+    pub(super) reduction: Reduction,
+    /// Each actuator's invariant curve l_p(θ), tabulated for the slow model (empty otherwise).
+    pub(super) curves: Vec<Curve>,
 }
 
 /// Newton iterations of [`Platform::settled_state`] at most: the settled states enter ẋ
@@ -84,7 +97,55 @@ impl Platform {
             nb: terms.block_size(),
             terms,
             params,
+            reduction: Reduction::Full,
+            curves: Vec::new(),
         })
+    }
+
+    /// The reduced model `reduction` of the platform of `params` (src/model/reduced.rs).
+    pub fn reduced(params: Params, reduction: Reduction) -> Result<Platform, ParamError> {
+        let full = Platform::new(params)?;
+        let curves = if reduction.kept() <= actuator::L_P {
+            let lv = full.params.lv;
+            full.actuators.iter().map(|a| Curve::new(a, lv)).collect()
+        } else {
+            Vec::new()
+        };
+        Ok(Platform {
+            reduction,
+            curves,
+            ..full
+        })
+    }
+
+    /// Which model this is: the full one or a reduction.
+    pub fn reduction(&self) -> Reduction {
+        self.reduction
+    }
+
+    /// Whether this is the full model: states, ẋ and energy as the paper's.
+    fn is_full(&self) -> bool {
+        self.reduction == Reduction::Full
+    }
+
+    /// `full(self, arg)` for the full model, `reduced(self, arg)` for a reduction.
+    fn per_model<A, T>(
+        &self,
+        arg: A,
+        full: impl FnOnce(&Self, A) -> T,
+        reduced: impl FnOnce(&Self, A) -> T,
+    ) -> T {
+        if self.is_full() {
+            full(self, arg)
+        } else {
+            reduced(self, arg)
+        }
+    }
+
+    /// States per actuator block of this model: the paper's states it keeps, then the
+    /// effect states.
+    pub(super) fn rb(&self) -> usize {
+        self.reduction.kept() + self.nb - actuator::N
     }
 
     pub fn params(&self) -> &Params {
@@ -92,16 +153,21 @@ impl Platform {
     }
 
     pub fn n_states(&self) -> usize {
-        3 * self.nb
+        3 * self.rb()
     }
 
-    /// Actuator i's block of states.
+    /// Actuator i's block of this model's states.
     fn block<'x>(&self, x: &'x [f64], i: usize) -> &'x [f64] {
+        &x[self.rb() * i..self.rb() * (i + 1)]
+    }
+
+    /// Actuator i's block of the full model's states.
+    fn full_block<'x>(&self, x: &'x [f64], i: usize) -> &'x [f64] {
         &x[self.nb * i..self.nb * (i + 1)]
     }
 
-    fn blocks<'x>(&self, x: &'x [f64]) -> [&'x [f64]; 3] {
-        [0, 1, 2].map(|i| self.block(x, i))
+    fn full_blocks<'x>(&self, x: &'x [f64]) -> [&'x [f64]; 3] {
+        [0, 1, 2].map(|i| self.full_block(x, i))
     }
 
     fn refs(&self) -> [&Actuator; 3] {
@@ -111,7 +177,7 @@ impl Platform {
     /// The states of each actuator's block, in block order: the paper's five, then the
     /// effect states of this configuration.
     pub fn block_states(&self) -> impl Iterator<Item = BlockState> + '_ {
-        (0..actuator::N)
+        (0..self.reduction.kept())
             .map(BlockState::Paper)
             .chain(self.terms.extras.iter().map(|&e| BlockState::Extra(e)))
     }
@@ -135,10 +201,10 @@ impl Platform {
     /// effect that is off. No allocation: for per-call lookups such as the FMU's.
     pub fn state_position(&self, i: usize, s: BlockState) -> Option<usize> {
         let k = self.block_states().position(|b| b == s)?;
-        Some(self.nb * i + k)
+        Some(self.rb() * i + k)
     }
 
-    fn each<T>(
+    pub(super) fn each<T>(
         &self,
         mut f: impl FnMut(usize, &Actuator) -> Result<T, DomainError>,
     ) -> Result<[T; 3], ModelError> {
@@ -156,7 +222,7 @@ impl Platform {
     }
 
     /// The voltage actuator block `xi` receives for the command `u` [V].
-    fn port_voltage(&self, xi: &[f64], u: f64) -> f64 {
+    pub(super) fn port_voltage(&self, xi: &[f64], u: f64) -> f64 {
         if self.terms.neutral {
             u
         } else {
@@ -164,11 +230,26 @@ impl Platform {
         }
     }
 
-    /// ẋ = f(x, U): each actuator at the voltage its port receives, then the effects' terms.
+    /// ẋ = f(x, U) of this model (of the full one: [`Platform::full_rhs`]).
     pub fn rhs(&self, x: &[f64], u: [f64; 3], dx: &mut [f64]) -> Result<(), ModelError> {
+        self.per_model(
+            dx,
+            |m, dx| m.full_rhs(x, u, dx),
+            |m, dx| m.reduced_rhs(x, u, dx),
+        )
+    }
+
+    /// ẋ = f(x, U) of the full model: each actuator at the voltage its port receives, then the
+    /// effects' terms.
+    pub(super) fn full_rhs(
+        &self,
+        x: &[f64],
+        u: [f64; 3],
+        dx: &mut [f64],
+    ) -> Result<(), ModelError> {
         let (n, nb) = (actuator::N, self.nb);
 
-        let xs = self.blocks(x);
+        let xs = self.full_blocks(x);
         let refs = self.refs();
         self.each(|i, a| {
             let dxi = &mut dx[nb * i..nb * (i + 1)];
@@ -189,17 +270,31 @@ impl Platform {
     }
 
     /// The entries of ∂f/∂x through `add(row, col, value)` (an entry may come in parts that add
-    /// up): each actuator's own, at the voltage its port receives, then the effects' terms.
-    /// Every entry the equations can make nonzero is given, whatever its value here, so the
-    /// positions given are the Jacobian's structure for this configuration of effects.
+    /// up). Every entry the equations can make nonzero is given, whatever its value here, so
+    /// the positions given are the Jacobian's structure for this model.
     pub fn jacobian_entries(
+        &self,
+        x: &[f64],
+        u: [f64; 3],
+        add: impl FnMut(usize, usize, f64),
+    ) -> Result<(), ModelError> {
+        self.per_model(
+            add,
+            |m, add| m.full_jacobian_entries(x, u, add),
+            |m, add| m.reduced_entries(x, u, Wrt::States, add),
+        )
+    }
+
+    /// The entries of the full model's ∂f/∂x, as [`Platform::jacobian_entries`]: each
+    /// actuator's own, at the voltage its port receives, then the effects' terms.
+    pub(super) fn full_jacobian_entries(
         &self,
         x: &[f64],
         u: [f64; 3],
         mut add: impl FnMut(usize, usize, f64),
     ) -> Result<(), ModelError> {
         let nb = self.nb;
-        let xs = self.blocks(x);
+        let xs = self.full_blocks(x);
         let refs = self.refs();
         let offset = [0, nb, 2 * nb];
         self.each(|i, a| {
@@ -239,10 +334,24 @@ impl Platform {
         &self,
         x: &[f64],
         u: [f64; 3],
+        add: impl FnMut(usize, usize, f64),
+    ) -> Result<(), ModelError> {
+        self.per_model(
+            add,
+            |m, add| m.full_input_jacobian_entries(x, u, add),
+            |m, add| m.reduced_entries(x, u, Wrt::Inputs, add),
+        )
+    }
+
+    /// The entries of the full model's ∂f/∂U, as [`Platform::input_jacobian_entries`].
+    pub(super) fn full_input_jacobian_entries(
+        &self,
+        x: &[f64],
+        u: [f64; 3],
         mut add: impl FnMut(usize, usize, f64),
     ) -> Result<(), ModelError> {
         let nb = self.nb;
-        let xs = self.blocks(x);
+        let xs = self.full_blocks(x);
         let refs = self.refs();
         self.each(|i, a| {
             let o = nb * i;
@@ -282,7 +391,7 @@ impl Platform {
     pub fn output_jacobian_entries(&self, x: &[f64], mut set: impl FnMut(usize, usize, f64)) {
         let tip = self.kinematics.tip_jacobian(self.heights(x));
         for i in 0..3 {
-            let col = self.nb * i + actuator::THETA;
+            let col = self.rb() * i + actuator::THETA;
             let slope = self.actuators[i].height_slope(self.block(x, i)[actuator::THETA]);
             set(i, col, slope);
             for k in 0..3 {
@@ -308,7 +417,15 @@ impl Platform {
     /// The voltage each actuator's port receives for the commands `u` at state `x` [V]: U
     /// itself, or after the amplifier's lag and clipping when those effects are on.
     pub fn port_voltages(&self, x: &[f64], u: [f64; 3]) -> [f64; 3] {
-        [0, 1, 2].map(|i| self.port_voltage(self.block(x, i), u[i]))
+        // the port reads the effect states only, which every model keeps after its own
+        let kept = self.reduction.kept();
+        [0, 1, 2].map(|i| {
+            let mut xi = vec![0.0; self.nb];
+            let own = self.block(x, i);
+            xi[..kept].copy_from_slice(&own[..kept]);
+            xi[actuator::N..].copy_from_slice(&own[kept..]);
+            self.port_voltage(&xi, u[i])
+        })
     }
 
     /// The effects' extra states of each actuator block, in block order (after its five).
@@ -319,9 +436,9 @@ impl Platform {
     /// Sizes of the diagonal blocks of ∂f/∂x: the actuators are independent unless coupled.
     pub fn jacobian_blocks(&self) -> Vec<usize> {
         if self.terms.links_actuators() {
-            vec![3 * self.nb]
+            vec![self.n_states()]
         } else {
-            vec![self.nb; 3]
+            vec![self.rb(); 3]
         }
     }
 
@@ -329,6 +446,15 @@ impl Platform {
     /// equilibrium under gravity (and the static loads of the effects), solved actuator by
     /// actuator until the coupling settles.
     pub fn rest_state(&self) -> Result<Vec<f64>, ModelError> {
+        Ok(self.own_state(self.full_rest_state()?))
+    }
+
+    /// This model's state of the full model's state `x` (`x` itself, or its reduced coordinates).
+    fn own_state(&self, x: Vec<f64>) -> Vec<f64> {
+        self.per_model(x, |_, x| x, |m, x| m.project(&x))
+    }
+
+    fn full_rest_state(&self) -> Result<Vec<f64>, ModelError> {
         let refs = self.refs();
         let mut rest = self.uncoupled_rest_blocks()?;
         for _ in 0..50 {
@@ -370,6 +496,15 @@ impl Platform {
         slow: &[f64],
         u: [f64; 3],
     ) -> Result<Vec<f64>, ModelError> {
+        Ok(self.own_state(self.full_settled_state(theta, slow, u)?))
+    }
+
+    fn full_settled_state(
+        &self,
+        theta: [f64; 3],
+        slow: &[f64],
+        u: [f64; 3],
+    ) -> Result<Vec<f64>, ModelError> {
         let blocks = self.each(|i, a| {
             let t = theta[i];
             Ok([t, a.l_p_on_curve(t)?, 0.0, 0.0, 0.0])
@@ -399,7 +534,7 @@ impl Platform {
     /// the `slow` of [`Platform::settled_state`].
     pub fn effect_states(&self, x: &[f64]) -> Vec<f64> {
         (0..3)
-            .flat_map(|i| &self.block(x, i)[actuator::N..])
+            .flat_map(|i| &self.block(x, i)[self.reduction.kept()..])
             .copied()
             .collect()
     }
@@ -407,7 +542,7 @@ impl Platform {
     /// Newton on the states `settles` picks, to ẋ = 0 for them at command `u` with the others
     /// held, in the states' scaled coordinates; a direction that does not move ẋ (a
     /// hysteretic state that does not relax) keeps its value.
-    fn settle(
+    pub(super) fn settle(
         &self,
         x: &mut [f64],
         u: [f64; 3],
@@ -415,11 +550,12 @@ impl Platform {
     ) -> Result<(), ModelError> {
         let n = x.len();
         let free: Vec<usize> = (0..n).filter(|&k| settles(k)).collect();
-        let scale = self.state_scales();
+        let scale = self.full_state_scales();
         let (mut f, mut jac) = (vec![0.0; n], vec![0.0; n * n]);
         for _ in 0..SETTLE_NEWTON {
-            self.rhs(x, u, &mut f)?;
-            self.jacobian(x, u, &mut jac)?;
+            self.full_rhs(x, u, &mut f)?;
+            jac.fill(0.0);
+            self.full_jacobian_entries(x, u, |r, c, v| jac[c * n + r] += v)?;
             let m = free.len();
             let a = nalgebra::DMatrix::from_fn(m, m, |r, c| {
                 jac[free[c] * n + free[r]] * scale[free[c]] / scale[free[r]]
@@ -448,7 +584,7 @@ impl Platform {
     /// the model's domain for a tenth of the work, enough where the state's value does not
     /// matter (the positions of the Jacobian's entries, `fmu::structure`).
     pub fn uncoupled_rest_state(&self) -> Result<Vec<f64>, ModelError> {
-        Ok(self.with_effects_at_rest(&self.uncoupled_rest_blocks()?))
+        Ok(self.own_state(self.with_effects_at_rest(&self.uncoupled_rest_blocks()?)))
     }
 
     fn uncoupled_rest_blocks(&self) -> Result<[[f64; actuator::N]; 3], ModelError> {
@@ -474,9 +610,13 @@ impl Platform {
         self.kinematics.tip(self.heights(x))
     }
 
-    /// Stored energy H [J], the effects' terms included.
+    /// Stored energy H [J] of this model, the effects' terms included.
     pub fn energy(&self, x: &[f64]) -> Result<f64, ModelError> {
-        let xs = self.blocks(x);
+        self.per_model(x, Self::full_energy, Self::reduced_energy)
+    }
+
+    pub(super) fn full_energy(&self, x: &[f64]) -> Result<f64, ModelError> {
+        let xs = self.full_blocks(x);
         let own: f64 = self
             .each(|i, a| a.energy(&xs[i][..actuator::N]))?
             .iter()
@@ -484,9 +624,18 @@ impl Platform {
         Ok(own + self.terms.energy(&self.refs(), xs))
     }
 
-    /// Power supplied through the electrical ports at the voltages they receive [W].
+    /// Power supplied to this model [W]: of the full one, through the electrical ports at the
+    /// voltages they receive.
     pub fn supplied_power(&self, x: &[f64], u: [f64; 3]) -> Result<f64, ModelError> {
-        let (xs, refs) = (self.blocks(x), self.refs());
+        self.per_model(
+            x,
+            |m, x| m.full_supplied_power(x, u),
+            |m, x| m.reduced_supplied_power(x, u),
+        )
+    }
+
+    pub(super) fn full_supplied_power(&self, x: &[f64], u: [f64; 3]) -> Result<f64, ModelError> {
+        let (xs, refs) = (self.full_blocks(x), self.refs());
         Ok(self
             .each(|i, a| {
                 Ok(
@@ -498,9 +647,23 @@ impl Platform {
             .sum())
     }
 
-    /// Dissipated power, the effects' dashpots, resistors and hysteretic work included [W].
+    /// Dissipated power at state `x` with the commands at 0 [W]: of the full model, its
+    /// dissipated power at `x` whatever the command (see [`Platform::dissipated_power_at`]).
     pub fn dissipated_power(&self, x: &[f64]) -> Result<f64, ModelError> {
-        let xs = self.blocks(x);
+        self.dissipated_power_at(x, [0.0; 3])
+    }
+
+    /// Dissipated power at state `x` under the commands `u`, the effects' dashpots, resistors
+    /// and hysteretic work included [W]. Only a reduced model's depends on `u`: its
+    /// quasi-static charges (and momentum) follow the command.
+    pub fn dissipated_power_at(&self, x: &[f64], u: [f64; 3]) -> Result<f64, ModelError> {
+        self.per_model(x, Self::full_dissipated_power, |m, x| {
+            m.reduced_dissipated_power(x, u)
+        })
+    }
+
+    pub(super) fn full_dissipated_power(&self, x: &[f64]) -> Result<f64, ModelError> {
+        let xs = self.full_blocks(x);
         Ok(self
             .each(|i, a| {
                 Ok(a.dissipation(&xs[i][..actuator::N])? + self.terms.dissipation(a, xs[i])?)
@@ -511,7 +674,15 @@ impl Platform {
 
     /// dH/dt along the flow with the large electrical terms cancelled analytically [W].
     pub fn stored_power(&self, x: &[f64], u: [f64; 3]) -> Result<f64, ModelError> {
-        let (xs, refs) = (self.blocks(x), self.refs());
+        self.per_model(
+            x,
+            |m, x| m.full_stored_power(x, u),
+            |m, x| m.reduced_stored_power(x, u),
+        )
+    }
+
+    pub(super) fn full_stored_power(&self, x: &[f64], u: [f64; 3]) -> Result<f64, ModelError> {
+        let (xs, refs) = (self.full_blocks(x), self.refs());
         Ok(self
             .each(|i, a| {
                 Ok(
@@ -526,6 +697,10 @@ impl Platform {
 
     /// Per-state scale for absolute tolerances (see [`Actuator::state_scales`]).
     pub fn state_scales(&self) -> Vec<f64> {
+        self.own_state(self.full_state_scales())
+    }
+
+    pub(super) fn full_state_scales(&self) -> Vec<f64> {
         self.actuators
             .iter()
             .flat_map(|a| {

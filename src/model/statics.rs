@@ -63,11 +63,10 @@ const STABILITY_PROBE: f64 = 1e-7;
 /// ṗ = −(∂H/∂θ + d ∂H/∂l_p) = ṗ₀ + s V2² = 0, which gives V2² = −ṗ₀ / s.
 fn voltage_at(a: &Actuator, theta: f64, height: f64) -> Result<f64, Unreachable> {
     let l_p = a.l_p_on_curve(theta)?;
-    let c2 = a.c2(theta, l_p)?;
     let par = &a.par;
-    // ṗ at p = 0 with the DC charges of a given V2: affine in V2²
+    // ṗ at p = 0 with the DC charges of a given V2 = R2 i: affine in V2²
     let p_dot = |v2: f64| -> Result<f64, DomainError> {
-        let x = [theta, l_p, 0.0, par.c1 * par.r1 / par.r2 * v2, c2 * v2];
+        let x = a.dc_state(theta, l_p, v2 / par.r2)?;
         let mut dx = [0.0; N];
         a.rhs(&x, 0.0, &mut dx)?;
         Ok(dx[P])

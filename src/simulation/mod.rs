@@ -155,6 +155,19 @@ impl Sample {
     }
 }
 
+/// The largest differences |Δh| and |Δtip| [m] between two runs' samples from time `from` on,
+/// sample by sample (the runs sampled at the same times): how far one model is from another.
+pub fn largest_difference(a: &[Sample], b: &[Sample], from: f64) -> (f64, f64) {
+    let (mut dh, mut dtip): (f64, f64) = (0.0, 0.0);
+    for (x, y) in a.iter().zip(b).filter(|(x, _)| x.t >= from) {
+        for i in 0..3 {
+            dh = dh.max((x.h[i] - y.h[i]).abs());
+            dtip = dtip.max((x.tip[i] - y.tip[i]).abs());
+        }
+    }
+    (dh, dtip)
+}
+
 /// How far back the command before a mid-run start is continued [s]: past the longest
 /// transport delay a fit may give the `delay` effect.
 const PRE_RUN: f64 = 0.05;

@@ -13,7 +13,7 @@ use hasel_fmu::fmi_common::fmu_state::{Format, Snapshot, seal};
 use hasel_fmu::fmi_common::model_api::{FmuCore, InstanceKind};
 use hasel_fmu::fmi2::Fmi2;
 use hasel_fmu::fmi3::Fmi3;
-use hasel_fmu::fmu::hasel_core::HaselCore;
+use hasel_fmu::fmu::HaselCore;
 use hasel_fmu::fmu::inverse::InverseCore;
 use hasel_fmu::identify::experiment::Experiment;
 use hasel_fmu::io::csv::{Table, format_row};

@@ -1,5 +1,5 @@
-"""Shared fixtures: the packed FMUs (FMI 2.0, 3.0 and the inverse), the hasel command and the
-reference data."""
+"""Shared fixtures: the packed FMUs (FMI 2.0, 3.0, the slow model's and the inverse), the hasel
+command and the reference data."""
 import os
 import pathlib
 
@@ -41,6 +41,18 @@ def fmu_path():
 @pytest.fixture(scope="session")
 def fmu3_path():
     return built("HASEL_FMU3", ROOT / "fmu" / "HaselPlatform-fmi3.fmu", "`bash ci/main.sh` (or `hasel fmu`)")
+
+
+@pytest.fixture(scope="session")
+def reduced_fmu_path():
+    return built("HASEL_REDUCED_FMU", ROOT / "fmu" / "HaselPlatformReduced.fmu",
+                 "`bash ci/main.sh` (or `hasel fmu --model reduced`)")
+
+
+@pytest.fixture(scope="session")
+def reduced_fmu3_path():
+    return built("HASEL_REDUCED_FMU3", ROOT / "fmu" / "HaselPlatformReduced-fmi3.fmu",
+                 "`bash ci/main.sh` (or `hasel fmu --model reduced`)")
 
 
 @pytest.fixture(scope="session")

@@ -4,14 +4,16 @@ Model Exchange through fmpy's CVode."""
 import zipfile
 
 import numpy as np
+import pytest
 from fmpy import read_model_description, simulate_fmu
 from fmpy.validation import validate_fmu
 
 from test_fmu_fmpy import OUTPUTS, load_reference, zoh_input
 
 
-def test_fmpy_validate_finds_no_problem(fmu3_path):
-    assert validate_fmu(fmu3_path) == []
+@pytest.mark.parametrize("which", ["fmu3_path", "reduced_fmu3_path"])
+def test_fmpy_validate_finds_no_problem(which, request):
+    assert validate_fmu(request.getfixturevalue(which)) == []
 
 
 def test_same_variables_as_the_fmi2_fmu(fmu_path, fmu3_path):

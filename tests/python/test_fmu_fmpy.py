@@ -40,9 +40,10 @@ def held_input(ref):
     return signals
 
 
-@pytest.fixture(params=["fmu_path", "inverse_fmu_path"])
+@pytest.fixture(params=["fmu_path", "reduced_fmu_path", "inverse_fmu_path"])
 def each_fmu(request):
-    """Both FMUs: the platform's and the inverse's (tests/python/test_inverse_fmu.py)."""
+    """The FMI 2.0 FMUs: the platform's, its slow model's (tests/python/test_reduced_fmu.py) and
+    the inverse's (tests/python/test_inverse_fmu.py)."""
     return request.getfixturevalue(request.param)
 
 

@@ -117,13 +117,15 @@ class Api:
             setattr(self, name[4:], f)
 
 
-@pytest.fixture(scope="module")
-def fmu(fmu_path, tmp_path_factory):
-    """The FMU extracted once: its directory, ctypes API, GUID and value references by name."""
+@pytest.fixture(scope="module", params=["fmu_path", "reduced_fmu_path"])
+def fmu(request, tmp_path_factory):
+    """The FMU extracted once, the platform's and its slow model's: its directory, ctypes API,
+    GUID and value references by name."""
+    path = request.getfixturevalue(request.param)
     root = tmp_path_factory.mktemp("fmu")
-    with zipfile.ZipFile(fmu_path) as z:
+    with zipfile.ZipFile(path) as z:
         z.extractall(root)
-    md = read_model_description(fmu_path)
+    md = read_model_description(path)
     so = root / "binaries" / "linux64" / f"{md.coSimulation.modelIdentifier}.so"
 
     class F:
@@ -133,6 +135,9 @@ def fmu(fmu_path, tmp_path_factory):
     f.dir, f.api, f.guid = root, Api(so), md.guid.encode()
     f.vr = {v.name: v.valueReference for v in md.modelVariables}
     f.nx = len(md.derivatives)
+    f.states = [d.variable.derivative.name for d in md.derivatives]
+    # the slow model (HaselPlatformReduced) has no charges a command can drive out of reach
+    f.reduced = md.coSimulation.modelIdentifier == "HaselPlatformReduced"
     f.uri = (root / "resources").as_uri().encode()
     return f
 
@@ -353,6 +358,9 @@ def test_failing_solver_discards_and_a_restored_state_replays(fmu, slave):
     """U1 = 1e7 V over 10 ms makes the solver give up: fmi2Discard with the reason logged,
     fmi2LastSuccessfulTime is the step's start, further steps are refused, and after
     fmi2SetFMUstate of a state saved before, the run equals a clean run bit for bit."""
+    if fmu.reduced:
+        pytest.skip("the slow model follows U1 = 1e7 V (its angle settles where the input gain "
+                    "vanishes): no command makes its solver give up")
     slave.init()
     for k in range(50):
         for u in ("U1", "U2", "U3"):
@@ -532,7 +540,8 @@ def test_null_logger_is_tolerated(fmu):
     assert s.set("U1", math.nan) == ERROR
     s.init()
     assert s.set("U1", 1e7) == OK
-    assert s.api.DoStep(s.c, 0.0, 0.01, 1) in (DISCARD, ERROR)
+    # a failing step (see test_failing_solver_discards_and_a_restored_state_replays)
+    assert s.api.DoStep(s.c, 0.0, 0.01, 1) in ((OK,) if fmu.reduced else (DISCARD, ERROR))
     s.free()
     assert not Slave(fmu, with_logger=False, guid=b"{wrong}").c
 
@@ -632,7 +641,7 @@ def test_model_exchange_arguments(model):
     assert api.GetContinuousStates(c, x, nx) == OK
     x[3] = math.inf
     assert api.SetContinuousStates(c, x, nx) == ERROR
-    model.log.expect(ERROR, "fmi2SetContinuousStates", "Q1_1", "must be finite")
+    model.log.expect(ERROR, "fmi2SetContinuousStates", model.fmu.states[3], "must be finite")
 
 
 def test_model_exchange_refuses_the_transport_delay(fmu):
@@ -661,8 +670,8 @@ def test_directional_derivative_arguments(model):
         result = doubles(len(unknowns)) if out else None
         return api.GetDirectionalDerivative(c, u, len(unknowns), k, len(knowns), doubles(len(knowns), seed), result)
 
-    assert dd([vr["der(p_1)"], vr["h1"]], [vr["theta_1"], vr["U1"]], 1.0) == OK
-    assert dd([vr["der(p_1)"]], [vr["Kb_1"]], 1.0) == ERROR
+    assert dd([vr["der(theta_1)"], vr["h1"]], [vr["theta_1"], vr["U1"]], 1.0) == OK
+    assert dd([vr["der(theta_1)"]], [vr["Kb_1"]], 1.0) == ERROR
     model.log.expect(ERROR, "fmi2GetDirectionalDerivative", "known Kb_1", "is not a continuous state or an input")
     assert dd([vr["theta_1"]], [vr["U1"]], 1.0) == ERROR
     model.log.expect(ERROR, "unknown theta_1", "neither a state derivative nor an output")

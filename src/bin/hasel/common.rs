@@ -7,7 +7,7 @@ use hasel_fmu::identify::Experiment;
 use hasel_fmu::identify::conditions::{Choice, LagChoice, StartChoice};
 use hasel_fmu::identify::synth::Columns;
 use hasel_fmu::io::{input_file, params_file};
-use hasel_fmu::model::Params;
+use hasel_fmu::model::{Params, Platform, Reduction};
 use hasel_fmu::simulation::input::PAPER_PHASES;
 use hasel_fmu::simulation::{Input, Interpolation, Tone};
 
@@ -18,6 +18,33 @@ pub fn load_params(path: &Option<PathBuf>) -> Result<Params, Error> {
     match path {
         Some(p) => Ok(params_file::read(p)?),
         None => Ok(Params::default()),
+    }
+}
+
+/// Which model of the platform a command builds (src/model/reduced.rs).
+#[derive(clap::Args)]
+pub struct ModelArgs {
+    /// full (the paper's 15 states), quasi-static (the charges on their DC values: θ, l_p, p
+    /// per actuator) or slow (also the momentum: θ per actuator), each with the effects' states
+    #[arg(
+        long = "model",
+        default_value = "full",
+        value_parser = clap::builder::PossibleValuesParser::new(Reduction::ALL.map(Reduction::name))
+    )]
+    model: String,
+}
+
+impl ModelArgs {
+    /// The model chosen.
+    pub fn reduction(&self) -> Result<Reduction, Error> {
+        self.model
+            .parse()
+            .map_err(|e| Error::flag("model", &self.model, format!("{e}")))
+    }
+
+    /// The model chosen, built from `params`.
+    pub fn build(&self, params: Params) -> Result<Platform, Error> {
+        Ok(Platform::reduced(params, self.reduction()?)?)
     }
 }
 

@@ -3,7 +3,7 @@
 use std::path::{Path, PathBuf};
 
 use hasel_fmu::fmu::pack::{self, FmiVersion, Spec};
-use hasel_fmu::fmu::{MODEL_IDENTIFIER, inverse};
+use hasel_fmu::fmu::{MODEL_IDENTIFIER, REDUCED_MODEL_IDENTIFIER, inverse};
 use hasel_fmu::io::file::write_text_atomic;
 use hasel_fmu::model::Params;
 
@@ -15,6 +15,9 @@ use crate::error::Error;
 enum Model {
     /// HaselPlatform: voltages in, heights and tip out
     Platform,
+    /// HaselPlatformReduced: the same with the slow model (one angle per actuator), its
+    /// libraries built with `--features reduced-fmu` (FMI 3.0: `reduced-fmu,fmi3`)
+    Reduced,
     /// HaselInverse: tip x, y and mean height in, heights and holding voltages out (FMI 2.0, its
     /// library built with `--features inverse-fmu`)
     Inverse,
@@ -24,6 +27,7 @@ impl Model {
     fn spec(self, params: &Params) -> Spec {
         match self {
             Model::Platform => pack::platform(params),
+            Model::Reduced => pack::reduced(params),
             Model::Inverse => pack::inverse(params),
         }
     }
@@ -31,6 +35,7 @@ impl Model {
     fn identifier(self) -> &'static str {
         match self {
             Model::Platform => MODEL_IDENTIFIER,
+            Model::Reduced => REDUCED_MODEL_IDENTIFIER,
             Model::Inverse => inverse::MODEL_IDENTIFIER,
         }
     }
@@ -66,7 +71,8 @@ pub struct Args {
     /// FMI 2.0 only)
     #[arg(long, value_name = "2|3")]
     fmi: Option<Fmi>,
-    /// Where to write the FMU (default: fmu/HaselPlatform.fmu, fmu/HaselInverse.fmu; FMI 3.0:
+    /// Where to write the FMU (default: fmu/HaselPlatform.fmu, fmu/HaselPlatformReduced.fmu,
+    /// fmu/HaselInverse.fmu; FMI 3.0:
     /// with `-fmi3` added to the name when both are packed)
     #[arg(long)]
     out: Option<PathBuf>,
@@ -143,7 +149,7 @@ pub fn run(a: Args) -> Result<(), Error> {
     let jobs = match (a.fmi, a.model) {
         (Some(Fmi::V2), _) | (None, Model::Inverse) => vec![(FmiVersion::V2, v2, out)],
         (Some(Fmi::V3), _) => vec![(FmiVersion::V3, v3, out)],
-        (None, Model::Platform) => {
+        (None, Model::Platform | Model::Reduced) => {
             let out3 = fmi3_name(&out);
             vec![(FmiVersion::V2, v2, out), (FmiVersion::V3, v3, out3)]
         }

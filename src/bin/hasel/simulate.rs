@@ -6,18 +6,20 @@ use std::time::Instant;
 use hasel_fmu::identify::fit::span;
 use hasel_fmu::io::csv::Table;
 use hasel_fmu::io::{params_file, trajectory};
-use hasel_fmu::model::Platform;
+use hasel_fmu::model::Reduction;
 use hasel_fmu::plot::{self, Panel, Series};
 use hasel_fmu::simulation::{DEFAULT_RTOL, Sample, Simulator};
 use indicatif::{ProgressBar, ProgressStyle};
 
-use crate::common::{InputArgs, load_params};
+use crate::common::{InputArgs, ModelArgs, load_params};
 use crate::error::Error;
 
 #[derive(clap::Args)]
 pub struct Args {
     #[command(flatten)]
     input: InputArgs,
+    #[command(flatten)]
+    model: ModelArgs,
     /// Parameter file (TOML, any subset of `hasel params`)
     #[arg(long, value_name = "FILE.toml")]
     params: Option<PathBuf>,
@@ -91,7 +93,7 @@ pub fn run(a: Args) -> Result<(), Error> {
     if !(t_end.is_finite() && t_end > 0.0) {
         return Err(Error::flag("t-end", t_end, "must be > 0"));
     }
-    let model = Platform::new(params)?;
+    let model = a.model.build(params)?;
     let mut sim = Simulator::new(model, 0.0, a.rtol)?;
 
     let bar = (t_end >= 30.0).then(|| {
@@ -206,6 +208,11 @@ pub fn run_panels(samples: &[Sample]) -> Vec<Panel> {
 /// `hasel simulate --samples N --uncertainty DIR/identification.json`: prediction bands.
 fn run_samples(a: &Args, samples: usize, identification: &Path) -> Result<(), Error> {
     use hasel_fmu::uncertainty::{Posterior, bands};
+    if a.model.reduction()? != Reduction::Full {
+        return Err(Error::Usage(
+            "--samples draws runs of the full model: leave out --model".into(),
+        ));
+    }
     let posterior = Posterior::read(identification)?;
     let (input, default_end) = a.input.input()?;
     // a measured experiment given as --input is drawn under the bands

@@ -309,7 +309,7 @@ const STATE_SLOTS: usize = 4;
 #[cfg(feature = "inverse")]
 use hasel_fmu::fmu::inverse::{InverseCore as Core, spec};
 #[cfg(not(feature = "inverse"))]
-use hasel_fmu::fmu::{hasel_core::HaselCore as Core, pack::platform as spec};
+use hasel_fmu::fmu::{HaselCore as Core, pack::platform as spec};
 
 /// What the sequence holds between calls: the instances, their simulated time, FMU states.
 struct World {

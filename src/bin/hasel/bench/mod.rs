@@ -1,7 +1,7 @@
 //! `hasel bench`: the solver (`solver.rs`, with the library solvers of `compare/` beside it
 //! under the `compare` feature), the command's whole process with and without its CSV
 //! (`process.rs`), the identification (`identify.rs`) and the missing-effect
-//! diagnosis (`diagnose.rs`). The reference trajectories (`reference.rs`) and the timing
+//! diagnosis (`diagnose.rs`), the reduced models against the full one (`reduced.rs`). The reference trajectories (`reference.rs`) and the timing
 //! (`timing.rs`) are leaves that the benchmarks use; nothing uses this module's command back.
 
 use std::path::PathBuf;
@@ -13,6 +13,7 @@ mod compare;
 mod diagnose;
 mod identify;
 mod process;
+mod reduced;
 mod reference;
 mod solver;
 mod timing;
@@ -29,6 +30,9 @@ pub struct Args {
     /// Benchmark the identification instead of the solver
     #[arg(long)]
     identify: bool,
+    /// Measure the reduced models (quasi-static, slow) against the full one instead
+    #[arg(long)]
+    reduced: bool,
     /// Benchmark the missing-effect diagnosis on hidden mechanisms (the confusion matrix)
     #[arg(long)]
     diagnose: bool,
@@ -64,6 +68,9 @@ pub fn run(a: Args) -> Result<(), Error> {
     }
     if a.identify {
         return identify::run();
+    }
+    if a.reduced {
+        return reduced::run_all(a.repeat);
     }
     solver::run(a.repeat, a.reference.as_deref())?;
     process::run(a.repeat)
