@@ -282,6 +282,16 @@ fn a_random_hardening_is_stiffening_in_its_convex_series() {
     assert!((n - 7.37).abs() < 1.0, "{fitted}");
 }
 
+/// Hysteresis of a density of yield angles off the plays' grid (log-normal about 1.4 mrad, seed
+/// 1; `hasel bench --diagnose --only hysteresis_plays --seeds 3` named all three in `plays`):
+/// named in its plays, the law shown.
+#[test]
+fn a_density_of_yield_angles_is_hysteresis_in_its_plays() {
+    let d = named_in_form(Effect::Hysteresis, 1, &["plays", "plays_rate"], 1);
+    let (law, _) = law_shown(&d);
+    assert_eq!(law.points.len(), 201, "{}", law.what);
+}
+
 /// Two mechanisms at once: both named, in either order, each with its form in the JSON, and
 /// the held-out fit after them at the noise floor.
 fn both_named(case: &str, seed: u64) -> diagnose::Diagnosis {
