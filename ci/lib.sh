@@ -81,6 +81,10 @@ seed_target_dir() {
         for sub in build deps .fingerprint; do
             if [ -d "$from/$profile/$sub" ] && [ ! -d "$dir/$profile/$sub" ]; then cp -a "$from/$profile/$sub" "$dir/$profile/"; fi
         done
+        # cargo's record of what rustc said of the host and target, so that it does not ask again:
+        # in a fresh clone's CI run the FMI 3.0 build's asking failed three times in a row (rustc
+        # read a compiler message as its source on stdin), and never when the step ran alone
+        if [ -f "$from/.rustc_info.json" ]; then cp -a "$from/.rustc_info.json" "$dir/"; fi
     fi
 }
 
