@@ -330,9 +330,9 @@ impl Hidden {
         self
     }
 
-    /// The experiment of `input` recorded in `columns` every `dt` up to `t_end` (from
-    /// `record_from`), with this
-    /// case's parameters, hidden mechanism and noise (noise drawn from `seed`).
+    /// The experiment of `input` recorded in `columns` every `dt` for `t_end` seconds from
+    /// `record_from` into the drive, with this case's parameters, hidden mechanism and noise
+    /// (noise drawn from `seed`).
     pub fn spec(
         &self,
         input: Input,
@@ -341,9 +341,10 @@ impl Hidden {
         columns: Columns,
         seed: u64,
     ) -> Result<Spec, Error> {
+        let end = self.record_from + t_end;
         let drive = match (self.wandering_delay, self.ripple) {
-            (Some((tau, phase)), _) => Some(delayed(&input, tau, phase, t_end)?),
-            (None, Some(r)) => Some(rippled(&input, r, t_end)?),
+            (Some((tau, phase)), _) => Some(delayed(&input, tau, phase, end)?),
+            (None, Some(r)) => Some(rippled(&input, r, end)?),
             (None, None) => None,
         };
         let mut sensor = self.artifacts.as_ref().map_or(Sensor::IDEAL, |a| a.sensor);
@@ -355,7 +356,7 @@ impl Hidden {
             drive,
             vibration: self.vibration,
             params: self.params.clone(),
-            t_end: self.record_from + t_end,
+            t_end: end,
             dt,
             noise: self.noise,
             sensor,
@@ -385,7 +386,7 @@ impl Hidden {
             .map(|k| {
                 let spec = self.spec(
                     p.input(k, total)?,
-                    total,
+                    p.length,
                     p.dt,
                     columns,
                     seed.wrapping_mul(31).wrapping_add(k as u64),
@@ -559,6 +560,28 @@ mod tests {
         assert_eq!(lengths.fold(0.0, f64::max), 20.0);
         let tips = draws.iter().filter(|p| p.tip).count();
         assert!((60..140).contains(&tips), "{tips} of 400 of the tip");
+    }
+
+    /// A record mid-run lasts its protocol's length, not the lead-in too, and the drive a
+    /// hidden delay makes reaches its end (it once ran 1.3 s past the drive's table).
+    #[test]
+    fn a_record_mid_run_lasts_its_protocols_length() {
+        let p = (0..)
+            .map(Protocol::draw)
+            .find(|p| p.drive == Drive::Chirp)
+            .unwrap()
+            .lasting(2.0);
+        let case = hide(Truth::Effect(Effect::Delay), 1)
+            .unwrap()
+            .with_protocol(p)
+            .mid_run(1.3);
+        let exp = &case.experiments(Columns::Heights, 1).unwrap()[0];
+        let (first, last) = (exp.t[0], exp.t[exp.t.len() - 1]);
+        assert!((first - 1.3).abs() <= p.dt, "starts at {first} s");
+        assert!((last - 3.3).abs() <= p.dt, "ends at {last} s");
+        let spec = case.spec(p.input(0, 3.3).unwrap(), 2.0, p.dt, Columns::Heights, 1);
+        let drive = spec.unwrap().drive.unwrap();
+        assert!(drive.last_sample().unwrap() >= 3.3, "{:?}", drive.last_sample());
     }
 
     #[test]
