@@ -282,6 +282,18 @@ fn a_random_hardening_is_stiffening_in_its_convex_series() {
     assert!((n - 7.37).abs() < 1.0, "{fitted}");
 }
 
+/// A tilt spring hardening about its stiffer axis in a law outside the series (seed 1, chosen
+/// before it was run): coupling in its convex series, which holds the hardening (a weight of a
+/// power above the linear spring's above 0), its law nearer a hardening spring than a linear one.
+#[test]
+fn a_hardening_tilt_spring_is_coupling_in_its_convex_series() {
+    let d = named_in_form(Effect::Coupling, 1, &["convex"], 1);
+    let series = d.last.params.effects.coupling.series;
+    assert!(series[1..].iter().any(|&w| w > 0.0), "{series:?}");
+    let (law, nearest) = law_shown(&d);
+    assert_ne!(nearest, "linear spring", "{}: {law:?}", law.what);
+}
+
 /// Hysteresis of a density of yield angles off the plays' grid (log-normal about 1.4 mrad, seed
 /// 1; `hasel bench --diagnose --only hysteresis_plays --seeds 3` named all three in `plays`):
 /// named in its plays, the law shown.
