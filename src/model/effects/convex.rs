@@ -32,9 +32,15 @@ pub fn sum<const N: usize>(parts: [(f64, f64, f64); N]) -> (f64, f64, f64) {
 pub enum Hardening {
     None,
     /// E = k x_ref² |x/x_ref|ⁿ / n, n any real > 2: secant stiffness k at x_ref.
-    Power { k: f64, n: f64 },
+    Power {
+        k: f64,
+        n: f64,
+    },
     /// E = k x_s² (cosh(x/x_s) − 1 − (x/x_s)²/2): exponential hardening.
-    Exponential { k: f64, x_s: f64 },
+    Exponential {
+        k: f64,
+        x_s: f64,
+    },
 }
 
 impl Hardening {

@@ -406,7 +406,10 @@ mod tests {
         let axis = [0.0, -1.0, 1.0].map(|x: f64| x / 3f64.sqrt());
         [
             Hardening::Power { k: 2000.0, n: 4.6 },
-            Hardening::Exponential { k: 500.0, x_s: 3e-5 },
+            Hardening::Exponential {
+                k: 500.0,
+                x_s: 3e-5,
+            },
         ]
         .map(|law| Coupling {
             hidden: HiddenTilt { law, axis },
@@ -417,7 +420,12 @@ mod tests {
     /// Heights within the pairs' reach, no two alike.
     fn heights_at(k: usize) -> [f64; 3] {
         let x = k as f64;
-        [(0.7 * x).sin(), (1.3 * x + 1.0).sin(), (2.1 * x + 2.0).sin()].map(|s| 9e-5 * s)
+        [
+            (0.7 * x).sin(),
+            (1.3 * x + 1.0).sin(),
+            (2.1 * x + 2.0).sin(),
+        ]
+        .map(|s| 9e-5 * s)
     }
 
     /// The energy is convex in the heights (its Hessian positive semi-definite, the midpoint
@@ -447,11 +455,17 @@ mod tests {
                     };
                     let (up, down) = (at(dh), at(-dh));
                     let fd = (up.0 - down.0) / (2.0 * dh);
-                    assert!((fd - g[i]).abs() <= 1e-6 * (1.0 + g[i].abs()), "{fd} {}", g[i]);
-                    for j in 0..3 {
+                    assert!(
+                        (fd - g[i]).abs() <= 1e-6 * (1.0 + g[i].abs()),
+                        "{fd} {}",
+                        g[i]
+                    );
+                    for (j, &want) in hess[i].iter().enumerate() {
                         let fd = (up.1[j] - down.1[j]) / (2.0 * dh);
-                        let want = hess[i][j];
-                        assert!((fd - want).abs() <= 1e-5 * (1.0 + want.abs()), "{fd} {want}");
+                        assert!(
+                            (fd - want).abs() <= 1e-5 * (1.0 + want.abs()),
+                            "{fd} {want}"
+                        );
                     }
                 }
             }
@@ -491,7 +505,11 @@ mod tests {
                 for i in 0..3 {
                     let t = torque(theta, i);
                     let fd = (energy(shifted(i, d)) - energy(shifted(i, -d))) / (2.0 * d);
-                    assert!((fd - t.h_t).abs() <= 1e-6 * (1e-6 + t.h_t.abs()), "{fd} {}", t.h_t);
+                    assert!(
+                        (fd - t.h_t).abs() <= 1e-6 * (1e-6 + t.h_t.abs()),
+                        "{fd} {}",
+                        t.h_t
+                    );
                     // the Jacobian's row p_i: −∂(torque_i)/∂θ_j
                     let x = theta.map(|t| {
                         let mut xi = [0.0; actuator::N];
@@ -542,6 +560,9 @@ mod tests {
         assert!(nearest.distance < 1e-9, "{linear:?}");
         p.effects.coupling.series[2] = 3000.0;
         let hard = law(&p);
-        assert_ne!(hard.textbook[hard.nearest].name, "linear spring", "{hard:?}");
+        assert_ne!(
+            hard.textbook[hard.nearest].name, "linear spring",
+            "{hard:?}"
+        );
     }
 }

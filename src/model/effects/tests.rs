@@ -57,10 +57,7 @@ fn all_on(other_forms: bool) -> Params {
         f.saturation.knee = 0.3;
         f.saturation.u_dead = 2.0;
         f.stiffening.series = [0.02, 0.0, 0.01, 0.005];
-        f.stiffening.hidden = super::convex::Hardening::Exponential {
-            k: 0.01,
-            x_s: 0.01,
-        };
+        f.stiffening.hidden = super::convex::Hardening::Exponential { k: 0.01, x_s: 0.01 };
         f.preload.law = PreloadLaw::Weight;
     }
     p
