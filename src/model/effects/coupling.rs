@@ -207,13 +207,13 @@ fn unequal_pairs(params: &mut Params, between: &mut dyn FnMut(f64, f64) -> f64) 
     ))
 }
 
-/// A platform tilt spring stiffer about one axis (effects.md, "coupling", "Forms"); also its
-/// tilt about that axis, in heights (`HiddenTilt::axis`), and its stiffness there [N/m].
+/// A platform tilt spring stiffer about one axis (effects.md, "coupling", "Forms").
 fn tilt_spring(params: &mut Params, between: &mut dyn FnMut(f64, f64) -> f64) -> Planted {
     tilt_spring_axis(params, between).0
 }
 
-/// The tilt spring of [`tilt_spring`], its stiffer axis and that axis' stiffness [N/m].
+/// The tilt spring of [`tilt_spring`], its stiffer axis (the tilt about it in heights, as
+/// `HiddenTilt::axis`) and that axis' stiffness K / r² [N/m].
 fn tilt_spring_axis(
     params: &mut Params,
     between: &mut dyn FnMut(f64, f64) -> f64,
