@@ -64,12 +64,17 @@ fn assert_named(effect: Effect, d: &diagnose::Diagnosis) {
 
 /// Every held-out fit of the final model is within [`FIT_TOLERANCE`] of its noise floor.
 fn at_the_noise_floor(case: &str, d: &diagnose::Diagnosis) {
+    near_the_noise_floor(case, d, FIT_TOLERANCE);
+}
+
+/// Every held-out fit of the final model is within `tolerance` points of its noise floor.
+fn near_the_noise_floor(case: &str, d: &diagnose::Diagnosis, tolerance: f64) {
     for (exp, fits) in d.experiments[1..].iter().zip(&d.last.validation) {
         // (the 2-D tip fit has no noise floor of its own: its coordinates are checked)
         for (name, fit) in fits.fits.iter().filter(|(n, _)| n != "tip_xy") {
             let floor = floor_fit(exp, name).unwrap();
             assert!(
-                fit >= &(floor - FIT_TOLERANCE),
+                fit >= &(floor - tolerance),
                 "{case}: held-out {name} fit {fit:.2} % below the noise floor {floor:.2} %"
             );
         }
@@ -280,6 +285,22 @@ fn a_random_hardening_is_stiffening_in_its_convex_series() {
     let fitted = &law.textbook[law.nearest].values;
     let n: f64 = fitted[4..fitted.find(',').unwrap()].parse().unwrap();
     assert!((n - 7.37).abs() < 1.0, "{fitted}");
+}
+
+/// A tilt spring hardening about its stiffer axis in a law outside the series (exponential,
+/// a_s = 21 µm, seed 1, chosen before it was run): coupling in its convex series, which holds
+/// the hardening (a weight of a power above the linear spring's above 0), its law nearer a
+/// hardening spring than a linear one (a Duffing spring 1.4 % from it, the linear spring 14 %).
+/// The series leaves the held-out fits 0.05 points below their floors; the pairs' linear springs
+/// alone (the series' probe removed) left the farthest 0.80 below.
+#[test]
+fn a_hardening_tilt_spring_is_coupling_in_its_convex_series() {
+    let d = named_in_form(Effect::Coupling, 1, &["convex"], 1);
+    near_the_noise_floor("coupling_hardening_tilt", &d, 0.25);
+    let series = d.last.params.effects.coupling.series;
+    assert!(series[1..].iter().any(|&w| w > 0.0), "{series:?}");
+    let (law, nearest) = law_shown(&d);
+    assert_ne!(nearest, "linear spring", "{}: {law:?}", law.what);
 }
 
 /// Hysteresis of a density of yield angles off the plays' grid (log-normal about 1.4 mrad, seed

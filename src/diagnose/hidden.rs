@@ -3,7 +3,7 @@
 //! form that differs from the library's term, its magnitude random within a range where it
 //! visibly changes the response, measurement noise of 0.5–2 % of each output's range, and the
 //! paper's two experiments (the 60 V sine at 3π and at 11 rad/s). Families have further hidden
-//! forms beside the first (a tilt spring, retention across the film, unequal creep times,
+//! forms beside the first (a tilt spring, one hardening about its stiffer axis, retention across the film, unequal creep times,
 //! rate-dependent Dahl hysteresis, a second-order amplifier of equal stages, a slewing amplifier,
 //! an output stage with unequal limits), drawn at random where the family's law is flexible. Also data with no effect and with two mechanisms outside the library (a floor
 //! vibration picked up by the sensor, a ripple of the amplifier's supply), and data with two

@@ -16,6 +16,7 @@ pub mod terms;
 
 pub mod amplifier_lag;
 pub mod charge_drift;
+pub mod convex;
 pub mod coupling;
 pub mod creep;
 pub mod delay;

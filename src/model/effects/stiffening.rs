@@ -5,11 +5,10 @@
 
 use std::f64::consts::PI;
 
+use super::convex::{Hardening, series, sum};
 use super::family::{FittedLaw, TextbookForm, golden, mean_kb, sampled, scaled_to};
 use super::terms::{Law, States, Torque};
-use super::{
-    Drive, Effect, Exposing, Family, Form, Magnitude, Planted, Probe, Scaling, log_between,
-};
+use super::{Drive, Effect, Exposing, Family, Form, Magnitude, Planted, Probe, Scaling};
 use crate::model::Params;
 use crate::model::actuator::{Actuator, THETA};
 use crate::model::params::common_rows;
@@ -23,23 +22,6 @@ const SERIES_NAMES: [&str; 4] = ["k_s4", "k_s6", "k_s8", "k_s12"];
 /// Angle at which the stiffness terms are compared with Kb θ: within the stroke of actuators 2
 /// and 3 [rad]. A weight of the series is the extra stiffness its power adds there.
 const THETA_REF: f64 = 0.012;
-
-/// A hardening law for synthetic data only (no row of the table reaches it): convex, odd in its
-/// torque, none of the series' powers.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub enum Hardening {
-    None,
-    /// H = k θ_ref² |θ/θ_ref|ⁿ / n, n any real > 2.
-    Power {
-        k: f64,
-        n: f64,
-    },
-    /// H = k θ_s² (cosh(θ/θ_s) − 1 − (θ/θ_s)²/2): exponential hardening.
-    Exponential {
-        k: f64,
-        theta_s: f64,
-    },
-}
 
 /// Nonlinear film stiffness: H += k3 θ⁴/4 + Σ_n w_n θ_ref² |θ/θ_ref|ⁿ / n (+ a synthetic law).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -71,33 +53,16 @@ impl Stiffening {
     /// "stiffening"): each term convex and even, so the torque is odd and monotone.
     pub fn energy_torque_stiffness(&self, theta: f64) -> (f64, f64, f64) {
         let a = theta.abs();
-        let mut h = (
+        let quartic = (
             0.25 * self.k3 * a.powi(4),
             self.k3 * theta.powi(3),
             3.0 * self.k3 * theta * theta,
         );
-        let x = a / THETA_REF;
-        for (&n, &w) in POWERS.iter().zip(&self.series).filter(|(_, w)| **w > 0.0) {
-            let nf = f64::from(n);
-            h.0 += w * THETA_REF * THETA_REF * x.powi(n) / nf;
-            h.1 += (w * THETA_REF * x.powi(n - 1)).copysign(theta);
-            h.2 += w * (nf - 1.0) * x.powi(n - 2);
-        }
-        match self.hidden {
-            Hardening::None => {}
-            Hardening::Power { k, n } => {
-                h.0 += k * THETA_REF * THETA_REF * x.powf(n) / n;
-                h.1 += (k * THETA_REF * x.powf(n - 1.0)).copysign(theta);
-                h.2 += k * (n - 1.0) * x.powf(n - 2.0);
-            }
-            Hardening::Exponential { k, theta_s } => {
-                let y = theta / theta_s;
-                h.0 += k * theta_s * theta_s * (y.cosh() - 1.0 - 0.5 * y * y);
-                h.1 += k * theta_s * (y.sinh() - y);
-                h.2 += k * (y.cosh() - 1.0);
-            }
-        }
-        h
+        sum([
+            quartic,
+            series(&POWERS, &self.series, THETA_REF, theta),
+            self.hidden.at(THETA_REF, theta),
+        ])
     }
 }
 
@@ -179,27 +144,17 @@ fn fifth_power(params: &mut Params, between: &mut dyn FnMut(f64, f64) -> f64) ->
 fn random_hardening(params: &mut Params, between: &mut dyn FnMut(f64, f64) -> f64) -> Planted {
     let kb = mean_kb(params);
     let s = between(0.3, 0.8);
-    let (law, text) = if between(0.0, 1.0) < 0.5 {
-        let n = between(3.0, 10.0);
-        (
-            Hardening::Power { k: s * kb, n },
-            format!("stiffening of power {n:.2}"),
-        )
-    } else {
-        let theta_s = log_between(between, 0.005, 0.012);
-        // its stiffness k (cosh(θ_ref/θ_s) − 1) at θ_ref is s Kb
-        let k = s * kb / ((THETA_REF / theta_s).cosh() - 1.0);
-        (
-            Hardening::Exponential { k, theta_s },
-            format!(
-                "exponential hardening, cosh(theta / theta_s) with theta_s = {:.1} mrad",
-                1000.0 * theta_s
-            ),
-        )
-    };
+    let (law, text) = Hardening::random(
+        between,
+        s * kb,
+        THETA_REF,
+        (0.005, 0.012),
+        "theta",
+        ("mrad", 1e-3),
+    );
     params.effects.stiffening.hidden = law;
     Planted::text(format!(
-        "{text}, adding {:.0} % of Kb at theta = {THETA_REF} rad",
+        "stiffening of {text}, adding {:.0} % of Kb at theta = {THETA_REF} rad",
         100.0 * s
     ))
 }

@@ -23,6 +23,11 @@ fn all_on(other_forms: bool) -> Params {
     f.preload.tau0 = [1e-4, -2e-4, 3e-4];
     if other_forms {
         f.coupling.weights = [1.0, 0.5, 1.5];
+        f.coupling.series = [30.0, 0.0, 200.0, 100.0];
+        f.coupling.hidden = super::coupling::HiddenTilt {
+            law: super::convex::Hardening::Power { k: 300.0, n: 4.6 },
+            axis: [2.0, -1.0, -1.0].map(|x| x / 3.0),
+        };
         f.charge_drift.two_stages = true;
         // the absorption spectrum with capacitances at 0 among its branches, and a synthetic
         // branch
@@ -52,10 +57,7 @@ fn all_on(other_forms: bool) -> Params {
         f.saturation.knee = 0.3;
         f.saturation.u_dead = 2.0;
         f.stiffening.series = [0.02, 0.0, 0.01, 0.005];
-        f.stiffening.hidden = super::stiffening::Hardening::Exponential {
-            k: 0.01,
-            theta_s: 0.01,
-        };
+        f.stiffening.hidden = super::convex::Hardening::Exponential { k: 0.01, x_s: 0.01 };
         f.preload.law = PreloadLaw::Weight;
     }
     p
