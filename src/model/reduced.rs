@@ -55,6 +55,7 @@ use nalgebra::DMatrix;
 
 use super::actuator::{L_P, N, P, Q2, THETA};
 use super::platform::{ModelError, Platform, Wrt};
+use super::reduction::Reduction;
 use super::shell::{DomainError, Shell};
 
 impl Platform {
@@ -147,6 +148,12 @@ impl Platform {
         u: [f64; 3],
         dz: &mut [f64],
     ) -> Result<(), ModelError> {
+        if self.reduction == Reduction::Slow && self.terms.neutral {
+            // θ alone per actuator: its rate directly, without the lift's allocations
+            let rates = self.each(|i, a| a.slow_rate(z[i], self.l_p_on_curve(i, z[i])?, u[i]))?;
+            dz.copy_from_slice(&rates);
+            return Ok(());
+        }
         let x = self.lift(z, u)?;
         let mut f = vec![0.0; x.len()];
         self.full_rhs(&x, u, &mut f)?;
