@@ -175,7 +175,7 @@ impl Actuator {
     /// θ̇ of the slow model without effects (src/model/reduced.rs) at (θ, l_p) on the invariant
     /// curve: on the DC circuit V2 = R2 i, and ṗ = 0 gives ω = −(∂H/∂θ + d ∂H/∂l_p)/b, from one
     /// evaluation of the geometry (lifting to the full state and evaluating its f takes three).
-    pub fn slow_rate(&self, theta: f64, l_p: f64, u: f64) -> Result<f64, DomainError> {
+    pub(super) fn slow_rate(&self, theta: f64, l_p: f64, u: f64) -> Result<f64, DomainError> {
         let shell = Shell::new(theta, l_p, self.lv)?;
         let v2 = self.par.r2 * self.dc_current(theta, u);
         let (h_t, h_l) = self.geometric_gradient(&shell, theta, l_p, v2);

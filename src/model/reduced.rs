@@ -21,6 +21,8 @@
 //!   θ̇ = ω = −(∂H/∂θ + d ∂H/∂l_p) / b: the energy's gradient along the curve over the damping.
 //!   l̇_p = d θ̇ keeps (θ, l_p) on the curve through (0, Lp) ([`Actuator::l_p_on_curve`],
 //!   model.md, "Initial state"), so l_p = L(θ) is no state.
+//!   Without effects the lift's charges give V2 = R2 i, so θ̇ comes from the geometry alone
+//!   ([`Actuator::slow_rate`]): one evaluation of it per actuator, not the lift's three.
 //!
 //! With effects the drift stage and the clipping change the circuit's rows and the effects'
 //! torques the force balance; the fast states are then the root of the same rows of the full
