@@ -4,7 +4,8 @@
 //! on the calling thread (the FMU steps on its caller's thread; the test harness's own
 //! threads allocate at times of their own, which made a process-wide count fail under load).
 //! Allocations before the loop (instantiation, initialization, the first steps while buffers
-//! settle) are not counted.
+//! settle) are not counted. The slow model's FMU (feature reduced-fmu, a build of its own) steps
+//! through the same simulator, whose held step is counted here on the slow model.
 
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::cell::Cell;
@@ -13,8 +14,8 @@ use std::ptr::null;
 
 use hasel_fmu::fmu::pack::{guid, platform};
 use hasel_fmu::fmu::variables::rows;
-use hasel_fmu::model::Params;
-use hasel_fmu::simulation::Input;
+use hasel_fmu::model::{Params, Platform, Reduction};
+use hasel_fmu::simulation::{DEFAULT_RTOL, Input, Simulator};
 
 struct Counting;
 
@@ -142,5 +143,25 @@ fn set_real_do_step_and_get_real_allocate_nothing() {
     let made = allocations() - before;
     unsafe { fmi2FreeInstance(c) };
     assert!(y.iter().all(|v| v.is_finite()));
+    assert_eq!(made, 0, "{made} heap allocations in 2,000 steps");
+}
+
+#[test]
+fn a_held_step_of_the_slow_model_allocates_nothing() {
+    let model = Platform::reduced(Params::default(), Reduction::Slow).unwrap();
+    let mut sim = Simulator::new(model, 0.0, DEFAULT_RTOL).unwrap();
+    let input = Input::sine(60.0, 3.0 * std::f64::consts::PI);
+    let mut step = |k: usize| {
+        sim.step_held(input.value(k as f64 * 1e-3), (k + 1) as f64 * 1e-3)
+            .unwrap();
+    };
+    for k in 0..100 {
+        step(k);
+    }
+    let before = allocations();
+    for k in 100..2100 {
+        step(k);
+    }
+    let made = allocations() - before;
     assert_eq!(made, 0, "{made} heap allocations in 2,000 steps");
 }

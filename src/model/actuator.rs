@@ -149,17 +149,37 @@ impl Actuator {
         let c2 = self.c2_0 + self.c2_a * shell.a_s;
         let v1 = x[Q1] / self.par.c1;
         let v2 = x[Q2] / c2;
-        // ∂/∂x of Q2²/(2 C2) = −½ V2² ∂C2/∂x
-        let e_x = -0.5 * v2 * v2 * self.c2_a;
+        let (h_t, h_l) = self.geometric_gradient(&shell, x[THETA], x[L_P], v2);
         Ok(Eval {
             c2,
             v1,
             v2,
             omega: x[P] / self.inertia,
-            h_t: self.par.kb * x[THETA] + self.gravity * shell.cos_theta + e_x * shell.a_s_t,
-            h_l: 0.5 * self.par.k * (x[L_P] - self.lp) + e_x * shell.a_s_l,
+            h_t,
+            h_l,
             shell,
         })
+    }
+
+    /// (∂H/∂θ, ∂H/∂l_p) at the geometry of `shell` with the electrode at voltage `v2`.
+    #[inline(always)]
+    fn geometric_gradient(&self, shell: &Shell, theta: f64, l_p: f64, v2: f64) -> (f64, f64) {
+        // ∂/∂x of Q2²/(2 C2) = −½ V2² ∂C2/∂x
+        let e_x = -0.5 * v2 * v2 * self.c2_a;
+        (
+            self.par.kb * theta + self.gravity * shell.cos_theta + e_x * shell.a_s_t,
+            0.5 * self.par.k * (l_p - self.lp) + e_x * shell.a_s_l,
+        )
+    }
+
+    /// θ̇ of the slow model without effects (src/model/reduced.rs) at (θ, l_p) on the invariant
+    /// curve: on the DC circuit V2 = R2 i, and ṗ = 0 gives ω = −(∂H/∂θ + d ∂H/∂l_p)/b, from one
+    /// evaluation of the geometry (lifting to the full state and evaluating its f takes three).
+    pub(super) fn slow_rate(&self, theta: f64, l_p: f64, u: f64) -> Result<f64, DomainError> {
+        let shell = Shell::new(theta, l_p, self.lv)?;
+        let v2 = self.par.r2 * self.dc_current(theta, u);
+        let (h_t, h_l) = self.geometric_gradient(&shell, theta, l_p, v2);
+        Ok(-(h_t + shell.d * h_l) / self.par.b)
     }
 
     /// Electrode capacitance C2(θ, l_p) [F].

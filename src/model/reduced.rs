@@ -21,6 +21,8 @@
 //!   θ̇ = ω = −(∂H/∂θ + d ∂H/∂l_p) / b: the energy's gradient along the curve over the damping.
 //!   l̇_p = d θ̇ keeps (θ, l_p) on the curve through (0, Lp) ([`Actuator::l_p_on_curve`],
 //!   model.md, "Initial state"), so l_p = L(θ) is no state.
+//!   Without effects the lift's charges give V2 = R2 i, so θ̇ comes from the geometry alone
+//!   ([`Actuator::slow_rate`]): one evaluation of it per actuator, not the lift's three.
 //!
 //! With effects the drift stage and the clipping change the circuit's rows and the effects'
 //! torques the force balance; the fast states are then the root of the same rows of the full
@@ -55,6 +57,7 @@ use nalgebra::DMatrix;
 
 use super::actuator::{L_P, N, P, Q2, THETA};
 use super::platform::{ModelError, Platform, Wrt};
+use super::reduction::Reduction;
 use super::shell::{DomainError, Shell};
 
 impl Platform {
@@ -147,6 +150,12 @@ impl Platform {
         u: [f64; 3],
         dz: &mut [f64],
     ) -> Result<(), ModelError> {
+        if self.reduction == Reduction::Slow && self.terms.neutral {
+            // θ alone per actuator: its rate directly, without the lift's allocations
+            let rates = self.each(|i, a| a.slow_rate(z[i], self.l_p_on_curve(i, z[i])?, u[i]))?;
+            dz.copy_from_slice(&rates);
+            return Ok(());
+        }
         let x = self.lift(z, u)?;
         let mut f = vec![0.0; x.len()];
         self.full_rhs(&x, u, &mut f)?;

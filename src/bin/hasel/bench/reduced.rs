@@ -4,7 +4,7 @@
 use std::time::Duration;
 
 use hasel_fmu::model::{Params, Platform, Reduction};
-use hasel_fmu::simulation::{DEFAULT_RTOL, Input, Sample, Simulator, largest_difference};
+use hasel_fmu::simulation::{DEFAULT_RTOL, Input, Sample, SimError, Simulator, largest_difference};
 
 use super::timing::best;
 use crate::error::Error;
@@ -100,7 +100,8 @@ pub fn run_all(repeat: usize) -> Result<(), Error> {
 }
 
 /// The cost of one held 1 ms co-simulation step of each model at the FMUs' default tolerance,
-/// over the 10,000 steps of the paper's sine.
+/// over the 10,000 steps of the paper's sine, with what it is made of: the right-hand side's
+/// evaluations per step and the cost of one (at the run's last state and command).
 fn step_costs(repeat: usize) -> Result<(), Error> {
     say!(
         "One held 1 ms co-simulation step, rtol {DEFAULT_RTOL:e} (the FMUs' default), 10,000 steps of the paper's sine, best of {repeat} runs:"
@@ -108,15 +109,26 @@ fn step_costs(repeat: usize) -> Result<(), Error> {
     let input = Input::sine(60.0, 3.0 * std::f64::consts::PI);
     for reduction in Reduction::ALL {
         let model = Platform::reduced(Params::default(), reduction)?;
-        let (wall, done) = best(repeat, || -> Result<(), Error> {
+        let (wall, sim) = best(repeat, || -> Result<Simulator, Error> {
             let mut sim = Simulator::new(model.clone(), 0.0, DEFAULT_RTOL)?;
-            for k in 0..10_000 {
+            for k in 0..STEPS {
                 sim.step_held(input.value(k as f64 * 1e-3), (k + 1) as f64 * 1e-3)?;
+            }
+            Ok(sim)
+        });
+        let sim = sim?;
+        let (x, u) = (sim.state(), input.value(STEPS as f64 * 1e-3));
+        let mut dx = vec![0.0; x.len()];
+        let (rhs_wall, done) = best(repeat, || -> Result<(), Error> {
+            for _ in 0..RHS_CALLS {
+                model
+                    .rhs(std::hint::black_box(x), u, &mut dx)
+                    .map_err(SimError::from)?;
             }
             Ok(())
         });
         done?;
-        let us = wall.as_secs_f64() * 1e6 / 10_000.0;
+        let us = wall.as_secs_f64() * 1e6 / STEPS as f64;
         let verdict = match reduction {
             Reduction::Slow => format!(
                 " (target <= {SLOW_STEP_TARGET_US} us: {})",
@@ -128,10 +140,21 @@ fn step_costs(repeat: usize) -> Result<(), Error> {
             ),
             _ => String::new(),
         };
-        say!("  {:<12} {us:.2} us{verdict}", reduction.name());
+        let stats = sim.stats();
+        say!(
+            "  {:<12} {us:.2} us{verdict}; per step {:.2} right-hand sides of {:.0} ns each, {:.4} Jacobians",
+            reduction.name(),
+            stats.rhs_evals as f64 / STEPS as f64,
+            rhs_wall.as_secs_f64() * 1e9 / RHS_CALLS as f64,
+            stats.jac_evals as f64 / STEPS as f64
+        );
     }
     Ok(())
 }
+
+/// Held steps of the step cost, and evaluations of the right-hand side timed for its cost.
+const STEPS: usize = 10_000;
+const RHS_CALLS: usize = 100_000;
 
 fn row(case: &Case, model: &Platform, wall: Duration, all: (f64, f64), after: (f64, f64)) {
     let um = 1e6;
