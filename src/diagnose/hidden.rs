@@ -581,7 +581,11 @@ mod tests {
         assert!((last - 3.3).abs() <= p.dt, "ends at {last} s");
         let spec = case.spec(p.input(0, 3.3).unwrap(), 2.0, p.dt, Columns::Heights, 1);
         let drive = spec.unwrap().drive.unwrap();
-        assert!(drive.last_sample().unwrap() >= 3.3, "{:?}", drive.last_sample());
+        assert!(
+            drive.last_sample().unwrap() >= 3.3,
+            "{:?}",
+            drive.last_sample()
+        );
     }
 
     #[test]

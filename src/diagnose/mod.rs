@@ -946,12 +946,7 @@ pub fn diagnose(
     let u_peak = analysis::peak_command(&estimation[0]);
     let laws = forms
         .iter()
-        .map(|f| {
-            f.effect
-                .family()
-                .law
-                .and_then(|law| law(&current.params, u_peak))
-        })
+        .map(|f| (f.effect.family().law)(&current.params, u_peak))
         .collect();
     timing.push(("total".to_string(), began.elapsed().as_secs_f64()));
     Ok(Diagnosis {

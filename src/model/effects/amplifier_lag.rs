@@ -121,7 +121,7 @@ pub const FAMILY: Family = Family {
         ("amplifier_lag_second_order", equal_stages),
         ("amplifier_lag_slew", slewing),
     ],
-    law: Some(|p, u_peak| Some(law(p, u_peak))),
+    law: |p, u_peak| Some(law(p, u_peak)),
 };
 
 /// One stage, and two of half the time, at a fast and a slow time; a slewing stage at a fast

@@ -191,7 +191,7 @@ pub const FAMILY: Family = Family {
         ("charge_drift_film", across_the_film),
         ("charge_drift_kernel", random_kernel),
     ],
-    law: Some(|p, _| absorption_law(&p.effects.charge_drift)),
+    law: |p, _| absorption_law(&p.effects.charge_drift),
 };
 
 /// The element is on at its magnitude (R3 in series, C3 across the film), or an absorption

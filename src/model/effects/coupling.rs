@@ -163,7 +163,7 @@ pub const FAMILY: Family = Family {
         ("coupling_tilt", tilt_spring),
         ("coupling_hardening_tilt", hardening_tilt),
     ],
-    law: Some(|p, _| Some(law(p))),
+    law: |p, _| Some(law(p)),
 };
 
 /// The equal pairs at k_c, each pair alone, and the series, one column per power at the same

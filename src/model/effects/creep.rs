@@ -121,7 +121,7 @@ pub const FAMILY: Family = Family {
     },
     hidden: random_kernel,
     variants: &[("creep_two_times", unequal_times)],
-    law: Some(|p, _| Some(spectrum_law(&p.effects.creep))),
+    law: |p, _| Some(spectrum_law(&p.effects.creep)),
 };
 
 /// One branch at three times; the spectrum, one column per weight (src/diagnose/diagnose.md,

@@ -1,6 +1,7 @@
 //! `delay` (src/model/effects/effects.md, "delay"): a transport delay between the command and
 //! the actuator. It has no terms here: the simulation, which holds the input history, applies it.
 
+use super::family::no_law;
 use super::terms::{Law, States};
 use super::{Drive, Effect, Exposing, Family, Form, Magnitude, Planted, Probe, log_between};
 use crate::model::Params;
@@ -50,7 +51,7 @@ pub const FAMILY: Family = Family {
     },
     hidden: wandering,
     variants: &[],
-    law: None,
+    law: no_law,
 };
 
 /// A delay wandering around its mean (network jitter), which the data generator applies.

@@ -57,9 +57,14 @@ pub struct Family {
     pub variants: &'static [(&'static str, Plant)],
     /// The family's fitted law at the model `params`, drawn over commands up to the peak
     /// command [V] where its variable is the command (src/diagnose/diagnose.md, "The fitted
-    /// law"); `None` for a family whose forms are its textbook terms, and from the function
-    /// for a form of the family the law does not describe (charge_drift's series stage).
-    pub law: Option<fn(&Params, f64) -> Option<FittedLaw>>,
+    /// law"); `None` for a family whose forms are its textbook terms ([`no_law`]) and for a
+    /// form of the family the law does not describe (charge_drift's series stage).
+    pub law: fn(&Params, f64) -> Option<FittedLaw>,
+}
+
+/// The `law` of a family whose forms are its textbook terms (delay, preload): nothing to draw.
+pub fn no_law(_: &Params, _: f64) -> Option<FittedLaw> {
+    None
 }
 
 /// A family's fitted law as the verdict shows it: its points against its variable, and the

@@ -191,7 +191,7 @@ pub const FAMILY: Family = Family {
         ("hysteresis_rate", relaxing_dahl),
         ("hysteresis_plays", random_plays),
     ],
-    law: Some(|p, u_peak| Some(loading_law(p, u_peak))),
+    law: |p, u_peak| Some(loading_law(p, u_peak)),
 };
 
 /// Two saturation angles, without and with relaxation; the plays, one column per angle of the

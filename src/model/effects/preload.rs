@@ -1,6 +1,6 @@
 //! `preload` (src/model/effects/effects.md, "preload"): a constant load on each actuator.
 
-use super::family::mean_kb;
+use super::family::{mean_kb, no_law};
 use super::terms::{Law, States, Torque};
 use super::{Drive, Effect, Exposing, Family, Form, Magnitude, Planted, Probe, Scaling};
 use crate::model::Params;
@@ -78,7 +78,7 @@ pub const FAMILY: Family = Family {
     },
     hidden: weight,
     variants: &[],
-    law: None,
+    law: no_law,
 };
 
 /// A weight on the platform.

@@ -180,7 +180,7 @@ pub const FAMILY: Family = Family {
     },
     hidden: compressing,
     variants: &[("saturation_unequal", unequal)],
-    law: Some(|p, u_peak| Some(law(p, u_peak))),
+    law: |p, u_peak| Some(law(p, u_peak)),
 };
 
 /// Limits just below the peak command, kept as they are: equal (`hard`), unequal with either

@@ -109,7 +109,7 @@ pub const FAMILY: Family = Family {
     },
     hidden: fifth_power,
     variants: &[("stiffening_random", random_hardening)],
-    law: Some(|p, u_peak| Some(law(p, u_peak))),
+    law: |p, u_peak| Some(law(p, u_peak)),
 };
 
 /// A fifth of Kb θ at 15 mrad for the quartic; the series, one column per power, each adding a

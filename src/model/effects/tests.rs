@@ -210,21 +210,21 @@ fn a_textbook_law_is_nearest_itself() {
     let mut p = Params::default();
     p.effects.saturation.u_max = 54.5;
     p.effects.saturation.u_max_neg = 88.0;
-    let law = (Effect::Saturation.family().law.unwrap())(&p, 60.0).unwrap();
+    let law = (Effect::Saturation.family().law)(&p, 60.0).unwrap();
     let nearest = &law.textbook[law.nearest];
     assert_eq!(nearest.name, "unequal clamp", "{law:?}");
     assert_eq!(nearest.values, "+54.5 V / -none", "{law:?}");
     assert!(nearest.distance < 1e-6, "{law:?}");
     let mut p = Params::default();
     p.effects.amplifier_lag.tau_a = 0.02;
-    let law = (Effect::AmplifierLag.family().law.unwrap())(&p, 60.0).unwrap();
+    let law = (Effect::AmplifierLag.family().law)(&p, 60.0).unwrap();
     let nearest = &law.textbook[law.nearest];
     assert_eq!(nearest.name, "linear lag", "{law:?}");
     assert_eq!(nearest.values, "tau 20.00 ms", "{law:?}");
     assert!(nearest.distance < 1e-6, "{law:?}");
     // a slew far below the fastest error: nearest the hard slew limit
     p.effects.amplifier_lag.slew = 100.0;
-    let law = (Effect::AmplifierLag.family().law.unwrap())(&p, 60.0).unwrap();
+    let law = (Effect::AmplifierLag.family().law)(&p, 60.0).unwrap();
     let nearest = &law.textbook[law.nearest];
     assert_eq!(nearest.name, "hard slew limit", "{law:?}");
     assert!(nearest.values.starts_with("100 V/s"), "{law:?}");
