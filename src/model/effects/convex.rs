@@ -19,6 +19,23 @@ pub fn series(powers: &[i32], weights: &[f64], x_ref: f64, x: f64) -> (f64, f64,
     h
 }
 
+/// The force of a power law of exponent n, secant stiffness 1 at x_ref: x_ref |x/x_ref|ⁿ⁻¹
+/// signed as x, the textbook power law a series' fitted law is compared with
+/// (src/diagnose/diagnose.md, "The fitted law").
+pub fn power_force(x_ref: f64, n: f64) -> impl Fn(f64) -> f64 {
+    move |x: f64| (x_ref * (x.abs() / x_ref).powf(n - 1.0)).copysign(x)
+}
+
+/// A series' weights in words, each with its power, to `decimals` places: "w (n = 4), …".
+pub fn weights_text(powers: &[i32], weights: &[f64], decimals: usize) -> String {
+    let words: Vec<String> = powers
+        .iter()
+        .zip(weights)
+        .map(|(n, w)| format!("{w:.decimals$} (n = {n})"))
+        .collect();
+    words.join(", ")
+}
+
 /// The sum of energies, forces and stiffnesses.
 pub fn sum<const N: usize>(parts: [(f64, f64, f64); N]) -> (f64, f64, f64) {
     parts

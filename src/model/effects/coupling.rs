@@ -6,7 +6,7 @@
 
 use std::f64::consts::PI;
 
-use super::convex::{Hardening, series, sum};
+use super::convex::{Hardening, power_force, series, sum, weights_text};
 use super::family::{FittedLaw, TextbookForm, golden, sampled, scaled_to};
 use super::log_between;
 use super::terms::{At, Law, States, Torque};
@@ -280,7 +280,7 @@ fn law(params: &Params) -> FittedLaw {
     let scaled = |g: &dyn Fn(f64) -> f64| scaled_to(&curve, g);
     let linear = |d: f64| d;
     let duffing = |s: f64| move |d: f64| d * (1.0 + (d / s).powi(2));
-    let power = |n: f64| move |d: f64| (D_REF * (d.abs() / D_REF).powf(n - 1.0)).copysign(d);
+    let power = |n: f64| power_force(D_REF, n);
     let exponential = |s: f64| move |d: f64| s * (d / s).sinh();
     let (k, _) = scaled(&linear);
     let ds = golden(0.05 * D_REF, 100.0 * D_REF, |s| scaled(&duffing(s)).1);
@@ -289,16 +289,11 @@ fn law(params: &Params) -> FittedLaw {
     let (kn, _) = scaled(&power(n));
     let es = golden(0.05 * D_REF, 100.0 * D_REF, |s| scaled(&exponential(s)).1);
     let (ke, _) = scaled(&exponential(es));
-    let weights: Vec<String> = POWERS
-        .iter()
-        .zip(c.series)
-        .map(|(n, w)| format!("{w:.0} (n = {n})"))
-        .collect();
     let text = format!(
         "force of a pair of unit weight (pair weights {:.2?}): k_c {:.0} N/m, series weights {} N/m",
         c.weights,
         c.k_c,
-        weights.join(", ")
+        weights_text(&POWERS, &c.series, 0)
     );
     let um = |x: f64| 1e6 * x;
     let forms: Vec<TextbookForm> = vec![

@@ -203,21 +203,12 @@ pub struct Terms {
 impl Law for Terms {
     type Params = Creep;
 
-    /// Stage 0 is the free branch, 1 … 6 the grid's, the synthetic ones after them. The grid's
-    /// branches come all together, a weight of 0 among them included: a fit moves weights to
-    /// and from 0, and a state that came and went with its weight would have no sensitivity.
+    /// Stage 0 is the free branch, 1 … 6 the grid's, the synthetic ones after them.
     fn new(cr: &Creep, states: &mut States) -> Terms {
-        let spectrum = cr.spectrum_on();
-        let free = (cr.k_v, cr.tau_v, cr.k_v > 0.0);
-        let grid = GRID.iter().zip(cr.grid).map(|(&tau, k)| (k, tau, spectrum));
-        let spread = cr.spread.iter().map(|b| (b.weight, b.tau, b.weight > 0.0));
-        let branches = std::iter::once(free)
-            .chain(grid)
-            .chain(spread)
-            .enumerate()
-            .filter(|(_, (_, _, on))| *on)
-            .map(|(stage, (k, tau, _))| (states.push(Effect::Creep, stage), k, tau))
-            .collect();
+        let grid = GRID.iter().zip(cr.grid).map(|(&tau, k)| (k, tau));
+        let spread = cr.spread.iter().map(|b| (b.weight, b.tau));
+        let free = (cr.k_v, cr.tau_v);
+        let branches = states.push_grid(Effect::Creep, free, grid, cr.spectrum_on(), spread);
         Terms { branches }
     }
 

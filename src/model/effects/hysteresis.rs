@@ -340,20 +340,11 @@ impl Law for Terms {
     type Params = Hysteresis;
 
     /// Stage 0 is the element at the free angle, 1 … 5 the plays, the synthetic ones after them.
-    /// The plays come all together, a weight of 0 among them included: a fit moves weights to
-    /// and from 0, and a state that came and went with its weight would have no sensitivity.
     fn new(h: &Hysteresis, states: &mut States) -> Terms {
-        let plays = h.plays_on();
-        let free = (h.k_h, h.theta_h, h.k_h > 0.0);
-        let grid = GRID.iter().zip(h.grid).map(|(&theta, k)| (k, theta, plays));
-        let spread = h.spread.iter().map(|e| (e.k, e.theta, e.k > 0.0));
-        let elements = std::iter::once(free)
-            .chain(grid)
-            .chain(spread)
-            .enumerate()
-            .filter(|(_, (_, _, on))| *on)
-            .map(|(stage, (k, theta, _))| (states.push(Effect::Hysteresis, stage), k, theta))
-            .collect();
+        let grid = GRID.iter().zip(h.grid).map(|(&theta, k)| (k, theta));
+        let spread = h.spread.iter().map(|e| (e.k, e.theta));
+        let free = (h.k_h, h.theta_h);
+        let elements = states.push_grid(Effect::Hysteresis, free, grid, h.plays_on(), spread);
         Terms {
             elements,
             law: h.law,

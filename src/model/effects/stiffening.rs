@@ -5,7 +5,7 @@
 
 use std::f64::consts::PI;
 
-use super::convex::{Hardening, series, sum};
+use super::convex::{Hardening, power_force, series, sum, weights_text};
 use super::family::{FittedLaw, TextbookForm, golden, mean_kb, sampled, scaled_to};
 use super::terms::{Law, States, Torque};
 use super::{Drive, Effect, Exposing, Family, Form, Magnitude, Planted, Probe, Scaling};
@@ -168,23 +168,17 @@ fn law(params: &Params, _: f64) -> FittedLaw {
     let curve = sampled(-reach, reach, |th| st.energy_torque_stiffness(th).1);
     let scaled = |g: &dyn Fn(f64) -> f64| scaled_to(&curve, g);
     let cube = |th: f64| th.powi(3);
-    let power =
-        |n: f64| move |th: f64| (THETA_REF * (th.abs() / THETA_REF).powf(n - 1.0)).copysign(th);
+    let power = |n: f64| power_force(THETA_REF, n);
     let exponential = |s: f64| move |th: f64| s * ((th / s).sinh() - th / s);
     let (k3, _) = scaled(&cube);
     let n = golden(3.0, 20.0, |n| scaled(&power(n)).1);
     let (kn, _) = scaled(&power(n));
     let s = golden(0.002, 0.1, |s| scaled(&exponential(s)).1);
     let (ks, _) = scaled(&exponential(s));
-    let weights: Vec<String> = POWERS
-        .iter()
-        .zip(st.series)
-        .map(|(n, w)| format!("{w:.3} (n = {n})"))
-        .collect();
     let text = format!(
         "added torque dH/dtheta: k3 {:.3e} N.m/rad^3, series weights {} N.m/rad",
         st.k3,
-        weights.join(", ")
+        weights_text(&POWERS, &st.series, 3)
     );
     let forms: Vec<TextbookForm> = vec![
         (

@@ -56,6 +56,31 @@ impl States {
         self.0.push(Extra { effect, stage });
         actuator::N + self.0.len() - 1
     }
+
+    /// The states of a family of elements (weight, and a time or an angle) on a fixed grid, the
+    /// creep's branches or the hysteresis's plays (effects.md, "How effects enter the model"):
+    /// stage 0 the free element, 1 … n the grid's, the synthetic ones after them; (index,
+    /// weight, time or angle) of each that is on. The free and synthetic elements are on with
+    /// a weight above 0; the grid's come all together when `grid_on`, a weight of 0 among them
+    /// included: a fit moves weights to and from 0, and a state that came and went with its
+    /// weight would have no sensitivity.
+    pub fn push_grid(
+        &mut self,
+        effect: Effect,
+        free: (f64, f64),
+        grid: impl Iterator<Item = (f64, f64)>,
+        grid_on: bool,
+        spread: impl Iterator<Item = (f64, f64)>,
+    ) -> Vec<(usize, f64, f64)> {
+        let on = |(w, x): (f64, f64)| (w, x, w > 0.0);
+        std::iter::once(on(free))
+            .chain(grid.map(|(w, x)| (w, x, grid_on)))
+            .chain(spread.map(on))
+            .enumerate()
+            .filter(|(_, (_, _, on))| *on)
+            .map(|(stage, (w, x, _))| (self.push(effect, stage), w, x))
+            .collect()
+    }
 }
 
 /// The voltage at an actuator's port.
