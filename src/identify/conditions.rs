@@ -25,21 +25,11 @@ pub const LAG_MAX: f64 = 1e-3;
 const START_SIGMAS: f64 = 5.0;
 /// …and by more than this share of the output's range.
 const START_SHARE: f64 = 0.02;
-/// At the start parameters, a guess, the fit's error says nothing of the start: a record
-/// starts evidently mid-run when its first sample stands away from the rest state's outputs by
-/// more than this share of the output's range (and START_SIGMAS of the noise). The rest state
-/// moves with the parameters by micrometres (the sag under the platform, a static load),
-/// a tenth of the stroke is beyond them.
-const EVIDENT_SHARE: f64 = 0.1;
-
 /// Where a record starts, as asked (`--start`).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum StartChoice {
     /// Detected: estimated where the first samples are not the rest state's.
     Auto,
-    /// Detected at parameters that are a guess: estimated where the first sample stands
-    /// evidently away from the rest state (`EVIDENT_SHARE`), else as the record has it.
-    Evident,
     /// At rest, whatever the data.
     Rest,
     /// Estimated, whatever the data.
@@ -166,27 +156,6 @@ fn residuals(params: &Params, exp: &Experiment, rtol: f64, r: &mut [f64]) -> Res
 /// model that misses a static load is off by about as much at rest as elsewhere, which is no
 /// sign of a start mid-run, and its offset must not widen the bound a start mid-run has to pass.
 fn starts_mid_run(params: &Params, exp: &Experiment, rtol: f64) -> Result<bool, Error> {
-    first_sample_away(params, exp, rtol, |fit_sigma, noise, range| {
-        (START_SIGMAS * noise.max(fit_sigma)).max(START_SHARE * range)
-    })
-}
-
-/// Whether the first sample of `exp` stands evidently away from the rest state's outputs at
-/// parameters that are a guess, whose fit error says nothing (`EVIDENT_SHARE`).
-fn evidently_mid_run(params: &Params, exp: &Experiment, rtol: f64) -> Result<bool, Error> {
-    first_sample_away(params, exp, rtol, |_, noise, range| {
-        (START_SIGMAS * noise).max(EVIDENT_SHARE * range)
-    })
-}
-
-/// Whether on some channel the first sample's offset from the simulation at rest, taken about
-/// the offset's median over the record, exceeds `bound(fit σ, noise σ, output range)`.
-fn first_sample_away(
-    params: &Params,
-    exp: &Experiment,
-    rtol: f64,
-    bound: impl Fn(f64, f64, f64) -> f64,
-) -> Result<bool, Error> {
     let mut at_rest = exp.clone();
     at_rest.conditions.start = Start::Rest;
     let sim = simulate(params, &at_rest, rtol)?;
@@ -197,7 +166,8 @@ fn first_sample_away(
         let mut spread: Vec<f64> = off.iter().map(|r| (r - offset).abs()).collect();
         let fit_sigma = robust_sigma(&mut spread);
         let (lo, hi) = span(y.iter().copied());
-        (first - offset).abs() > bound(fit_sigma, noise_level(&exp.t, y), hi - lo)
+        let sigma = noise_level(&exp.t, y).max(fit_sigma);
+        (first - offset).abs() > (START_SIGMAS * sigma).max(START_SHARE * (hi - lo))
     }))
 }
 
@@ -297,13 +267,6 @@ pub fn estimate(
         // trajectory the start must meet: a delay's as much as a lag's states
         StartChoice::Refined if found_before => (true, "detected mid-run, estimated"),
         StartChoice::Refined => (false, "rest"),
-        StartChoice::Evident => {
-            if found_before || evidently_mid_run(params, exp, rtol)? {
-                (true, "detected mid-run, estimated")
-            } else {
-                (false, "rest")
-            }
-        }
         StartChoice::Auto => {
             // once found mid-run, a record stays so: the fit under its start no longer holds
             // the parameters that set the rest heights to the first samples

@@ -255,18 +255,18 @@ pub fn identify(
             .collect()
     };
     // the start parameters are a guess: the lag, a fraction of a sample, waits for the fit,
-    // and so does the detection of a start mid-run but where it is evident (the rest heights
-    // move with the parameters: a device 20 % off the guess rests elsewhere), as a fit from
-    // rest on a record that starts far from it bends the parameters to the wrong transient,
-    // to bounds it does not leave (a tip record, whose heave it cannot see)
+    // and so does the detection of a start mid-run (the rest heights move with the
+    // parameters: a device 20 % off the guess rests elsewhere): the first fit is under the
+    // records' conditions as they come (at rest, unless found before)
     let first = conditions::Choice {
         lag: match choice.lag {
             conditions::LagChoice::Estimate => conditions::LagChoice::Stated(0.0),
             asked => asked,
         },
         start: match choice.start {
-            conditions::StartChoice::Auto => conditions::StartChoice::Evident,
-            conditions::StartChoice::Refined => conditions::StartChoice::Kept,
+            conditions::StartChoice::Auto | conditions::StartChoice::Refined => {
+                conditions::StartChoice::Kept
+            }
             stated => stated,
         },
     };
