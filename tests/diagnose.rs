@@ -499,6 +499,28 @@ fn a_sensor_lag_neither_names_an_effect_nor_leaves_unexplained() {
     }
 }
 
+/// A hidden delay seen on a lab's tip chirp, three records of 10 s from 1.3 s into the drive (the
+/// protocols' benchmark case of `Protocol::draw(6 * 7919 + 1)`): `delay`. It was `unexplained`
+/// while the generator ran such a record 1.3 s past the drive it had made, then `amplifier_lag`
+/// while a refit without states kept the start the model without the delay had found.
+#[test]
+fn a_delay_on_a_tip_chirp_recorded_mid_run_is_named_delay() {
+    let protocol = hidden::Protocol::draw(6 * 7919 + 1);
+    assert!(
+        protocol.tip && protocol.drive == hidden::Drive::Chirp,
+        "{protocol:?}"
+    );
+    let case = hidden::hide(Truth::Effect(Effect::Delay), 1)
+        .unwrap()
+        .with_protocol(protocol)
+        .mid_run(1.3);
+    let d = diagnose_lab(case, 1);
+    for f in &d.base.conditions {
+        assert_eq!(f.start_how, "detected mid-run, estimated", "{f:?}");
+    }
+    assert_named(Effect::Delay, &d);
+}
+
 /// A record mid-run of a device with a static load the model lacks (a preload): the model is
 /// off by about as much everywhere as at rest, and that offset must not hide the start (in
 /// the protocols' benchmark the held-out record of this case was simulated from rest).
