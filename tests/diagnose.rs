@@ -521,6 +521,46 @@ fn a_delay_on_a_tip_chirp_recorded_mid_run_is_named_delay() {
     assert_named(Effect::Delay, &d);
 }
 
+/// The protocols' benchmark case `name` at `seed` as `hasel bench --diagnose --protocols --only
+/// NAME` draws it, diagnosed, its start checked as its protocol has it.
+fn diagnose_drawn(name: &str, seed: u64) -> diagnose::Diagnosis {
+    let truth = Truth::from_name(name).unwrap();
+    let case = hidden::hide(truth, seed).unwrap().in_drawn_protocol(seed);
+    let mid_run = case.record_from > 0.0;
+    let label = case.protocol_label();
+    let d = diagnose_lab(case, seed);
+    for f in &d.base.conditions {
+        let how = if mid_run {
+            "detected mid-run, estimated"
+        } else {
+            "rest"
+        };
+        assert_eq!(f.start_how, how, "{name} ({label}): {f:?}");
+    }
+    d
+}
+
+/// A rate-dependent hysteresis seen on the tip, sines at 1 ms from 1.3 s into the drive: the
+/// paper's model is left 0.14 points below the noise floor on average, where no effect can gain
+/// `MIN_GAIN` (0.2 points). The hysteresis closes 73 % of that gap and is named; it was
+/// `unexplained` while the gain asked was 0.2 points whatever the gap.
+#[test]
+fn a_hysteresis_close_to_the_noise_floor_is_named() {
+    let d = diagnose_drawn("hysteresis_rate", 1);
+    assert_named(Effect::Hysteresis, &d);
+}
+
+/// A Prandtl–Ishlinskii hysteresis on a staircase at 1 ms from 1.3 s into the drive: it was
+/// `unexplained` while the screening scored each form at its states settled at the start,
+/// where its refit estimates them. (Named in its `rate_independent` form, the model is left
+/// 3.4 points below the floor on a held-out record: the plays' form is not refitted.)
+#[test]
+fn a_hysteresis_on_a_staircase_recorded_mid_run_is_named() {
+    let d = diagnose_drawn("hysteresis_plays", 1);
+    assert_eq!(d.verdict, Verdict::Effect, "{}", d.answer());
+    assert_eq!(d.effects, vec![Effect::Hysteresis], "{}", d.answer());
+}
+
 /// A record mid-run of a device with a static load the model lacks (a preload): the model is
 /// off by about as much everywhere as at rest, and that offset must not hide the start (in
 /// the protocols' benchmark the held-out record of this case was simulated from rest).

@@ -323,6 +323,40 @@ impl Hidden {
         self
     }
 
+    /// This case recorded as the protocols' benchmark records it (`hasel bench --diagnose
+    /// --protocols`): in a lab protocol drawn from the case's place in [`Truth::all`] and
+    /// `seed`, so that one case drawn alone is drawn as in the full run, and from 1.3 s into
+    /// the drive where the draw's top bit after a multiplicative hash is set (about half).
+    pub fn in_drawn_protocol(self, seed: u64) -> Hidden {
+        let index = Truth::all()
+            .iter()
+            .position(|t| *t == self.truth)
+            .unwrap_or(0);
+        let draw = (index as u64).wrapping_mul(7919).wrapping_add(seed);
+        let case = self.with_protocol(Protocol::draw(draw));
+        if draw.wrapping_mul(0x9E37_79B9_7F4A_7C15) >> 63 == 1 {
+            case.mid_run(1.3)
+        } else {
+            case
+        }
+    }
+
+    /// The protocol a case is recorded in, in a few words: "staircase 1 ms tip mid-run".
+    pub fn protocol_label(&self) -> String {
+        let p = &self.protocol;
+        format!(
+            "{} {} ms{}{}",
+            p.name(),
+            p.dt * 1e3,
+            if p.tip { " tip" } else { "" },
+            if self.record_from > 0.0 {
+                " mid-run"
+            } else {
+                ""
+            }
+        )
+    }
+
     /// This case seen through a sensor with a first-order lag of `lag` seconds.
     pub fn with_sensor_lag(mut self, lag: f64) -> Hidden {
         self.description = format!("{}; sensor lag {:.2} ms", self.description, lag * 1e3);

@@ -11,10 +11,11 @@ use nalgebra::{DMatrix, DVector, Dyn, SVD};
 
 use super::Error;
 use super::analysis::noise_level;
-use crate::identify::{Channel, Experiment, simulate};
+use crate::identify::{self, Channel, Experiment, simulate};
 use crate::model::effects::{Form, Probe, Scaling, nonnegative_least_squares};
 use crate::model::linalg::bounded_svd;
-use crate::model::{Effect, Params};
+use crate::model::{Effect, Params, Platform};
+use crate::simulation::{SimError, Start};
 
 /// Probes of every form of every family not yet in `params`, at values that change the response
 /// by a few percent of its range at the paper's excitation (src/diagnose/diagnose.md,
@@ -44,6 +45,10 @@ fn outputs(
 
 /// How far from its probe value a magnitude's refit may start: a factor either way.
 const MAGNITUDE_RANGE: f64 = 5.0;
+
+/// The step of an effect's state at a start mid-run whose change of the outputs is its
+/// direction, in the state's scale (a full stroke, 100 V): small enough to stay linear.
+const START_STATE_STEP: f64 = 0.1;
 
 /// A probe's outcome: its score and the start values it suggests.
 pub struct Score {
@@ -78,6 +83,16 @@ fn svd(m: DMatrix<f64>) -> Result<SVD<f64, Dyn, Dyn>, Error> {
     bounded_svd(m).ok_or(Error::Projection(
         "the SVD of the sensitivities did not converge",
     ))
+}
+
+/// `m` less its least-squares part in the columns of `a` (whose SVD is `a_svd`): m − A (A⁺ m).
+fn off(
+    a: &DMatrix<f64>,
+    a_svd: &SVD<f64, Dyn, Dyn>,
+    m: DMatrix<f64>,
+) -> Result<DMatrix<f64>, Error> {
+    let part = a * a_svd.solve(&m, 1e-12).map_err(Error::Projection)?;
+    Ok(m - part)
 }
 
 impl<'a> Point<'a> {
@@ -122,8 +137,52 @@ impl<'a> Point<'a> {
         })
     }
 
-    /// Scores `probe` here.
-    pub fn score(&self, probe: &Probe) -> Result<Score, Error> {
+    /// On a record that starts mid-run (src/diagnose/diagnose.md, "Screening"), the directions
+    /// in which the effects' states at the start move the outputs of the model with each of
+    /// `probe`'s columns on: one per state, a step of START_STATE_STEP of its scale from where
+    /// the states settle at the start's angles and first command. None from rest, or where the
+    /// probed model has no effect states.
+    fn start_state_directions(&self, probe: &Probe) -> Result<Option<DMatrix<f64>>, Error> {
+        let Start::Settled { theta, .. } = self.exp.conditions.start else {
+            return Ok(None);
+        };
+        let u0 = self.exp.input.value(self.exp.t[0]);
+        let mut cols = Vec::new();
+        for column in &probe.columns {
+            let mut p = self.params.clone();
+            for &(name, v) in column {
+                p.set(name, v)?;
+            }
+            let model = Platform::new(p.clone())?;
+            let x0 = model
+                .settled_state(theta, &[], u0)
+                .map_err(|e| identify::Error::from(SimError::from(e)))?;
+            let slow = model.effect_states(&x0);
+            let scales = model.effect_states(&model.state_scales());
+            let mut exp = self.exp.clone();
+            let mut outputs_from = |slow: Vec<f64>| {
+                exp.conditions.start = Start::Settled { theta, slow };
+                outputs(&p, &exp, &self.weights, self.rtol)
+            };
+            let y = outputs_from(slow.clone())?;
+            for (k, scale) in scales.iter().enumerate() {
+                let mut moved = slow.clone();
+                moved[k] += START_STATE_STEP * scale;
+                cols.push(outputs_from(moved)? - &y);
+            }
+        }
+        Ok((!cols.is_empty()).then(|| DMatrix::from_columns(&cols)))
+    }
+
+    /// Whether the record starts mid-run, where a probe's states at the start are unknowns of
+    /// its refit.
+    pub fn mid_run(&self) -> bool {
+        matches!(self.exp.conditions.start, Start::Settled { .. })
+    }
+
+    /// Scores `probe` here; with `start_states`, on a record that starts mid-run, beside the
+    /// probe's states at the start.
+    pub fn score(&self, probe: &Probe, start_states: bool) -> Result<Score, Error> {
         let mut cols = Vec::new();
         for column in &probe.columns {
             let mut p = self.params.clone();
@@ -133,10 +192,29 @@ impl<'a> Point<'a> {
             cols.push(outputs(&p, self.exp, &self.weights, self.rtol)? - &self.y0);
         }
         let d = DMatrix::from_columns(&cols);
-        // project out the base sensitivities: D⊥ = D − B (B⁺ D)
-        let d_perp =
-            &d - &self.base_directions * self.base.solve(&d, 1e-12).map_err(Error::Projection)?;
-        let r_perp = &self.residual_perp;
+        // project out the base sensitivities, D⊥ = D − B (B⁺ D), and on a record that starts
+        // mid-run the probe's own states at the start, which its refit estimates (N⊥ = N − B B⁺N;
+        // D and r lose their parts in N⊥ too, which count as explained)
+        let d_perp = off(&self.base_directions, &self.base, d)?;
+        let directions = match start_states {
+            true => self.start_state_directions(probe)?,
+            false => None,
+        };
+        let (d_perp, r_perp, start_states) = match directions {
+            Some(n) => {
+                let n_perp = off(&self.base_directions, &self.base, n)?;
+                let n_svd = svd(n_perp.clone())?;
+                let r = DMatrix::from_column_slice(
+                    self.residual_perp.len(),
+                    1,
+                    self.residual_perp.as_slice(),
+                );
+                let r_off = off(&n_perp, &n_svd, r)?.column(0).into_owned();
+                (off(&n_perp, &n_svd, d_perp)?, r_off, n_perp.ncols())
+            }
+            None => (d_perp, self.residual_perp.clone(), 0),
+        };
+        let r_perp = &r_perp;
         let coef = if probe.scaling == Scaling::Weights {
             nonnegative_least_squares(&d_perp, r_perp)
         } else {
@@ -152,7 +230,7 @@ impl<'a> Point<'a> {
             Scaling::Fixed => coef.map(|_| 1.0),
             _ => coef.clone(),
         };
-        let total = r_perp.norm_squared().max(1e-300);
+        let total = self.residual_perp.norm_squared().max(1e-300);
         let explained = (total - (r_perp - &d_perp * &realized).norm_squared()).max(0.0);
         let mut start = Vec::new();
         if probe.scaling == Scaling::Pairs {
@@ -191,11 +269,13 @@ impl<'a> Point<'a> {
         };
         let explained = if wrong_sign { 0.0 } else { explained };
         let n = self.residual_perp.len() as f64;
-        // a series is charged for the weights it uses, not for the length of its grid
-        let dimensions = match probe.scaling {
-            Scaling::Weights => coef.iter().filter(|&&c| c > 0.0).count(),
-            _ => probe.form.free.len(),
-        };
+        // a series is charged for the weights it uses, not for the length of its grid; the
+        // states at a start mid-run as its refit's BIC charges them (`diagnose::unknowns`)
+        let dimensions = start_states
+            + match probe.scaling {
+                Scaling::Weights => coef.iter().filter(|&&c| c > 0.0).count(),
+                _ => probe.form.free.len(),
+            };
         Ok(Score {
             form: probe.form,
             score: explained / total,

@@ -104,7 +104,7 @@ pub fn run(
     let mut stages: BTreeMap<String, f64> = BTreeMap::new();
     // per protocol (its drive, and whether recorded mid-run): (right, cases)
     let mut by_protocol: BTreeMap<String, (usize, usize)> = BTreeMap::new();
-    for (index, truth) in Truth::all().into_iter().enumerate() {
+    for truth in Truth::all() {
         // `--only coupling` runs every single case of the family, `--only coupling_tilt` one,
         // `--only two` every two-mechanism case
         let pair = matches!(truth, Truth::Two(_));
@@ -122,22 +122,8 @@ pub fn run(
             }
             let mut protocol = "sines".to_string();
             if protocols {
-                // drawn per case, apart from the device's seed, and from the case's place in
-                // the full list, so that `--only` draws what the full run draws
-                let draw = (index as u64).wrapping_mul(7919).wrapping_add(seed);
-                let p = hidden::Protocol::draw(draw);
-                protocol = format!(
-                    "{} {} ms{}",
-                    p.name(),
-                    p.dt * 1e3,
-                    if p.tip { " tip" } else { "" }
-                );
-                case = case.with_protocol(p);
-                // the draw's top bit after a multiplicative hash
-                if draw.wrapping_mul(0x9E37_79B9_7F4A_7C15) >> 63 == 1 {
-                    case = case.mid_run(1.3);
-                    protocol += " mid-run";
-                }
+                case = case.in_drawn_protocol(seed);
+                protocol = case.protocol_label();
             }
             let exps = case.experiments(columns, seed)?;
             let d = diagnose::diagnose(&Params::default(), exps, &Options::default())?;
