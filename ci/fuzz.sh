@@ -2,7 +2,8 @@
 # The fuzz campaigns (tests/fuzz): libFuzzer through cargo-fuzz, nightly Rust, AddressSanitizer
 # with leak detection, one campaign per target for a bounded time:
 #   - the FMI call sequences of every FMU the project builds: fmi2_calls, fmi3_calls (the
-#     platform's FMI 2.0 and 3.0 builds) and inverse_calls (HaselInverse's FMI 2.0 build);
+#     platform's FMI 2.0 and 3.0 builds), inverse_calls (HaselInverse's FMI 2.0 build),
+#     reduced_calls and reduced_fmi3_calls (HaselPlatformReduced's FMI 2.0 and 3.0 builds);
 #   - every reader of a user's file (tests/fuzz/checks.rs): csv_input, csv_experiment,
 #     params_toml, heights_toml, identification_json, and the serialized FMU states fed to the
 #     deserializers directly, fmi2_state and fmi3_state.
@@ -23,7 +24,7 @@ shift || true
 TARGETS=("$@")
 if [ ${#TARGETS[@]} -eq 0 ]; then
     TARGETS=(csv_input csv_experiment params_toml heights_toml identification_json fmi2_state
-        fmi3_state fmi2_calls fmi3_calls inverse_calls)
+        fmi3_state fmi2_calls fmi3_calls inverse_calls reduced_calls reduced_fmi3_calls)
 fi
 mkdir -p out
 if ! rustup toolchain list | grep -q '^nightly'; then
@@ -45,16 +46,26 @@ for target in "${TARGETS[@]}"; do
         fmi2_calls) timeout=20 ;;
         fmi3_calls) features=(--features fmi3); timeout=20 ;;
         inverse_calls) features=(--features inverse); timeout=20 ;;
+        reduced_calls) features=(--features reduced); timeout=20 ;;
+        reduced_fmi3_calls) features=(--features reduced,fmi3); timeout=20 ;;
     esac
     step "fuzz $target for $SECONDS_TO_RUN s (libFuzzer, AddressSanitizer, leak detection)"
     corpus="tests/fuzz/corpus/$target"
     mkdir -p "$corpus"
-    nice -n 19 cargo +nightly fuzz run "${FUZZ[@]}" "${features[@]}" "$target" -- \
+    # cargo's own status kept beside the log: a campaign whose build failed found nothing
+    { status=0
+      nice -n 19 cargo +nightly fuzz run "${FUZZ[@]}" "${features[@]}" "$target" -- \
         -max_total_time="$SECONDS_TO_RUN" -timeout="$timeout" -rss_limit_mb=1024 \
-        -malloc_limit_mb=256 -detect_leaks=1 -print_final_stats=1 2>&1 | tee "out/fuzz-$target.log" |
+        -malloc_limit_mb=256 -detect_leaks=1 -print_final_stats=1 2>&1 || status=$?
+      echo "$status" >"out/fuzz-$target.status"; } | tee "out/fuzz-$target.log" |
         grep -E '^(#[0-9]+.*(DONE|pulse)|stat::|==[0-9]+==ERROR|SUMMARY|artifact_prefix|Test unit written)' || true
+    fuzz_status="$(cat "out/fuzz-$target.status")"
     if grep -qE '==[0-9]+==ERROR|^SUMMARY|Test unit written|deadly signal|panicked at' "out/fuzz-$target.log"; then
         echo "fuzz $target FOUND A PROBLEM: see out/fuzz-$target.log and tests/fuzz/artifacts/$target/"
+        exit 1
+    fi
+    if [ "$fuzz_status" -ne 0 ]; then
+        echo "fuzz $target: cargo fuzz exited with status $fuzz_status (a build that failed?): see out/fuzz-$target.log"
         exit 1
     fi
     echo "fuzz $target: no crash, no broken promise, no memory error, no leak, no hang in $SECONDS_TO_RUN s"

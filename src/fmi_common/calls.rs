@@ -299,7 +299,14 @@ pub unsafe fn deserialize_fmu_state<V: Version, M: FmuCore>(
             }
             match inst.deserialize(data) {
                 Ok(snapshot) => {
-                    *state = Box::into_raw(Box::new(snapshot)).cast();
+                    if (*state).is_null() {
+                        *state = Box::into_raw(Box::new(snapshot)).cast();
+                    } else {
+                        // a non-NULL *FMUstate is a state of this FMU, reused as the get call
+                        // reuses it: replaced by a new one, the importer's only handle of it
+                        // would be lost (a leak the fuzzer found, tests/fuzz/corpus/fmi2_calls)
+                        *(*state).cast::<State<V, M>>() = snapshot;
+                    }
                     Status::Ok
                 }
                 Err(status) => status,

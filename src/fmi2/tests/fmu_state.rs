@@ -76,6 +76,35 @@ fn restored_state_replays_bit_for_bit() {
     );
 }
 
+/// A state deserialized into a non-NULL FMUstate takes its place, as fmi2GetFMUstate reuses
+/// one: the libFuzzer campaign of fmi2_calls found the state there leaked (GetFMUstate, then
+/// DeSerializeFMUstate into the same handle).
+#[test]
+fn a_state_deserialized_into_a_held_one_reuses_it() {
+    let fmu = Fmu::running(0.0);
+    run(&fmu, 0.0, 10);
+    let mut state = fmu.get_state();
+    let bytes = serialize(&fmu, state);
+    let first = run(&fmu, 0.1, 20);
+    let held = state;
+    assert_eq!(
+        unsafe {
+            toy::fmi2DeSerializeFMUstate(fmu.c, bytes.as_ptr().cast(), bytes.len(), &mut state)
+        },
+        Fmi2Status::Ok
+    );
+    assert_eq!(state, held);
+    assert_eq!(
+        unsafe { toy::fmi2SetFMUstate(fmu.c, state) },
+        Fmi2Status::Ok
+    );
+    assert_eq!(run(&fmu, 0.1, 20), first);
+    assert_eq!(
+        unsafe { toy::fmi2FreeFMUstate(fmu.c, &mut state) },
+        Fmi2Status::Ok
+    );
+}
+
 #[test]
 fn serialized_state_replays_bit_for_bit_in_another_instance() {
     let fmu = Fmu::running(0.0);

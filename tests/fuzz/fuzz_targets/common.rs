@@ -4,8 +4,14 @@
 use arbitrary::Arbitrary;
 #[cfg(feature = "inverse")]
 use hasel_fmu::fmu::inverse::variables::rows;
-#[cfg(not(feature = "inverse"))]
+#[cfg(not(any(feature = "inverse", feature = "reduced")))]
 use hasel_fmu::fmu::variables::rows;
+
+/// HaselPlatformReduced's variable table (target reduced_calls, reduced_fmi3_calls).
+#[cfg(feature = "reduced")]
+fn rows() -> &'static [hasel_fmu::fmu::variables::Row] {
+    hasel_fmu::fmu::variables::rows_of(hasel_fmu::model::Reduction::Slow)
+}
 use sha2::{Digest, Sha256};
 
 /// A real number: one of the values that matter to this model, or any bit pattern.

@@ -1,11 +1,11 @@
 //! Random FMI 2.0 call sequences against an FMU's C entry points (HaselPlatform's in target
-//! fmi2_calls, HaselInverse's in inverse_calls), as an importer would make them, right and wrong:
-//! two instances (Co-Simulation or Model Exchange), NULL pointers, unknown value references, wrong
-//! array sizes, NaN and infinite values, calls in the wrong state, FMU states passed between
-//! instances, serialized states truncated or corrupted (also with a recomputed checksum, so the
-//! decoder behind it is reached). The sequence keeps only the caller's side of the contract that no
-//! FMU can check: no pointer is used after it was freed and every array holds as many elements as
-//! the size passed with it.
+//! fmi2_calls, HaselInverse's in inverse_calls, HaselPlatformReduced's in reduced_calls), as an
+//! importer would make them, right and wrong: two instances (Co-Simulation or Model Exchange), NULL
+//! pointers, unknown value references, wrong array sizes, NaN and infinite values, calls in the
+//! wrong state, FMU states passed between instances, serialized states truncated or corrupted (also
+//! with a recomputed checksum, so the decoder behind it is reached). The sequence keeps only the
+//! caller's side of the contract that no FMU can check: no pointer is used after it was freed and
+//! every array holds as many elements as the size passed with it.
 //!
 //! Under libFuzzer with AddressSanitizer (`bash ci/fuzz.sh`) a crash, an out-of-bounds access,
 //! a leak at the end of a sequence or a call that hangs fails the run.
@@ -305,11 +305,14 @@ enum Call {
 const STATE_SLOTS: usize = 4;
 
 // The FMU under test: HaselPlatform, or with the feature `inverse` (target inverse_calls) the
-// stateless HaselInverse, whose functions the library's `inverse-fmu` build exports instead.
+// stateless HaselInverse, with `reduced` (target reduced_calls) HaselPlatformReduced, whose
+// functions the library's `inverse-fmu` and `reduced-fmu` builds export instead.
 #[cfg(feature = "inverse")]
 use hasel_fmu::fmu::inverse::{InverseCore as Core, spec};
-#[cfg(not(feature = "inverse"))]
+#[cfg(not(any(feature = "inverse", feature = "reduced")))]
 use hasel_fmu::fmu::{HaselCore as Core, pack::platform as spec};
+#[cfg(feature = "reduced")]
+use hasel_fmu::fmu::{HaselReducedCore as Core, pack::reduced as spec};
 
 /// What the sequence holds between calls: the instances, their simulated time, FMU states.
 struct World {
