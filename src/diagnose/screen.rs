@@ -196,9 +196,10 @@ impl<'a> Point<'a> {
         // mid-run the probe's own states at the start, which its refit estimates (N⊥ = N − B B⁺N;
         // D and r lose their parts in N⊥ too, which count as explained)
         let d_perp = off(&self.base_directions, &self.base, d)?;
-        let directions = match start_states {
-            true => self.start_state_directions(probe)?,
-            false => None,
+        let directions = if start_states {
+            self.start_state_directions(probe)?
+        } else {
+            None
         };
         let (d_perp, r_perp, start_states) = match directions {
             Some(n) => {

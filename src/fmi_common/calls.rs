@@ -173,6 +173,20 @@ pub unsafe fn not_offered<V: Version, M: FmuCore>(
     unsafe { with_instance::<V, M>(c, func, |inst| inst.not_offered(func, what)) }
 }
 
+/// Puts `snapshot` where `*state` points: a new state where it is NULL, else into the state
+/// there, which is one of this FMU's to be reused (FMI 2.0 section 2.1.8). Replaced by a new
+/// one, the importer's only handle of it would be lost (a leak the fuzzer found after a
+/// deserialization into a held handle). `state` is not NULL.
+unsafe fn store<V: Version, M: FmuCore>(state: *mut *mut c_void, snapshot: State<V, M>) {
+    unsafe {
+        if (*state).is_null() {
+            *state = Box::into_raw(Box::new(snapshot)).cast();
+        } else {
+            *(*state).cast::<State<V, M>>() = snapshot;
+        }
+    }
+}
+
 /// `fmi2GetFMUstate` / `fmi3GetFMUState`: a new state, or the one in `*state` overwritten.
 pub unsafe fn get_fmu_state<V: Version, M: FmuCore>(
     c: *mut c_void,
@@ -184,13 +198,7 @@ pub unsafe fn get_fmu_state<V: Version, M: FmuCore>(
             if state.is_null() {
                 return inst.null_argument(func, V::NAMES.fmu_state);
             }
-            let snapshot = inst.snapshot();
-            if (*state).is_null() {
-                *state = Box::into_raw(Box::new(snapshot)).cast();
-            } else {
-                // a non-NULL *FMUstate is a state of this FMU to be reused
-                *(*state).cast::<State<V, M>>() = snapshot;
-            }
+            store::<V, M>(state, inst.snapshot());
             Status::Ok
         })
     }
@@ -281,7 +289,8 @@ pub unsafe fn serialize_fmu_state<V: Version, M: FmuCore>(
     }
 }
 
-/// `fmi2DeSerializeFMUstate` / `fmi3DeserializeFMUState`: a new state from `size` bytes.
+/// `fmi2DeSerializeFMUstate` / `fmi3DeserializeFMUState`: a state from `size` bytes, new or
+/// into the one in `*state`.
 pub unsafe fn deserialize_fmu_state<V: Version, M: FmuCore>(
     c: *mut c_void,
     func: &str,
@@ -299,14 +308,7 @@ pub unsafe fn deserialize_fmu_state<V: Version, M: FmuCore>(
             }
             match inst.deserialize(data) {
                 Ok(snapshot) => {
-                    if (*state).is_null() {
-                        *state = Box::into_raw(Box::new(snapshot)).cast();
-                    } else {
-                        // a non-NULL *FMUstate is a state of this FMU, reused as the get call
-                        // reuses it: replaced by a new one, the importer's only handle of it
-                        // would be lost (a leak the fuzzer found, tests/fuzz/corpus/fmi2_calls)
-                        *(*state).cast::<State<V, M>>() = snapshot;
-                    }
+                    store::<V, M>(state, snapshot);
                     Status::Ok
                 }
                 Err(status) => status,
