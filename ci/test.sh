@@ -1,6 +1,10 @@
 #!/usr/bin/env bash
-# Every test: self-containment, formatting and lints, the Rust suite, then the packed FMU
-# through fmpy, fmutool, libcosimpy, ecospy, fmi-sim (installed by ci/lib.sh) and ctypes.
+# Every test: self-containment, formatting and lints, the Rust suite, then the packed FMUs
+# through fmpy, fmutool, libcosimpy, ecospy, fmi-sim (installed by ci/lib.sh) and ctypes, and the
+# other platforms' binaries: the FMUs and the hasel command cross-built for Windows and macOS at
+# the cheap profile cross-test (Cargo.toml says why; CROSS_PROFILE=release tests the shipping
+# build), the Windows ones run under Wine, the macOS ones checked, the Linux wheel installed.
+CROSS_PROFILE="${CROSS_PROFILE:-cross-test}"
 source "$(dirname "${BASH_SOURCE[0]}")/lib.sh"
 step "the repository refers to nothing outside it (ci/self_contained.py)"
 python3 ci/self_contained.py
@@ -9,8 +13,11 @@ step "formatting and lints (cargo fmt --check, cargo clippy -D warnings)"
 cargo fmt --check
 cargo clippy -q --release --all-targets -- -D warnings
 build_fmu
+build_cross
+build_wheel
+ensure_wine
 step "Rust tests (tests/fuzz_replay.rs replays the committed fuzz corpora, tests/fuzz/corpus)"
 cargo test --release --all-targets
 ensure_fmi_sim
-step "Python tests of the packed FMU"
-python -m pytest tests/python -q -p no:cacheprovider
+step "Python tests of the packed FMUs, the other platforms' among them"
+HASEL_PLATFORMS=required python -m pytest tests/python -q -p no:cacheprovider
