@@ -4,8 +4,9 @@
 # and arm64, cross-built here (ci/lib.sh, build_platforms; the commands in
 # target/cross/cli/TRIPLE/release/), fmu/HaselPlatform.fmu, fmu/HaselPlatform-fmi3.fmu and
 # fmu/HaselInverse.fmu packed with all of them, and a Python wheel for each platform in
-# target/wheels (maturin: the command and the three FMUs). Then the platform tests, required here
-# (ci/test.sh, which builds Linux only, skips them): the Windows FMUs and hasel.exe under Wine beside
+# target/wheels (maturin: the command and the three FMUs), at the release profile: what ships.
+# Then the platform tests (ci/test.sh runs them too, on builds of the cheap profile cross-test):
+# the Windows FMUs and hasel.exe under Wine beside
 # Linux's, the macOS binaries checked, the Linux wheel installed into a fresh venv. Installs what it
 # needs: Debian's rustc-web with the standard library's sources, mingw-w64, lld-16, llvm-16 and
 # wine; the macOS stubs come from the venv's ziglang package.

@@ -17,9 +17,9 @@ def cross_built(triple, name):
 
 
 def platform_missing(why):
-    """A build or tool of another platform is missing: a failure where `bash ci/platforms.sh` runs
-    the tests (it builds and installs them all, HASEL_PLATFORMS=required), a skip that says so where
-    `bash ci/test.sh` does (it builds Linux only: CI's time, README "Windows and macOS")."""
+    """A build or tool of another platform is missing: a failure where `bash ci/test.sh` or `bash
+    ci/platforms.sh` runs the tests (they build and install them all, HASEL_PLATFORMS=required), a
+    skip that says so where pytest runs alone on a Linux-only build."""
     if os.environ.get("HASEL_PLATFORMS") == "required":
         pytest.fail(why)
     pytest.skip(why)

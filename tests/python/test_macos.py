@@ -7,8 +7,9 @@ and the arm64 one carries a code signature (macOS refuses unsigned arm64 code) w
 match the file, checked here by reading the signature's CodeDirectory. The hasel command for macOS,
 one executable each architecture, is checked the same way but for the exports.
 
-The macOS builds come from `bash ci/platforms.sh`, which runs these tests; `bash ci/test.sh` builds
-Linux only (CI's time: README, "Windows and macOS"), and there they skip, saying so.
+The macOS builds come from `bash ci/test.sh` (profile cross-test) and `bash ci/platforms.sh` (release),
+which both run these tests with HASEL_PLATFORMS=required; run alone on a Linux-only build, they skip,
+saying so.
 """
 import hashlib
 import pathlib

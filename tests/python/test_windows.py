@@ -21,8 +21,9 @@ difference stays near the rounding level unless it flips a step-size decision, w
 keep the runs within the solver's error control; 1e-12 m is far below anything physical and far
 above rounding.
 
-The Windows builds come from `bash ci/platforms.sh`, which runs these tests; `bash ci/test.sh` builds
-Linux only (CI's time: README, "Windows and macOS"), and there they skip, saying so.
+The Windows builds come from `bash ci/test.sh` (profile cross-test) and `bash ci/platforms.sh` (release),
+which both run these tests with HASEL_PLATFORMS=required; run alone on a Linux-only build, they skip,
+saying so.
 
 The hasel command for Windows (hasel.exe, cross-built by ci/platforms.sh) runs under
 Wine too: `simulate`, its CSV compared with the Linux command's, and `identify`, its estimates
