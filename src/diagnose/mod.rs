@@ -212,12 +212,12 @@ pub struct Provisional {
 #[derive(Clone, Debug)]
 pub struct Revisit {
     pub replaced: Effect,
-    /// The runner-up, in the form it was refitted in.
-    pub by: &'static Form,
-    /// BIC with the runner-up in its place minus BIC of the model, on the estimation data; or
-    /// why the refit failed.
+    /// The runner-up, in the form it was refitted in; `None`: the model without the effect.
+    pub by: Option<&'static Form>,
+    /// BIC with the runner-up in its place (or without the effect) minus BIC of the model, on
+    /// the estimation data; or why the refit failed.
     pub delta_bic: Result<f64, String>,
-    /// Whether the runner-up took the effect's place.
+    /// Whether the runner-up took the effect's place (or the effect was dropped).
     pub swapped: bool,
 }
 
@@ -1015,13 +1015,17 @@ fn converged(
 
 /// Once a later effect has been added, each earlier effect (the model's `forms`, `current`) is
 /// tried against the best other candidate that passed in its round, refitted with the later
-/// effects beside it; the runner-up takes the effect's place when it lowers the BIC on the
+/// effects beside it, and, where that one does not take its place, against nothing: the model
+/// without it, the later effects may explain all it stood in for (a charge drift chosen for the
+/// first share of a slewing amplifier). The replacement is taken when it lowers the BIC on the
 /// estimation data by [`BIC_MARGIN`] and keeps every held-out fit within [`FIT_TOLERANCE`] of its
-/// noise floor (src/diagnose/diagnose.md, "Two mechanisms at once"). The earlier choice was made
-/// while the later effect's share of the data was still unexplained.
+/// noise floor; the model without the effect, when it lowers the BIC so and leaves no held-out
+/// fit farther from its floor than the model with it (src/diagnose/diagnose.md, "Two mechanisms
+/// at once"). The earlier choice was made while the later effect's share of the data was still
+/// unexplained.
 fn revisit(
     rounds: &[Round],
-    forms: &mut [&'static Form],
+    forms: &mut Vec<&'static Form>,
     current: &mut Identification,
     estimation: &[Experiment],
     held: &[Experiment],
@@ -1037,54 +1041,84 @@ fn revisit(
             .candidates
             .iter()
             .filter(|c| forms.iter().all(|f| f.effect != c.effect))
-            .filter_map(|c| c.refit.as_ref().filter(|r| r.passes()).map(|r| (c, r)))
+            .filter_map(|c| c.refit.as_ref().filter(|r| r.passes()).map(|r| (c.form, r)))
             .min_by(|a, b| a.1.delta_bic.total_cmp(&b.1.delta_bic));
-        let Some((c, r)) = runner_up else {
-            continue;
-        };
-        // the runner-up's refit, with the other effects' parameters as the model has them
         let replaced = forms[pos].effect;
-        let mut start = r.id.params.clone();
-        for (_, f) in forms.iter().enumerate().filter(|(k, _)| *k != pos) {
-            for name in f.free.iter().chain(f.settings.iter().map(|(n, _)| n)) {
-                start.set(name, current.params.get(name)?)?;
+        // the runner-up's refit, with the other effects' parameters as the model has them; the
+        // model without the effect, its parameters neutral (off)
+        let mut tries = Vec::new();
+        if let Some((form, r)) = runner_up {
+            tries.push((Some(form), r.id.params.clone()));
+        }
+        let mut without = current.params.clone();
+        let neutral = Params::default();
+        for name in form_parameters(forms[pos]) {
+            without.set(name, neutral.get(name)?)?;
+        }
+        tries.push((None, without));
+        for (by, mut start) in tries {
+            for (_, f) in forms.iter().enumerate().filter(|(k, _)| *k != pos) {
+                for name in form_parameters(f) {
+                    start.set(name, current.params.get(name)?)?;
+                }
+            }
+            let mut with: Vec<&'static Form> = forms.to_vec();
+            match by {
+                Some(form) => with[pos] = form,
+                None => {
+                    with.remove(pos);
+                }
+            }
+            let mut o = id_opts(&with);
+            o.lm.deadline = Some(Instant::now() + opts.refit_budget);
+            let refit = identify::identify(&start, estimation, held, &o);
+            let (delta_bic, swapped) = match refit {
+                Ok(id) => {
+                    let delta = bic(
+                        &estimation[0],
+                        &id.simulated[0],
+                        unknowns(&id, degrees(&o.free, &id.params)),
+                    ) - bic(
+                        &estimation[0],
+                        &current.simulated[0],
+                        unknowns(current, degrees(&free_list(forms), &current.params)),
+                    );
+                    let gap = |id: &Identification| {
+                        worst_gap_to_floor(held_or_estimation(estimation, held), id)
+                    };
+                    // a replacement must reach the floor; fewer effects need only do no worse
+                    // on held-out data than more, the BIC having found the one dropped not needed
+                    let held_out_ok =
+                        gap(&id) <= FIT_TOLERANCE || (by.is_none() && gap(&id) <= gap(current));
+                    let swapped = delta <= -BIC_MARGIN && held_out_ok;
+                    if swapped {
+                        *forms = with;
+                        *current = converged(id, estimation, held, &o, opts.refit_budget);
+                    }
+                    (Ok(delta), swapped)
+                }
+                Err(e) => (Err(e.to_string()), false),
+            };
+            out.push(Revisit {
+                replaced,
+                by,
+                delta_bic,
+                swapped,
+            });
+            if swapped {
+                break;
             }
         }
-        let mut with: Vec<&'static Form> = forms.to_vec();
-        with[pos] = c.form;
-        let mut o = id_opts(&with);
-        o.lm.deadline = Some(Instant::now() + opts.refit_budget);
-        let refit = identify::identify(&start, estimation, held, &o);
-        let (delta_bic, swapped) = match refit {
-            Ok(id) => {
-                let delta = bic(
-                    &estimation[0],
-                    &id.simulated[0],
-                    unknowns(&id, degrees(&o.free, &id.params)),
-                ) - bic(
-                    &estimation[0],
-                    &current.simulated[0],
-                    unknowns(current, degrees(&free_list(forms), &current.params)),
-                );
-                let at_floor =
-                    worst_gap_to_floor(held_or_estimation(estimation, held), &id) <= FIT_TOLERANCE;
-                let swapped = delta <= -BIC_MARGIN && at_floor;
-                if swapped {
-                    forms[pos] = c.form;
-                    *current = converged(id, estimation, held, &o, opts.refit_budget);
-                }
-                (Ok(delta), swapped)
-            }
-            Err(e) => (Err(e.to_string()), false),
-        };
-        out.push(Revisit {
-            replaced,
-            by: c.form,
-            delta_bic,
-            swapped,
-        });
     }
     Ok(out)
+}
+
+/// The parameters a form frees and sets.
+fn form_parameters(form: &Form) -> impl Iterator<Item = &'static str> {
+    form.free
+        .iter()
+        .copied()
+        .chain(form.settings.iter().map(|(n, _)| *n))
 }
 
 /// One refitted candidate as the decision sees it.

@@ -184,8 +184,8 @@ pub fn to_json(d: &Diagnosis) -> Value {
             "revisits": r.revisits.iter().map(|v| {
                 let mut j = json!({
                     "replaced": v.replaced.name(),
-                    "by": v.by.effect.name(),
-                    "by_form": v.by.name,
+                    "by": v.by.map(|f| f.effect.name()),
+                    "by_form": v.by.map(|f| f.name),
                     "swapped": v.swapped,
                 });
                 match &v.delta_bic {
@@ -288,7 +288,7 @@ fn disagreement_table(md: &mut String, ds: &[Disagreement]) {
 }
 
 /// The candidate's form, and the ΔBIC of every form refitted when there were several.
-fn forms_cell(c: &Candidate) -> String {
+pub fn forms_cell(c: &Candidate) -> String {
     if c.forms_tried.len() < 2 {
         return format!("`{}`", c.form.name);
     }
@@ -592,13 +592,20 @@ pub fn write(dir: &Path, d: &Diagnosis) -> Result<(), FileError> {
             );
         }
         for v in &r.revisits {
+            let against = match v.by {
+                Some(f) => format!(
+                    "`{}` in the form `{}`, its round's runner-up,",
+                    f.effect.name(),
+                    f.name
+                ),
+                None => "the model without it".into(),
+            };
             let _ = writeln!(
                 md,
-                "Revisited: `{}` against `{}` in the form `{}`, its round's runner-up, refitted beside the later effects: {}.\n",
+                "Revisited: `{}` against {against} refitted beside the later effects: {}.\n",
                 v.replaced.name(),
-                v.by.effect.name(),
-                v.by.name,
                 match (&v.delta_bic, v.swapped) {
+                    (Ok(b), true) if v.by.is_none() => format!("ΔBIC {b:.1}, dropped"),
                     (Ok(b), true) => format!("ΔBIC {b:.1}, the runner-up takes its place"),
                     (Ok(b), false) => format!("ΔBIC {b:.1}, kept"),
                     (Err(e), _) => format!("the refit failed ({e}), kept"),

@@ -185,7 +185,7 @@ pub fn run(
                         say!(
                             "      {:<13} {:<17} score {:.3} dBIC {:9.1} gain {:6.2} gap {:5.2} {}",
                             c.effect.name(),
-                            c.form.name,
+                            diagnose::report::forms_cell(c),
                             c.score,
                             f.delta_bic,
                             f.fit_gain,
@@ -211,10 +211,13 @@ pub fn run(
                 }
                 for v in &r.revisits {
                     say!(
-                        "      revisit {} against {} [{}]: {}",
+                        "      revisit {} against {}: {}",
                         v.replaced.name(),
-                        v.by.effect.name(),
-                        v.by.name,
+                        v.by.map_or("nothing".into(), |f| format!(
+                            "{} [{}]",
+                            f.effect.name(),
+                            f.name
+                        )),
                         match (&v.delta_bic, v.swapped) {
                             (Ok(b), s) =>
                                 format!("dBIC {b:.1}, {}", if s { "swapped" } else { "kept" }),
