@@ -138,9 +138,12 @@ CROSS_DIR="$ROOT/target/cross"
 # copying, cargo compiled them all again: the FMI 3.0 libraries took 113 s, in the shared
 # folder 11 s)
 CROSS_BUILD_DIR="$CROSS_DIR/build"
-# what is built, each copied into a folder of its own under CROSS_DIR: the three FMU libraries
-# (without the feature tools, which only the hasel command needs) and the hasel command
+# what is built, each copied into a folder of its own under CROSS_DIR: the five FMU libraries
+# (the platform's for FMI 2.0 and 3.0, the slow model's for both, the inverse's; without the
+# feature tools, which only the hasel command needs) and the hasel command
 declare -A CROSS_ARGS=([fmi2]="--lib --no-default-features" [fmi3]="--lib --no-default-features --features fmi3"
+    [reduced]="--lib --no-default-features --features reduced-fmu"
+    [reduced-fmi3]="--lib --no-default-features --features reduced-fmu,fmi3"
     [inverse]="--lib --no-default-features --features inverse-fmu" [cli]="--bin hasel")
 # the cargo profile of the cross builds: release for what ships; CROSS_PROFILE=cross-test for a
 # cheaper build to test (Cargo.toml says why)
@@ -208,9 +211,10 @@ cross_env() {
     done
 }
 
-# cross_cargo SET TRIPLE...: builds SET (the FMU library fmi2, fmi3 or inverse, or cli, the hasel
-# command) for every TRIPLE in one cargo run (the targets' builds overlap on the two cores) in
-# CROSS_BUILD_DIR, with the profile CROSS_PROFILE, and copies what it made to cross_file's place.
+# cross_cargo SET TRIPLE...: builds SET (the FMU library fmi2, fmi3, reduced, reduced-fmi3 or
+# inverse, or cli, the hasel command) for every TRIPLE in one cargo run (the targets' builds
+# overlap on the two cores) in CROSS_BUILD_DIR, with the profile CROSS_PROFILE, and copies what it
+# made to cross_file's place.
 cross_cargo() {
     local set="$1" triple env file
     shift
@@ -286,15 +290,20 @@ cross_build() {
     timed cross_cargo "$set" "$@"
 }
 
-# Packs the three FMUs with the Linux libraries of build_fmu and every other platform's that
+# Packs the five FMUs with the Linux libraries of build_fmu and every other platform's that
 # cross_build made; `hasel fmu` says which went where.
 pack_platforms() {
-    local v2 v3 inverse
+    local v2 v3 reduced reduced3 inverse
     mapfile -t v2 < <(cross_libs fmi2 --lib)
     mapfile -t v3 < <(cross_libs fmi3 --lib-fmi3)
+    mapfile -t reduced < <(cross_libs reduced --lib)
+    mapfile -t reduced3 < <(cross_libs reduced-fmi3 --lib-fmi3)
     mapfile -t inverse < <(cross_libs inverse --lib)
     step "pack fmu/HaselPlatform.fmu and fmu/HaselPlatform-fmi3.fmu with every platform's library built"
     ./target/release/hasel fmu --lib "$FMU_LIB" "${v2[@]}" --lib-fmi3 "$FMU3_LIB" "${v3[@]}"
+    step "pack fmu/HaselPlatformReduced.fmu and fmu/HaselPlatformReduced-fmi3.fmu with every platform's library built"
+    ./target/release/hasel fmu --model reduced --lib "$REDUCED_LIB" "${reduced[@]}" \
+        --lib-fmi3 "$REDUCED3_LIB" "${reduced3[@]}"
     step "pack fmu/HaselInverse.fmu with every platform's library built"
     ./target/release/hasel fmu --model inverse --lib "$INVERSE_LIB" "${inverse[@]}"
 }
@@ -313,16 +322,17 @@ build_wheel() {
         args=(--release)
     fi
     mkdir -p python/hasel_fmu/fmu
-    cp fmu/HaselPlatform.fmu fmu/HaselPlatform-fmi3.fmu fmu/HaselInverse.fmu python/hasel_fmu/fmu/
+    cp fmu/HaselPlatform.fmu fmu/HaselPlatform-fmi3.fmu fmu/HaselPlatformReduced.fmu \
+        fmu/HaselPlatformReduced-fmi3.fmu fmu/HaselInverse.fmu python/hasel_fmu/fmu/
     step "the Python wheel for ${1:-Linux} (maturin)"
     (cd python && env "${env[@]}" nice -n 10 maturin build -q "${args[@]}" --out "$WHEELS")
 }
 
-# The three FMU libraries and the hasel command for Windows and both macOS architectures
+# The five FMU libraries and the hasel command for Windows and both macOS architectures
 # (target/cross/SET/TRIPLE/CROSS_PROFILE/), and the FMUs packed with them.
 build_cross() {
     local set
-    for set in fmi2 fmi3 inverse cli; do
+    for set in fmi2 fmi3 reduced reduced-fmi3 inverse cli; do
         cross_build "$set" "${CROSS_TARGETS[@]}"
     done
     pack_platforms

@@ -1,10 +1,12 @@
 #!/usr/bin/env bash
 # The FMUs and the hasel command for every platform, built and tested: the Linux build of
-# ci/main.sh, then the three FMU libraries and the hasel command for Windows x86_64 and macOS x86_64
-# and arm64, cross-built here (ci/lib.sh, build_platforms; the commands in
-# target/cross/cli/TRIPLE/release/), fmu/HaselPlatform.fmu, fmu/HaselPlatform-fmi3.fmu and
-# fmu/HaselInverse.fmu packed with all of them, and a Python wheel for each platform in
-# target/wheels (maturin: the command and the three FMUs), at the release profile: what ships.
+# ci/main.sh, then the five FMU libraries (the platform's FMI 2.0 and 3.0, the slow model's FMI 2.0
+# and 3.0, the inverse's) and the hasel command for Windows x86_64 and macOS x86_64 and arm64,
+# cross-built here (ci/lib.sh, build_platforms; the commands in target/cross/cli/TRIPLE/release/),
+# fmu/HaselPlatform.fmu, fmu/HaselPlatform-fmi3.fmu, fmu/HaselPlatformReduced.fmu,
+# fmu/HaselPlatformReduced-fmi3.fmu and fmu/HaselInverse.fmu packed with all of them, and a Python
+# wheel for each platform in target/wheels (maturin: the command and the five FMUs), at the release
+# profile: what ships.
 # Then the platform tests (ci/test.sh runs them too, on builds of the cheap profile cross-test):
 # the Windows FMUs and hasel.exe under Wine beside
 # Linux's, the macOS binaries checked, the Linux wheel installed into a fresh venv. Installs what it

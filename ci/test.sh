@@ -1,9 +1,10 @@
 #!/usr/bin/env bash
 # Every test: self-containment, formatting and lints, the Rust suite, then the packed FMUs
 # through fmpy, fmutool, libcosimpy, ecospy, fmi-sim (installed by ci/lib.sh) and ctypes, and the
-# other platforms' binaries: the FMUs and the hasel command cross-built for Windows and macOS at
-# the cheap profile cross-test (Cargo.toml says why; CROSS_PROFILE=release tests the shipping
-# build), the Windows ones run under Wine, the macOS ones checked, the Linux wheel installed.
+# other platforms' binaries: the FMUs' libraries (the platform's and the slow model's, FMI 2.0 and
+# 3.0, and the inverse's) and the hasel command cross-built for Windows and macOS at the cheap
+# profile cross-test (Cargo.toml says why; CROSS_PROFILE=release tests the shipping build), the
+# Windows ones run under Wine, the macOS ones checked, the Linux wheel installed.
 CROSS_PROFILE="${CROSS_PROFILE:-cross-test}"
 source "$(dirname "${BASH_SOURCE[0]}")/lib.sh"
 step "the repository refers to nothing outside it (ci/self_contained.py)"
