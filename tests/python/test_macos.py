@@ -1,11 +1,13 @@
 """The FMUs' macOS binaries, checked as far as a Linux machine can: they are built here but cannot
-be run. With LLVM's tools (llvm-16): FMI 2.0's darwin64 library is universal, an x86_64 and an arm64
-slice; FMI 3.0's x86_64-darwin and aarch64-darwin are one architecture each. Every slice is a
-dylib that exports exactly the FMI functions of its version, depends on /usr/lib/libSystem.B.dylib
-alone, names its minimum macOS (10.12 on x86_64, 11.0 on arm64: Rust's minimums for the targets),
-and the arm64 one carries a code signature (macOS refuses unsigned arm64 code) whose page hashes
-match the file, checked here by reading the signature's CodeDirectory. The hasel command for macOS,
-one executable each architecture, is checked the same way but for the exports.
+be run. The FMUs are HaselPlatform (FMI 2.0 and 3.0), the slow model's HaselPlatformReduced (FMI 2.0
+and 3.0) and HaselInverse (FMI 2.0). With LLVM's tools (llvm-16): FMI 2.0's darwin64 library is
+universal, an x86_64 and an arm64 slice; FMI 3.0's x86_64-darwin and aarch64-darwin are one
+architecture each. Every slice is a dylib that exports exactly the FMI functions of its version,
+depends on /usr/lib/libSystem.B.dylib alone, names its minimum macOS (10.12 on x86_64, 11.0 on
+arm64: Rust's minimums for the targets), and the arm64 one carries a code signature (macOS refuses
+unsigned arm64 code) whose page hashes match the file, checked here by reading the signature's
+CodeDirectory. The hasel command for macOS, one executable each architecture, is checked the same
+way but for the exports.
 
 The macOS builds come from `bash ci/test.sh` (profile cross-test) and `bash ci/platforms.sh` (release),
 which both run these tests with HASEL_PLATFORMS=required; run alone on a Linux-only build, they skip,
@@ -48,6 +50,9 @@ LIBRARIES = {
     "HaselInverse 2.0 darwin64": ("inverse_fmu_path", "darwin64", ["x86_64", "arm64"], False),
     "HaselPlatform 3.0 x86_64-darwin": ("fmu3_path", "x86_64-darwin", ["x86_64"], True),
     "HaselPlatform 3.0 aarch64-darwin": ("fmu3_path", "aarch64-darwin", ["arm64"], True),
+    "HaselPlatformReduced 2.0 darwin64": ("reduced_fmu_path", "darwin64", ["x86_64", "arm64"], False),
+    "HaselPlatformReduced 3.0 x86_64-darwin": ("reduced_fmu3_path", "x86_64-darwin", ["x86_64"], True),
+    "HaselPlatformReduced 3.0 aarch64-darwin": ("reduced_fmu3_path", "aarch64-darwin", ["arm64"], True),
 }
 
 

@@ -1,6 +1,7 @@
 """The Linux wheel (python/pyproject.toml, built by maturin in ci/platforms.sh) installed into a fresh venv,
 without the repository on any path: `pip install` puts `hasel` on the venv's PATH, and
-hasel_fmu.fmu_path() names the installed FMUs, which fmpy simulates."""
+hasel_fmu.fmu_path() names the installed FMUs (HaselPlatform and HaselPlatformReduced, FMI 2.0 and
+3.0, and HaselInverse), which fmpy simulates."""
 import os
 import pathlib
 import subprocess
@@ -32,7 +33,8 @@ def test_pip_install_puts_hasel_on_path(venv, tmp_path):
     assert len(out.read_text().splitlines()) == 102
 
 
-@pytest.mark.parametrize("model", ["HaselPlatform", "HaselPlatform-fmi3", "HaselInverse"])
+@pytest.mark.parametrize("model", ["HaselPlatform", "HaselPlatform-fmi3", "HaselPlatformReduced",
+                                   "HaselPlatformReduced-fmi3", "HaselInverse"])
 def test_fmu_path_names_the_installed_fmus_and_fmpy_runs_them(venv, tmp_path, model):
     from fmpy import simulate_fmu
 

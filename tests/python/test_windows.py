@@ -1,25 +1,28 @@
 """The FMUs' Windows binaries, inspected and run.
 
-Inspected: each DLL (win64 in the FMI 2.0 FMUs, x86_64-windows in the FMI 3.0 one) exports exactly
+Inspected: each DLL (win64 in the FMI 2.0 FMUs HaselPlatform, HaselPlatformReduced and HaselInverse,
+x86_64-windows in the FMI 3.0 ones HaselPlatform-fmi3 and HaselPlatformReduced-fmi3) exports exactly
 the FMI functions of its version and imports only Windows' own DLLs.
 
 Run: tests/windows/cosim.c, a co-simulation importer in C, is built twice, with mingw-w64 for
-Windows and with gcc for Linux. The Windows program loads the FMU's DLL under Wine (Debian's
-wine64; a test-only stand-in for bcryptprimitives.dll, which Wine 8.0 lacks, sits beside it), the
-Linux program the FMU's .so. Each calls the library wrongly first (NULLs, wrong states, a wrong
-GUID or token, bytes that are no FMU state: errors, logged, no crash), then runs 2 s of the paper's
-excitation at 1 ms steps with a replay from the FMU state and from its serialized bytes (bit for
-bit), and prints the outputs. The resources are read from a folder whose name needs
-percent-encoding in a URI ("my fmü"), with a changed parameter: the GUID or token given is that
-of the changed parameter, so an instance is made only if the library found and read the file.
+Windows and with gcc for Linux, and runs HaselPlatform and the slow model's HaselPlatformReduced
+(the same inputs and outputs), each in FMI 2.0 and 3.0. The Windows program loads the FMU's DLL
+under Wine (Debian's wine64; a test-only stand-in for bcryptprimitives.dll, which Wine 8.0 lacks,
+sits beside it), the Linux program the FMU's .so. Each calls the library wrongly first (NULLs, wrong
+states, a wrong GUID or token, bytes that are no FMU state: errors, logged, no crash), then runs 2 s
+of the paper's excitation at 1 ms steps with a replay from the FMU state and from its serialized
+bytes (bit for bit), and prints the outputs. The resources are read from a folder whose name needs
+percent-encoding in a URI ("my fmü"), with a changed parameter: the GUID or token given is that of
+the changed parameter, so an instance is made only if the library found and read the file.
 
-The two platforms' outputs agree within 1e-12 m (the heights move by ~1e-4 m; measured: 6.8e-20 m,
-a last-bit difference). Not bit for bit by requirement: under Wine the DLL's sin, exp and pow are
-msvcrt's (Wine's own implementation), and the test program's excitation uses them too; glibc's may
-round the last bit differently. The solver is deterministic and smooth in its inputs, so such a
-difference stays near the rounding level unless it flips a step-size decision, which would still
-keep the runs within the solver's error control; 1e-12 m is far below anything physical and far
-above rounding.
+The two platforms' outputs agree within 1e-12 m (the heights move by ~1e-4 m; measured, FMI 2.0 and
+3.0 alike: 6.8e-20 m for HaselPlatform, 2.0e-20 m for HaselPlatformReduced, last-bit differences
+both, so the slow model is held to the same bound). Not bit for bit by requirement: under Wine the
+DLL's sin, exp and pow are msvcrt's (Wine's own implementation), and the test program's excitation
+uses them too; glibc's may round the last bit differently. The solver is deterministic and smooth in
+its inputs, so such a difference stays near the rounding level unless it flips a step-size decision,
+which would still keep the runs within the solver's error control; 1e-12 m is far below anything
+physical and far above rounding.
 
 The Windows builds come from `bash ci/test.sh` (profile cross-test) and `bash ci/platforms.sh` (release),
 which both run these tests with HASEL_PLATFORMS=required; run alone on a Linux-only build, they skip,
@@ -68,13 +71,19 @@ def dll_of(fmu, folder, tmp_path_factory):
         return pathlib.Path(z.extract(member, tmp_path_factory.mktemp("dll")))
 
 
-@pytest.fixture(scope="module", params=["HaselPlatform 2.0", "HaselPlatform 3.0", "HaselInverse 2.0"])
+# each FMU with a Windows DLL: (its fixture in conftest.py, the folder of its DLL)
+DLLS = {
+    "HaselPlatform 2.0": ("fmu_path", "win64"),
+    "HaselPlatform 3.0": ("fmu3_path", "x86_64-windows"),
+    "HaselPlatformReduced 2.0": ("reduced_fmu_path", "win64"),
+    "HaselPlatformReduced 3.0": ("reduced_fmu3_path", "x86_64-windows"),
+    "HaselInverse 2.0": ("inverse_fmu_path", "win64"),
+}
+
+
+@pytest.fixture(scope="module", params=list(DLLS))
 def dll(request, tmp_path_factory):
-    fixture, folder = {
-        "HaselPlatform 2.0": ("fmu_path", "win64"),
-        "HaselPlatform 3.0": ("fmu3_path", "x86_64-windows"),
-        "HaselInverse 2.0": ("inverse_fmu_path", "win64"),
-    }[request.param]
+    fixture, folder = DLLS[request.param]
     return dll_of(request.getfixturevalue(fixture), folder, tmp_path_factory), folder
 
 
@@ -136,10 +145,19 @@ def outputs(stdout):
     return rows
 
 
-@pytest.mark.parametrize("version", ["2", "3"])
-def test_the_windows_dll_runs_under_wine_as_the_linux_library_runs(version, programs, wine_env, fmu_path,
-                                                                  fmu3_path, hasel_path, tmp_path):
-    fmu = fmu_path if version == "2" else fmu3_path
+# the FMUs cosim.c runs, by `hasel describe --model` and FMI version: their fixtures in conftest.py
+RUNS = {
+    ("platform", "2"): "fmu_path",
+    ("platform", "3"): "fmu3_path",
+    ("reduced", "2"): "reduced_fmu_path",
+    ("reduced", "3"): "reduced_fmu3_path",
+}
+
+
+@pytest.mark.parametrize("model,version", list(RUNS), ids=[f"{m}-{v}" for m, v in RUNS])
+def test_the_windows_dll_runs_under_wine_as_the_linux_library_runs(model, version, request, programs, wine_env,
+                                                                  hasel_path, tmp_path):
+    fmu = request.getfixturevalue(RUNS[model, version])
     folder = tmp_path / "my fmü"
     with zipfile.ZipFile(fmu) as z:
         z.extractall(folder)
@@ -151,7 +169,7 @@ def test_the_windows_dll_runs_under_wine_as_the_linux_library_runs(version, prog
     text, n = re.subn(r"(?m)^Kb_1 = \S+", "Kb_1 = 0.31", params.read_text())
     assert n == 1
     params.write_text(text)
-    description = subprocess.run([hasel_path, "describe", "--fmi", version, "--params", params],
+    description = subprocess.run([hasel_path, "describe", "--model", model, "--fmi", version, "--params", params],
                                  capture_output=True, text=True, check=True).stdout
     key = "guid" if version == "2" else "instantiationToken"
     token = re.search(rf'{key}="([^"]+)"', description)[1]
@@ -170,7 +188,7 @@ def test_the_windows_dll_runs_under_wine_as_the_linux_library_runs(version, prog
     assert [r[0] for r in windows] == [r[0] for r in linux]
     worst = max(abs(a - b) for rl, rw in zip(linux, windows) for a, b in zip(rl[1:], rw[1:]))
     peak = max(abs(v) for r in linux for v in r[1:4])
-    print(f"FMI {version}.0: Windows under Wine vs Linux, largest output difference {worst:.3g} m "
+    print(f"{model}, FMI {version}.0: Windows under Wine vs Linux, largest output difference {worst:.3g} m "
           f"(heights up to {peak:.3g} m)")
     assert worst <= TOLERANCE
 

@@ -1,4 +1,5 @@
-/* A co-simulation importer of HaselPlatform in plain C, for FMI 2.0 and FMI 3.0, built twice
+/* A co-simulation importer of HaselPlatform and HaselPlatformReduced (the same inputs and
+ * outputs, the same value references) in plain C, for FMI 2.0 and FMI 3.0, built twice
  * from this one file: with mingw-w64 for Windows (the FMU's DLL, run under Wine by
  * tests/python/test_windows.py) and with gcc for Linux (the FMU's .so), so that the two runs can
  * be compared line by line.
