@@ -207,14 +207,21 @@ fn preload_is_named() {
 
 #[test]
 fn an_effect_is_named_from_a_single_record() {
-    // nothing held out: the record is its own held-out one (it was judged on no fit at all)
+    // a single record: its first two thirds estimate, and the model is judged on predicting
+    // the last third from where the fit left it
     let mut one = hidden::Protocol::PAPER;
     one.records = 1;
     let case = hidden::hide(Truth::Effect(Effect::Coupling), 1)
         .unwrap()
         .with_protocol(one);
     let d = diagnose_hidden(case, Columns::Heights, 1);
-    assert_eq!(d.experiments.len(), 1);
+    let [estimation, held] = &d.experiments[..] else {
+        panic!("{} records", d.experiments.len());
+    };
+    assert_eq!(held.lead_in, estimation.t.len());
+    let span = |t: &[f64]| t[t.len() - 1] - t[0];
+    let dt = held.t[1] - held.t[0];
+    assert!((span(&held.t[held.lead_in..]) - span(&held.t) / 3.0).abs() <= dt);
     assert_named(Effect::Coupling, &d);
 }
 

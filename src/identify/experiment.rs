@@ -61,6 +61,10 @@ pub struct Experiment {
     /// Where the device stood at the first sample and the sensor's lag: the rest state and
     /// none as read, estimated by `identify::conditions`.
     pub conditions: Conditions,
+    /// Samples before this one are a lead-in: the record's conditions are estimated on them
+    /// alone, and they are not judged (src/diagnose/diagnose.md, "A single record"). 0: every
+    /// sample is judged, and the conditions are estimated on all of them.
+    pub lead_in: usize,
 }
 
 /// How a record was taken beyond its samples (src/identify/identify.md, "Records that start
@@ -174,6 +178,7 @@ impl Experiment {
             input,
             channels,
             conditions: Conditions::default(),
+            lead_in: 0,
         })
     }
 
@@ -208,7 +213,14 @@ impl Experiment {
             input,
             channels: self.channels.iter().map(|(c, v)| (*c, kept(v))).collect(),
             conditions: self.conditions.clone(),
+            lead_in: keep[..self.lead_in].iter().filter(|k| **k).count(),
         })
+    }
+
+    /// The samples in `range` as a record of their own.
+    pub fn samples_in(&self, range: std::ops::Range<usize>) -> Result<Experiment, FileError> {
+        let keep: Vec<bool> = (0..self.t.len()).map(|j| range.contains(&j)).collect();
+        self.rows(&keep)
     }
 
     /// The instants the samples show, t_k − lag: where the model is sampled.

@@ -194,20 +194,24 @@ pub fn simulate(params: &Params, exp: &Experiment, rtol: f64) -> Result<Vec<Samp
     Ok(out)
 }
 
-/// NRMSE fits of simulated outputs against one experiment.
+/// NRMSE fits of simulated outputs against one experiment, on its samples after the lead-in.
 pub fn fits(exp: &Experiment, sim: &[Sample]) -> ExperimentFit {
+    let (k, sim) = (exp.lead_in, &sim[exp.lead_in..]);
     let mut out: Vec<(String, f64)> = exp
         .channels
         .iter()
         .map(|(c, y)| {
             let s: Vec<f64> = sim.iter().map(|s| c.of(s)).collect();
-            (c.name().to_string(), fit::nrmse_fit(y, &s))
+            (c.name().to_string(), fit::nrmse_fit(&y[k..], &s))
         })
         .collect();
     if let (Some(x), Some(y)) = (exp.measured(Channel::Tip(0)), exp.measured(Channel::Tip(1))) {
         let sx: Vec<f64> = sim.iter().map(|s| s.tip[0]).collect();
         let sy: Vec<f64> = sim.iter().map(|s| s.tip[1]).collect();
-        out.push(("tip_xy".into(), fit::nrmse_fit_2d(x, y, &sx, &sy)));
+        out.push((
+            "tip_xy".into(),
+            fit::nrmse_fit_2d(&x[k..], &y[k..], &sx, &sy),
+        ));
     }
     ExperimentFit {
         experiment: exp.name.clone(),
