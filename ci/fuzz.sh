@@ -10,14 +10,17 @@
 # A crash, a broken promise, a memory error, a leak, an input slower than -timeout or an
 # allocation beyond -malloc_limit_mb stops it with the reproducing input saved under
 # tests/fuzz/artifacts/<target>/. After a clean campaign the target's corpus is minimized
-# (libFuzzer's -merge=1); tests/fuzz_replay.rs replays the committed corpora in every
-# `cargo test`.
+# (libFuzzer's -merge=1). tests/fuzz_replay.rs replays every target's committed corpus in every
+# `cargo test` (so in ci/test.sh, in about a second), through the same code in the ordinary build
+# on stable Rust: the readers' checks (tests/fuzz/checks.rs) and the call sequences
+# (fmi2_sequence.rs, fmi3_sequence.rs) of all five FMUs; only what the sanitizer sees (memory
+# errors, leaks) and the bounds on time and memory per input need a campaign.
 #
 #   bash ci/fuzz.sh [SECONDS] [TARGET...]   (default 300 s each, all targets; prints per target
 #                                           the executions, coverage (cov, ft) and corpus size)
 #
-# Not part of ci/test.sh: the instrumented nightly builds alone take minutes. What a campaign
-# finds becomes a regression test of the normal suite.
+# The campaigns are not part of ci/test.sh: the instrumented nightly build alone takes minutes.
+# What a campaign finds becomes a regression test of the normal suite.
 source "$(dirname "${BASH_SOURCE[0]}")/lib.sh"
 SECONDS_TO_RUN="${1:-300}"
 shift || true
@@ -37,24 +40,20 @@ if ! command -v cargo-fuzz >/dev/null 2>&1; then
 fi
 FUZZ=(--fuzz-dir tests/fuzz --release --debug-assertions)
 for target in "${TARGETS[@]}"; do
-    # the library build whose C functions a call-sequence target calls; the bounds per input:
-    # a sequence may simulate (20 s), a reader of a few kilobytes may not take long (5 s); no
-    # input may make one allocation above 256 MB or hold more than 1 GB
-    features=()
+    # the bounds per input: a sequence may simulate (20 s), a reader of a few kilobytes may not
+    # take long (5 s); no input may make one allocation above 256 MB or hold more than 1 GB. Every
+    # target runs on one build of the library (default features): a call-sequence target makes its
+    # FMU's C functions with the library's own macro (fuzz_targets/fmi2_sequence.rs says why)
     timeout=5
     case "$target" in
-        fmi2_calls) timeout=20 ;;
-        fmi3_calls) features=(--features fmi3); timeout=20 ;;
-        inverse_calls) features=(--features inverse); timeout=20 ;;
-        reduced_calls) features=(--features reduced); timeout=20 ;;
-        reduced_fmi3_calls) features=(--features reduced,fmi3); timeout=20 ;;
+        *_calls) timeout=20 ;;
     esac
     step "fuzz $target for $SECONDS_TO_RUN s (libFuzzer, AddressSanitizer, leak detection)"
     corpus="tests/fuzz/corpus/$target"
     mkdir -p "$corpus"
     # cargo's own status kept beside the log: a campaign whose build failed found nothing
     { status=0
-      nice -n 19 cargo +nightly fuzz run "${FUZZ[@]}" "${features[@]}" "$target" -- \
+      nice -n 19 cargo +nightly fuzz run "${FUZZ[@]}" "$target" -- \
         -max_total_time="$SECONDS_TO_RUN" -timeout="$timeout" -rss_limit_mb=1024 \
         -malloc_limit_mb=256 -detect_leaks=1 -print_final_stats=1 2>&1 || status=$?
       echo "$status" >"out/fuzz-$target.status"; } | tee "out/fuzz-$target.log" |

@@ -17,7 +17,10 @@ build_fmu
 build_cross
 build_wheel
 ensure_wine
-step "Rust tests (tests/fuzz_replay.rs replays the committed fuzz corpora, tests/fuzz/corpus)"
+# tests/fuzz_replay.rs replays the committed corpus of every fuzz target (tests/fuzz/corpus: the
+# readers' files, the FMI call sequences of all five FMUs) through the targets' own code, in about a
+# second; only the sanitizer's findings need a campaign (ci/fuzz.sh)
+step "Rust tests (tests/fuzz_replay.rs replays every fuzz target's committed corpus)"
 cargo test --release --all-targets
 ensure_fmi_sim
 step "Python tests of the packed FMUs, the other platforms' among them"

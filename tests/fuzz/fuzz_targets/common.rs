@@ -1,18 +1,36 @@
 //! What the call-sequence fuzzers of both FMI versions share: the arguments a sequence
-//! chooses (reals, value references, array lengths, which instance) and their meaning.
+//! chooses (reals, value references, array lengths, which instance) and their meaning. With
+//! fmi2_sequence.rs and fmi3_sequence.rs also a module of tests/fuzz_replay.rs, which replays
+//! the committed corpora through the same code in the ordinary build.
+
+use std::ffi::CString;
 
 use arbitrary::Arbitrary;
-#[cfg(feature = "inverse")]
-use hasel_fmu::fmu::inverse::variables::rows;
-#[cfg(not(any(feature = "inverse", feature = "reduced")))]
-use hasel_fmu::fmu::variables::rows;
-
-/// HaselPlatformReduced's variable table (target reduced_calls, reduced_fmi3_calls).
-#[cfg(feature = "reduced")]
-fn rows() -> &'static [hasel_fmu::fmu::variables::Row] {
-    hasel_fmu::fmu::variables::rows_of(hasel_fmu::model::Reduction::Slow)
-}
+use hasel_fmu::fmi_common::model_api::FmuCore;
 use sha2::{Digest, Sha256};
+
+/// The FMU a sequence runs against: its C functions `F` (a table of one FMI version's) and what
+/// an importer reads from its description.
+pub struct Fmu<F> {
+    pub functions: F,
+    /// The GUID (FMI 2.0) or instantiation token (FMI 3.0).
+    pub token: CString,
+    /// The number of continuous states.
+    pub states: usize,
+    /// The number of variables (value references 0..variables).
+    pub variables: u32,
+}
+
+impl<F> Fmu<F> {
+    pub fn new<Core: FmuCore>(functions: F, token: String, variables: usize) -> Fmu<F> {
+        Fmu {
+            functions,
+            token: CString::new(token).unwrap(),
+            states: Core::model_structure().derivatives.len(),
+            variables: variables as u32,
+        }
+    }
+}
 
 /// A real number: one of the values that matter to this model, or any bit pattern.
 #[derive(Arbitrary, Debug, Clone, Copy)]
@@ -54,9 +72,10 @@ pub enum Vr {
 }
 
 impl Vr {
-    pub fn get(self) -> u32 {
+    /// The value reference, for an FMU with `variables` variables (references 0..variables).
+    pub fn get(self, variables: u32) -> u32 {
         match self {
-            Vr::Known(k) => k as u32 % rows().len() as u32,
+            Vr::Known(k) => k as u32 % variables,
             Vr::Any(v) => v,
         }
     }

@@ -1,6 +1,13 @@
-//! The FMI 2.0 call sequences of fmi2_sequence.rs against HaselPlatform's FMI 2.0 build.
+//! The FMI 2.0 call sequences of fmi2_sequence.rs against HaselPlatform's FMI 2.0 functions.
 #![no_main]
 #![feature(c_variadic)]
 
 mod common;
+mod fmi2_logger;
+// each target runs one FMU of the module
+#[allow(dead_code)]
 mod fmi2_sequence;
+
+use fmi2_sequence::{Call, Fmu, run};
+
+libfuzzer_sys::fuzz_target!(|calls: Vec<Call>| run(&Fmu::platform(), fmi2_logger::LOGGER, &calls));

@@ -8,163 +8,316 @@
 //! every array holds as many elements as the size passed with it.
 //!
 //! Under libFuzzer with AddressSanitizer (`bash ci/fuzz.sh`) a crash, an out-of-bounds access,
-//! a leak at the end of a sequence or a call that hangs fails the run.
+//! a leak at the end of a sequence, a call that hangs or any panic (libfuzzer-sys aborts on one,
+//! even one the FMU's shell catches) fails the run. The same interpreter, [`run`], replays the
+//! committed corpora in every `cargo test` (tests/fuzz_replay.rs, stable Rust, no sanitizer),
+//! which fails on a panic, caught or not, and on a broken assertion of [`World::finish`].
 
-use std::ffi::{CStr, CString, c_char, c_int, c_void};
+use std::ffi::{CStr, c_char, c_void};
 use std::ptr::{null, null_mut};
 
 use crate::common::{Len, Real, Vr, Who, damage};
 use arbitrary::Arbitrary;
-use hasel_fmu::fmi_common::model_api::FmuCore;
+use hasel_fmu::fmi2::types::*;
 use hasel_fmu::fmu::pack::guid;
 use hasel_fmu::model::Params;
-use libfuzzer_sys::fuzz_target;
 
-type Component = *mut c_void;
-type FmuState = *mut c_void;
-type Status = c_int;
-const OK: Status = 0;
+const OK: fmi2Status = Fmi2Status::Ok;
 
-/// `fmi2CallbackFunctions`, as an importer declares it.
-#[repr(C)]
-struct Callbacks {
-    logger: Option<
-        unsafe extern "C" fn(*mut c_void, *const c_char, Status, *const c_char, *const c_char, ...),
-    >,
-    allocate: Option<unsafe extern "C" fn(usize, usize) -> *mut c_void>,
-    free: Option<unsafe extern "C" fn(*mut c_void)>,
-    step_finished: Option<unsafe extern "C" fn(*mut c_void, Status)>,
-    environment: *mut c_void,
-}
-
-/// `fmi2EventInfo`.
-#[repr(C)]
-#[derive(Default)]
-struct EventInfo {
-    new_discrete_states_needed: i32,
-    terminate_simulation: i32,
-    nominals_changed: i32,
-    values_changed: i32,
-    next_event_time_defined: i32,
-    next_event_time: f64,
-}
-
-// The 44 functions of fmi2Functions.h, linked from the hasel-fmu library.
-unsafe extern "C" {
-    fn fmi2GetTypesPlatform() -> *const c_char;
-    fn fmi2GetVersion() -> *const c_char;
-    fn fmi2SetDebugLogging(
-        c: Component,
-        on: i32,
-        n: usize,
-        categories: *const *const c_char,
-    ) -> Status;
-    fn fmi2Instantiate(
-        name: *const c_char,
-        kind: c_int,
-        guid: *const c_char,
-        resources: *const c_char,
-        callbacks: *const Callbacks,
-        visible: i32,
-        logging_on: i32,
-    ) -> Component;
-    fn fmi2FreeInstance(c: Component);
-    fn fmi2SetupExperiment(
-        c: Component,
-        tol_on: i32,
-        tol: f64,
-        t0: f64,
-        stop_on: i32,
-        stop: f64,
-    ) -> Status;
-    fn fmi2EnterInitializationMode(c: Component) -> Status;
-    fn fmi2ExitInitializationMode(c: Component) -> Status;
-    fn fmi2Terminate(c: Component) -> Status;
-    fn fmi2Reset(c: Component) -> Status;
-    fn fmi2GetReal(c: Component, vr: *const u32, n: usize, v: *mut f64) -> Status;
-    fn fmi2GetInteger(c: Component, vr: *const u32, n: usize, v: *mut i32) -> Status;
-    fn fmi2GetBoolean(c: Component, vr: *const u32, n: usize, v: *mut i32) -> Status;
-    fn fmi2GetString(c: Component, vr: *const u32, n: usize, v: *mut *const c_char) -> Status;
-    fn fmi2SetReal(c: Component, vr: *const u32, n: usize, v: *const f64) -> Status;
-    fn fmi2SetInteger(c: Component, vr: *const u32, n: usize, v: *const i32) -> Status;
-    fn fmi2SetBoolean(c: Component, vr: *const u32, n: usize, v: *const i32) -> Status;
-    fn fmi2SetString(c: Component, vr: *const u32, n: usize, v: *const *const c_char) -> Status;
-    fn fmi2GetFMUstate(c: Component, s: *mut FmuState) -> Status;
-    fn fmi2SetFMUstate(c: Component, s: FmuState) -> Status;
-    fn fmi2FreeFMUstate(c: Component, s: *mut FmuState) -> Status;
-    fn fmi2SerializedFMUstateSize(c: Component, s: FmuState, size: *mut usize) -> Status;
-    fn fmi2SerializeFMUstate(c: Component, s: FmuState, bytes: *mut c_char, size: usize) -> Status;
-    fn fmi2DeSerializeFMUstate(
-        c: Component,
-        bytes: *const c_char,
+/// The 44 functions of `fmi2Functions.h` of one FMU, as an importer holds them after loading
+/// its library: the library's macro [`hasel_fmu::export_fmi2`] makes them for a core
+/// ([`functions!`]), the same code the FMU's binary exports.
+#[allow(non_snake_case)]
+#[derive(Clone, Copy)]
+pub struct Functions {
+    pub fmi2GetTypesPlatform: unsafe extern "C" fn() -> *const c_char,
+    pub fmi2GetVersion: unsafe extern "C" fn() -> *const c_char,
+    pub fmi2SetDebugLogging: unsafe extern "C" fn(
+        c: fmi2Component,
+        logging_on: fmi2Boolean,
+        n_categories: usize,
+        categories: *const fmi2String,
+    ) -> fmi2Status,
+    pub fmi2Instantiate: unsafe extern "C" fn(
+        name: fmi2String,
+        fmu_type: fmi2Type,
+        guid: fmi2String,
+        resources: fmi2String,
+        functions: *const fmi2CallbackFunctions,
+        visible: fmi2Boolean,
+        logging_on: fmi2Boolean,
+    ) -> fmi2Component,
+    pub fmi2FreeInstance: unsafe extern "C" fn(c: fmi2Component),
+    pub fmi2SetupExperiment: unsafe extern "C" fn(
+        c: fmi2Component,
+        tol_defined: fmi2Boolean,
+        tol: fmi2Real,
+        start: fmi2Real,
+        stop_defined: fmi2Boolean,
+        stop: fmi2Real,
+    ) -> fmi2Status,
+    pub fmi2EnterInitializationMode: unsafe extern "C" fn(c: fmi2Component) -> fmi2Status,
+    pub fmi2ExitInitializationMode: unsafe extern "C" fn(c: fmi2Component) -> fmi2Status,
+    pub fmi2Terminate: unsafe extern "C" fn(c: fmi2Component) -> fmi2Status,
+    pub fmi2Reset: unsafe extern "C" fn(c: fmi2Component) -> fmi2Status,
+    pub fmi2GetReal: unsafe extern "C" fn(
+        c: fmi2Component,
+        vr: *const fmi2ValueReference,
+        nvr: usize,
+        value: *mut fmi2Real,
+    ) -> fmi2Status,
+    pub fmi2GetInteger: unsafe extern "C" fn(
+        c: fmi2Component,
+        vr: *const fmi2ValueReference,
+        nvr: usize,
+        value: *mut fmi2Integer,
+    ) -> fmi2Status,
+    pub fmi2GetBoolean: unsafe extern "C" fn(
+        c: fmi2Component,
+        vr: *const fmi2ValueReference,
+        nvr: usize,
+        value: *mut fmi2Boolean,
+    ) -> fmi2Status,
+    pub fmi2GetString: unsafe extern "C" fn(
+        c: fmi2Component,
+        vr: *const fmi2ValueReference,
+        nvr: usize,
+        value: *mut fmi2String,
+    ) -> fmi2Status,
+    pub fmi2SetReal: unsafe extern "C" fn(
+        c: fmi2Component,
+        vr: *const fmi2ValueReference,
+        nvr: usize,
+        value: *const fmi2Real,
+    ) -> fmi2Status,
+    pub fmi2SetInteger: unsafe extern "C" fn(
+        c: fmi2Component,
+        vr: *const fmi2ValueReference,
+        nvr: usize,
+        value: *const fmi2Integer,
+    ) -> fmi2Status,
+    pub fmi2SetBoolean: unsafe extern "C" fn(
+        c: fmi2Component,
+        vr: *const fmi2ValueReference,
+        nvr: usize,
+        value: *const fmi2Boolean,
+    ) -> fmi2Status,
+    pub fmi2SetString: unsafe extern "C" fn(
+        c: fmi2Component,
+        vr: *const fmi2ValueReference,
+        nvr: usize,
+        value: *const fmi2String,
+    ) -> fmi2Status,
+    pub fmi2GetFMUstate:
+        unsafe extern "C" fn(c: fmi2Component, state: *mut fmi2FMUstate) -> fmi2Status,
+    pub fmi2SetFMUstate: unsafe extern "C" fn(c: fmi2Component, state: fmi2FMUstate) -> fmi2Status,
+    pub fmi2FreeFMUstate:
+        unsafe extern "C" fn(c: fmi2Component, state: *mut fmi2FMUstate) -> fmi2Status,
+    pub fmi2SerializedFMUstateSize:
+        unsafe extern "C" fn(c: fmi2Component, state: fmi2FMUstate, size: *mut usize) -> fmi2Status,
+    pub fmi2SerializeFMUstate: unsafe extern "C" fn(
+        c: fmi2Component,
+        state: fmi2FMUstate,
+        bytes: *mut fmi2Byte,
         size: usize,
-        s: *mut FmuState,
-    ) -> Status;
-    fn fmi2GetDirectionalDerivative(
-        c: Component,
-        unknowns: *const u32,
-        n_unknowns: usize,
-        knowns: *const u32,
-        n_knowns: usize,
-        dv_known: *const f64,
-        dv_unknown: *mut f64,
-    ) -> Status;
-    fn fmi2EnterEventMode(c: Component) -> Status;
-    fn fmi2NewDiscreteStates(c: Component, info: *mut EventInfo) -> Status;
-    fn fmi2EnterContinuousTimeMode(c: Component) -> Status;
-    fn fmi2CompletedIntegratorStep(
-        c: Component,
-        no_prior: i32,
-        enter_event_mode: *mut i32,
-        terminate: *mut i32,
-    ) -> Status;
-    fn fmi2SetTime(c: Component, t: f64) -> Status;
-    fn fmi2SetContinuousStates(c: Component, x: *const f64, n: usize) -> Status;
-    fn fmi2GetDerivatives(c: Component, dx: *mut f64, n: usize) -> Status;
-    fn fmi2GetEventIndicators(c: Component, z: *mut f64, n: usize) -> Status;
-    fn fmi2GetContinuousStates(c: Component, x: *mut f64, n: usize) -> Status;
-    fn fmi2GetNominalsOfContinuousStates(c: Component, x: *mut f64, n: usize) -> Status;
-    fn fmi2SetRealInputDerivatives(
-        c: Component,
-        vr: *const u32,
-        n: usize,
-        order: *const i32,
-        v: *const f64,
-    ) -> Status;
-    fn fmi2GetRealOutputDerivatives(
-        c: Component,
-        vr: *const u32,
-        n: usize,
-        order: *const i32,
-        v: *mut f64,
-    ) -> Status;
-    fn fmi2DoStep(c: Component, t: f64, h: f64, no_prior: i32) -> Status;
-    fn fmi2CancelStep(c: Component) -> Status;
-    fn fmi2GetStatus(c: Component, kind: c_int, v: *mut Status) -> Status;
-    fn fmi2GetRealStatus(c: Component, kind: c_int, v: *mut f64) -> Status;
-    fn fmi2GetIntegerStatus(c: Component, kind: c_int, v: *mut i32) -> Status;
-    fn fmi2GetBooleanStatus(c: Component, kind: c_int, v: *mut i32) -> Status;
-    fn fmi2GetStringStatus(c: Component, kind: c_int, v: *mut *const c_char) -> Status;
+    ) -> fmi2Status,
+    pub fmi2DeSerializeFMUstate: unsafe extern "C" fn(
+        c: fmi2Component,
+        bytes: *const fmi2Byte,
+        size: usize,
+        state: *mut fmi2FMUstate,
+    ) -> fmi2Status,
+    pub fmi2GetDirectionalDerivative: unsafe extern "C" fn(
+        c: fmi2Component,
+        v_unknown_ref: *const fmi2ValueReference,
+        n_unknown: usize,
+        v_known_ref: *const fmi2ValueReference,
+        n_known: usize,
+        dv_known: *const fmi2Real,
+        dv_unknown: *mut fmi2Real,
+    ) -> fmi2Status,
+    pub fmi2EnterEventMode: unsafe extern "C" fn(c: fmi2Component) -> fmi2Status,
+    pub fmi2NewDiscreteStates:
+        unsafe extern "C" fn(c: fmi2Component, event_info: *mut fmi2EventInfo) -> fmi2Status,
+    pub fmi2EnterContinuousTimeMode: unsafe extern "C" fn(c: fmi2Component) -> fmi2Status,
+    pub fmi2CompletedIntegratorStep: unsafe extern "C" fn(
+        c: fmi2Component,
+        no_set_fmu_state_prior_to_current_point: fmi2Boolean,
+        enter_event_mode: *mut fmi2Boolean,
+        terminate_simulation: *mut fmi2Boolean,
+    ) -> fmi2Status,
+    pub fmi2SetTime: unsafe extern "C" fn(c: fmi2Component, time: fmi2Real) -> fmi2Status,
+    pub fmi2SetContinuousStates:
+        unsafe extern "C" fn(c: fmi2Component, x: *const fmi2Real, nx: usize) -> fmi2Status,
+    pub fmi2GetDerivatives:
+        unsafe extern "C" fn(c: fmi2Component, derivatives: *mut fmi2Real, nx: usize) -> fmi2Status,
+    pub fmi2GetEventIndicators: unsafe extern "C" fn(
+        c: fmi2Component,
+        event_indicators: *mut fmi2Real,
+        ni: usize,
+    ) -> fmi2Status,
+    pub fmi2GetContinuousStates:
+        unsafe extern "C" fn(c: fmi2Component, x: *mut fmi2Real, nx: usize) -> fmi2Status,
+    pub fmi2GetNominalsOfContinuousStates:
+        unsafe extern "C" fn(c: fmi2Component, x_nominal: *mut fmi2Real, nx: usize) -> fmi2Status,
+    pub fmi2SetRealInputDerivatives: unsafe extern "C" fn(
+        c: fmi2Component,
+        vr: *const fmi2ValueReference,
+        nvr: usize,
+        order: *const fmi2Integer,
+        value: *const fmi2Real,
+    ) -> fmi2Status,
+    pub fmi2GetRealOutputDerivatives: unsafe extern "C" fn(
+        c: fmi2Component,
+        vr: *const fmi2ValueReference,
+        nvr: usize,
+        order: *const fmi2Integer,
+        value: *mut fmi2Real,
+    ) -> fmi2Status,
+    pub fmi2DoStep: unsafe extern "C" fn(
+        c: fmi2Component,
+        tc: fmi2Real,
+        h: fmi2Real,
+        no_set_prior: fmi2Boolean,
+    ) -> fmi2Status,
+    pub fmi2CancelStep: unsafe extern "C" fn(c: fmi2Component) -> fmi2Status,
+    pub fmi2GetStatus: unsafe extern "C" fn(
+        c: fmi2Component,
+        kind: fmi2StatusKind,
+        value: *mut fmi2Status,
+    ) -> fmi2Status,
+    pub fmi2GetRealStatus: unsafe extern "C" fn(
+        c: fmi2Component,
+        kind: fmi2StatusKind,
+        value: *mut fmi2Real,
+    ) -> fmi2Status,
+    pub fmi2GetIntegerStatus: unsafe extern "C" fn(
+        c: fmi2Component,
+        kind: fmi2StatusKind,
+        value: *mut fmi2Integer,
+    ) -> fmi2Status,
+    pub fmi2GetBooleanStatus: unsafe extern "C" fn(
+        c: fmi2Component,
+        kind: fmi2StatusKind,
+        value: *mut fmi2Boolean,
+    ) -> fmi2Status,
+    pub fmi2GetStringStatus: unsafe extern "C" fn(
+        c: fmi2Component,
+        kind: fmi2StatusKind,
+        value: *mut fmi2String,
+    ) -> fmi2Status,
 }
 
-/// Reads every string the FMU hands the logger, so AddressSanitizer checks each pointer.
-unsafe extern "C" fn logger(
-    _env: *mut c_void,
-    name: *const c_char,
-    _status: Status,
-    category: *const c_char,
-    message: *const c_char,
-    mut args: ...
-) {
-    for p in [name, category, message] {
+/// The [`Functions`] of the core `$core` (a path from the crate root): the C functions the
+/// FMU's build exports, made by the same macro without the exported symbol names. So the fuzz
+/// targets and the replay of their corpora (tests/fuzz_replay.rs) reach every FMU from one build
+/// of the library, whatever its features select for export.
+macro_rules! functions {
+    ($core:ty) => {{
+        #[allow(dead_code)]
+        mod c {
+            hasel_fmu::__fmi2_functions!([] $core);
+        }
+        Functions {
+            fmi2GetTypesPlatform: c::fmi2GetTypesPlatform,
+            fmi2GetVersion: c::fmi2GetVersion,
+            fmi2SetDebugLogging: c::fmi2SetDebugLogging,
+            fmi2Instantiate: c::fmi2Instantiate,
+            fmi2FreeInstance: c::fmi2FreeInstance,
+            fmi2SetupExperiment: c::fmi2SetupExperiment,
+            fmi2EnterInitializationMode: c::fmi2EnterInitializationMode,
+            fmi2ExitInitializationMode: c::fmi2ExitInitializationMode,
+            fmi2Terminate: c::fmi2Terminate,
+            fmi2Reset: c::fmi2Reset,
+            fmi2GetReal: c::fmi2GetReal,
+            fmi2GetInteger: c::fmi2GetInteger,
+            fmi2GetBoolean: c::fmi2GetBoolean,
+            fmi2GetString: c::fmi2GetString,
+            fmi2SetReal: c::fmi2SetReal,
+            fmi2SetInteger: c::fmi2SetInteger,
+            fmi2SetBoolean: c::fmi2SetBoolean,
+            fmi2SetString: c::fmi2SetString,
+            fmi2GetFMUstate: c::fmi2GetFMUstate,
+            fmi2SetFMUstate: c::fmi2SetFMUstate,
+            fmi2FreeFMUstate: c::fmi2FreeFMUstate,
+            fmi2SerializedFMUstateSize: c::fmi2SerializedFMUstateSize,
+            fmi2SerializeFMUstate: c::fmi2SerializeFMUstate,
+            fmi2DeSerializeFMUstate: c::fmi2DeSerializeFMUstate,
+            fmi2GetDirectionalDerivative: c::fmi2GetDirectionalDerivative,
+            fmi2EnterEventMode: c::fmi2EnterEventMode,
+            fmi2NewDiscreteStates: c::fmi2NewDiscreteStates,
+            fmi2EnterContinuousTimeMode: c::fmi2EnterContinuousTimeMode,
+            fmi2CompletedIntegratorStep: c::fmi2CompletedIntegratorStep,
+            fmi2SetTime: c::fmi2SetTime,
+            fmi2SetContinuousStates: c::fmi2SetContinuousStates,
+            fmi2GetDerivatives: c::fmi2GetDerivatives,
+            fmi2GetEventIndicators: c::fmi2GetEventIndicators,
+            fmi2GetContinuousStates: c::fmi2GetContinuousStates,
+            fmi2GetNominalsOfContinuousStates: c::fmi2GetNominalsOfContinuousStates,
+            fmi2SetRealInputDerivatives: c::fmi2SetRealInputDerivatives,
+            fmi2GetRealOutputDerivatives: c::fmi2GetRealOutputDerivatives,
+            fmi2DoStep: c::fmi2DoStep,
+            fmi2CancelStep: c::fmi2CancelStep,
+            fmi2GetStatus: c::fmi2GetStatus,
+            fmi2GetRealStatus: c::fmi2GetRealStatus,
+            fmi2GetIntegerStatus: c::fmi2GetIntegerStatus,
+            fmi2GetBooleanStatus: c::fmi2GetBooleanStatus,
+            fmi2GetStringStatus: c::fmi2GetStringStatus,
+        }
+    }};
+}
+
+/// The logger of an importer written in C: variadic, printf-style (`fmi2CallbackLogger`).
+/// Defining one in Rust takes the nightly feature `c_variadic`, so it is the caller's: the fuzz
+/// targets define it (fmi2_logger.rs), the replay on stable Rust passes one declared with the
+/// arguments the FMU passes (tests/fuzz_replay.rs says why that is sound). Both hand what they
+/// got to [`read_log`].
+pub type Logger = fmi2CallbackLogger;
+
+/// Reads every string the FMU hands the logger (so AddressSanitizer checks each pointer under
+/// `cargo fuzz`); `text` is the argument of the format "%s", the only format the FMU logs with.
+pub fn read_log(name: fmi2String, category: fmi2String, message: fmi2String, text: fmi2String) {
+    for p in [name, category, message, text] {
         if !p.is_null() {
             std::hint::black_box(unsafe { CStr::from_ptr(p) }.to_bytes().len());
         }
     }
-    // the FMU logs through the format "%s" with one string argument
-    if !message.is_null() && unsafe { CStr::from_ptr(message) } == c"%s" {
-        let text: *const c_char = unsafe { args.next_arg() };
-        std::hint::black_box(unsafe { CStr::from_ptr(text) }.to_bytes().len());
+}
+
+/// The FMU a sequence runs against.
+pub type Fmu = crate::common::Fmu<Functions>;
+
+impl Fmu {
+    /// HaselPlatform (target fmi2_calls).
+    pub fn platform() -> Fmu {
+        use hasel_fmu::fmu::{HaselCore, pack, variables::rows};
+        Fmu::new::<HaselCore>(
+            functions!(hasel_fmu::fmu::HaselCore),
+            guid(&pack::platform(&Params::default())),
+            rows().len(),
+        )
+    }
+
+    /// HaselInverse, stateless and Co-Simulation only (target inverse_calls).
+    pub fn inverse() -> Fmu {
+        use hasel_fmu::fmu::inverse::{InverseCore, variables::rows};
+        use hasel_fmu::fmu::pack;
+        Fmu::new::<InverseCore>(
+            functions!(hasel_fmu::fmu::inverse::InverseCore),
+            guid(&pack::inverse(&Params::default())),
+            rows().len(),
+        )
+    }
+
+    /// HaselPlatformReduced, the slow model (target reduced_calls).
+    pub fn reduced() -> Fmu {
+        use hasel_fmu::fmu::{HaselReducedCore, pack, variables::rows_of};
+        use hasel_fmu::model::Reduction;
+        Fmu::new::<HaselReducedCore>(
+            functions!(hasel_fmu::fmu::HaselReducedCore),
+            guid(&pack::reduced(&Params::default())),
+            rows_of(Reduction::Slow).len(),
+        )
     }
 }
 
@@ -183,8 +336,9 @@ unsafe extern "C" {
     fn libc_free(p: *mut c_void);
 }
 
+/// One call of a sequence, with the arguments that matter.
 #[derive(Arbitrary, Debug)]
-enum Call {
+pub enum Call {
     Instantiate {
         who: Who,
         model_exchange: bool,
@@ -304,48 +458,39 @@ enum Call {
 
 const STATE_SLOTS: usize = 4;
 
-// The FMU under test: HaselPlatform, or with the feature `inverse` (target inverse_calls) the
-// stateless HaselInverse, with `reduced` (target reduced_calls) HaselPlatformReduced, whose
-// functions the library's `inverse-fmu` and `reduced-fmu` builds export instead.
-#[cfg(feature = "inverse")]
-use hasel_fmu::fmu::inverse::{InverseCore as Core, spec};
-#[cfg(not(any(feature = "inverse", feature = "reduced")))]
-use hasel_fmu::fmu::{HaselCore as Core, pack::platform as spec};
-#[cfg(feature = "reduced")]
-use hasel_fmu::fmu::{HaselReducedCore as Core, pack::reduced as spec};
-
 /// What the sequence holds between calls: the instances, their simulated time, FMU states.
-struct World {
-    instances: [Component; 2],
+struct World<'a> {
+    fmu: &'a Fmu,
+    /// The FMU's functions (a copy of `fmu.functions`, for short calls).
+    f: Functions,
+    instances: [fmi2Component; 2],
     time: [f64; 2],
-    states: [FmuState; STATE_SLOTS],
+    states: [fmi2FMUstate; STATE_SLOTS],
     /// The owner of each FMU state, which is also the instance that frees it.
     owner: [usize; STATE_SLOTS],
-    callbacks: Callbacks,
-    guid: CString,
-    states_expected: usize,
+    callbacks: fmi2CallbackFunctions,
 }
 
-impl World {
-    fn new() -> World {
+impl World<'_> {
+    fn new(fmu: &Fmu, logger: Logger) -> World<'_> {
         World {
+            fmu,
+            f: fmu.functions,
             instances: [null_mut(); 2],
             time: [0.0; 2],
             states: [null_mut(); STATE_SLOTS],
             owner: [0; STATE_SLOTS],
-            callbacks: Callbacks {
-                logger: Some(logger),
-                allocate: Some(allocate),
-                free: Some(free),
+            callbacks: fmi2CallbackFunctions {
+                logger,
+                allocate_memory: Some(allocate),
+                free_memory: Some(free),
                 step_finished: None,
-                environment: null_mut(),
+                component_environment: null_mut(),
             },
-            guid: CString::new(guid(&spec(&Params::default()))).unwrap(),
-            states_expected: Core::model_structure().derivatives.len(),
         }
     }
 
-    fn component(&self, who: Who) -> Component {
+    fn component(&self, who: Who) -> fmi2Component {
         match who {
             Who::First => self.instances[0],
             Who::Second => self.instances[1],
@@ -363,7 +508,7 @@ impl World {
 
     fn len(&self, len: Len) -> usize {
         match len {
-            Len::Right => self.states_expected,
+            Len::Right => self.fmu.states,
             Len::Other(n) => n as usize,
         }
     }
@@ -378,10 +523,10 @@ impl World {
             if self.owner[k] == i && !self.states[k].is_null() {
                 // a refused free (the instance may be in a state that does not allow it)
                 // leaves the pointer with us: `finish` frees it through a fresh instance
-                unsafe { fmi2FreeFMUstate(c, &mut self.states[k]) };
+                unsafe { (self.f.fmi2FreeFMUstate)(c, &mut self.states[k]) };
             }
         }
-        unsafe { fmi2FreeInstance(c) };
+        unsafe { (self.f.fmi2FreeInstance)(c) };
         self.instances[i] = null_mut();
         self.time[i] = 0.0;
     }
@@ -408,10 +553,10 @@ impl World {
                 let guid = if wrong_guid {
                     c"{0}"
                 } else {
-                    self.guid.as_c_str()
+                    self.fmu.token.as_c_str()
                 };
                 self.instances[i] = unsafe {
-                    fmi2Instantiate(
+                    (self.f.fmi2Instantiate)(
                         if null_name { null() } else { c"fuzz".as_ptr() },
                         i32::from(!model_exchange),
                         guid.as_ptr(),
@@ -434,7 +579,7 @@ impl World {
                 if let Some(i) = World::index(who) {
                     self.free_instance(i);
                 } else {
-                    unsafe { fmi2FreeInstance(null_mut()) };
+                    unsafe { (self.f.fmi2FreeInstance)(null_mut()) };
                 }
             }
             Call::SetDebugLogging {
@@ -450,7 +595,12 @@ impl World {
                     .collect();
                 let ptr = if null_ptr { null() } else { names.as_ptr() };
                 unsafe {
-                    fmi2SetDebugLogging(self.component(who), i32::from(on), names.len(), ptr)
+                    (self.f.fmi2SetDebugLogging)(
+                        self.component(who),
+                        i32::from(on),
+                        names.len(),
+                        ptr,
+                    )
                 };
             }
             Call::SetupExperiment {
@@ -462,7 +612,7 @@ impl World {
                 let c = self.component(who);
                 let t0 = start.get();
                 let status = unsafe {
-                    fmi2SetupExperiment(
+                    (self.f.fmi2SetupExperiment)(
                         c,
                         i32::from(tolerance.is_some()),
                         tolerance.map_or(0.0, Real::get),
@@ -476,16 +626,16 @@ impl World {
                 }
             }
             Call::EnterInitializationMode(who) => unsafe {
-                fmi2EnterInitializationMode(self.component(who));
+                (self.f.fmi2EnterInitializationMode)(self.component(who));
             },
             Call::ExitInitializationMode(who) => unsafe {
-                fmi2ExitInitializationMode(self.component(who));
+                (self.f.fmi2ExitInitializationMode)(self.component(who));
             },
             Call::Terminate(who) => unsafe {
-                fmi2Terminate(self.component(who));
+                (self.f.fmi2Terminate)(self.component(who));
             },
             Call::Reset(who) => {
-                let status = unsafe { fmi2Reset(self.component(who)) };
+                let status = unsafe { (self.f.fmi2Reset)(self.component(who)) };
                 if let (OK, Some(i)) = (status, World::index(who)) {
                     self.time[i] = 0.0;
                 }
@@ -495,24 +645,27 @@ impl World {
                 ref vrs,
                 null_ptr,
             } => {
-                let vrs: Vec<u32> = vrs.iter().map(|v| v.get()).collect();
+                let vrs: Vec<u32> = vrs.iter().map(|v| v.get(self.fmu.variables)).collect();
                 let mut values = vec![0.0; vrs.len()];
                 let out = if null_ptr {
                     null_mut()
                 } else {
                     values.as_mut_ptr()
                 };
-                unsafe { fmi2GetReal(self.component(who), vrs.as_ptr(), vrs.len(), out) };
+                unsafe { (self.f.fmi2GetReal)(self.component(who), vrs.as_ptr(), vrs.len(), out) };
             }
             Call::SetReal {
                 who,
                 ref values,
                 null_ptr,
             } => {
-                let vrs: Vec<u32> = values.iter().map(|(v, _)| v.get()).collect();
+                let vrs: Vec<u32> = values
+                    .iter()
+                    .map(|(v, _)| v.get(self.fmu.variables))
+                    .collect();
                 let xs: Vec<f64> = values.iter().map(|(_, x)| x.get()).collect();
                 let ptr = if null_ptr { null() } else { xs.as_ptr() };
-                unsafe { fmi2SetReal(self.component(who), vrs.as_ptr(), vrs.len(), ptr) };
+                unsafe { (self.f.fmi2SetReal)(self.component(who), vrs.as_ptr(), vrs.len(), ptr) };
             }
             Call::OtherType {
                 who,
@@ -521,18 +674,18 @@ impl World {
                 value,
             } => {
                 let c = self.component(who);
-                let vrs: Vec<u32> = vrs.iter().map(|v| v.get()).collect();
+                let vrs: Vec<u32> = vrs.iter().map(|v| v.get(self.fmu.variables)).collect();
                 let (p, n) = (vrs.as_ptr(), vrs.len());
                 let mut ints = vec![value; n];
                 let mut strings = vec![c"x".as_ptr(); n];
                 unsafe {
                     match kind % 6 {
-                        0 => fmi2GetInteger(c, p, n, ints.as_mut_ptr()),
-                        1 => fmi2GetBoolean(c, p, n, ints.as_mut_ptr()),
-                        2 => fmi2GetString(c, p, n, strings.as_mut_ptr()),
-                        3 => fmi2SetInteger(c, p, n, ints.as_ptr()),
-                        4 => fmi2SetBoolean(c, p, n, ints.as_ptr()),
-                        _ => fmi2SetString(c, p, n, strings.as_ptr()),
+                        0 => (self.f.fmi2GetInteger)(c, p, n, ints.as_mut_ptr()),
+                        1 => (self.f.fmi2GetBoolean)(c, p, n, ints.as_mut_ptr()),
+                        2 => (self.f.fmi2GetString)(c, p, n, strings.as_mut_ptr()),
+                        3 => (self.f.fmi2SetInteger)(c, p, n, ints.as_ptr()),
+                        4 => (self.f.fmi2SetBoolean)(c, p, n, ints.as_ptr()),
+                        _ => (self.f.fmi2SetString)(c, p, n, strings.as_ptr()),
                     }
                 };
             }
@@ -549,13 +702,14 @@ impl World {
                     _ => t.get(),
                 };
                 let h = h.get();
-                let status = unsafe { fmi2DoStep(self.component(who), t, h, i32::from(no_prior)) };
+                let status =
+                    unsafe { (self.f.fmi2DoStep)(self.component(who), t, h, i32::from(no_prior)) };
                 if let (OK, Some(i)) = (status, i) {
                     self.time[i] = t + h;
                 }
             }
             Call::CancelStep(who) => unsafe {
-                fmi2CancelStep(self.component(who));
+                (self.f.fmi2CancelStep)(self.component(who));
             },
             Call::Status {
                 who,
@@ -564,19 +718,19 @@ impl World {
                 null_ptr,
             } => {
                 let c = self.component(who);
-                let k = c_int::from(status_kind);
-                let mut status = 0;
+                let k = fmi2StatusKind::from(status_kind);
+                let mut status = OK;
                 let mut real = 0.0;
                 let mut int = 0;
                 let mut string = null();
                 unsafe {
                     match (kind % 5, null_ptr) {
-                        (_, true) => fmi2GetStatus(c, k, null_mut()),
-                        (0, _) => fmi2GetStatus(c, k, &mut status),
-                        (1, _) => fmi2GetRealStatus(c, k, &mut real),
-                        (2, _) => fmi2GetIntegerStatus(c, k, &mut int),
-                        (3, _) => fmi2GetBooleanStatus(c, k, &mut int),
-                        _ => fmi2GetStringStatus(c, k, &mut string),
+                        (_, true) => (self.f.fmi2GetStatus)(c, k, null_mut()),
+                        (0, _) => (self.f.fmi2GetStatus)(c, k, &mut status),
+                        (1, _) => (self.f.fmi2GetRealStatus)(c, k, &mut real),
+                        (2, _) => (self.f.fmi2GetIntegerStatus)(c, k, &mut int),
+                        (3, _) => (self.f.fmi2GetBooleanStatus)(c, k, &mut int),
+                        _ => (self.f.fmi2GetStringStatus)(c, k, &mut string),
                     }
                 };
                 if !string.is_null() {
@@ -589,13 +743,16 @@ impl World {
                 ref values,
             } => {
                 let c = self.component(who);
-                let vrs: Vec<u32> = values.iter().map(|(v, _, _)| v.get()).collect();
+                let vrs: Vec<u32> = values
+                    .iter()
+                    .map(|(v, _, _)| v.get(self.fmu.variables))
+                    .collect();
                 let orders: Vec<i32> = values.iter().map(|&(_, o, _)| i32::from(o)).collect();
                 let mut xs: Vec<f64> = values.iter().map(|(_, _, x)| x.get()).collect();
                 let n = vrs.len();
                 unsafe {
                     if set {
-                        fmi2SetRealInputDerivatives(
+                        (self.f.fmi2SetRealInputDerivatives)(
                             c,
                             vrs.as_ptr(),
                             n,
@@ -603,7 +760,7 @@ impl World {
                             xs.as_ptr(),
                         )
                     } else {
-                        fmi2GetRealOutputDerivatives(
+                        (self.f.fmi2GetRealOutputDerivatives)(
                             c,
                             vrs.as_ptr(),
                             n,
@@ -621,7 +778,7 @@ impl World {
                 let k = slot as usize % STATE_SLOTS;
                 let c = self.component(who);
                 if null_ptr {
-                    unsafe { fmi2GetFMUstate(c, null_mut()) };
+                    unsafe { (self.f.fmi2GetFMUstate)(c, null_mut()) };
                     return;
                 }
                 // into a free slot a new state; into a taken one the standard's update
@@ -629,17 +786,17 @@ impl World {
                 if !self.states[k].is_null() && World::index(who) != Some(self.owner[k]) {
                     return;
                 }
-                let status = unsafe { fmi2GetFMUstate(c, &mut self.states[k]) };
+                let status = unsafe { (self.f.fmi2GetFMUstate)(c, &mut self.states[k]) };
                 if let (OK, Some(i)) = (status, World::index(who)) {
                     self.owner[k] = i;
                 }
             }
             Call::SetFmuState { who, slot } => {
                 let s = self.states[slot as usize % STATE_SLOTS];
-                let status = unsafe { fmi2SetFMUstate(self.component(who), s) };
+                let status = unsafe { (self.f.fmi2SetFMUstate)(self.component(who), s) };
                 if let (OK, Some(i)) = (status, World::index(who)) {
                     let mut t = 0.0;
-                    unsafe { fmi2GetRealStatus(self.instances[i], 2, &mut t) };
+                    unsafe { (self.f.fmi2GetRealStatus)(self.instances[i], 2, &mut t) };
                     self.time[i] = t;
                 }
             }
@@ -647,10 +804,10 @@ impl World {
                 let k = slot as usize % STATE_SLOTS;
                 if World::index(who) != Some(self.owner[k]) && !self.states[k].is_null() {
                     // another instance's state: only a NULL handle may go elsewhere
-                    unsafe { fmi2FreeFMUstate(self.component(who), null_mut()) };
+                    unsafe { (self.f.fmi2FreeFMUstate)(self.component(who), null_mut()) };
                     return;
                 }
-                unsafe { fmi2FreeFMUstate(self.component(who), &mut self.states[k]) };
+                unsafe { (self.f.fmi2FreeFMUstate)(self.component(who), &mut self.states[k]) };
             }
             Call::Serialize {
                 who,
@@ -662,7 +819,7 @@ impl World {
                 into,
             } => self.serialize(who, slot, size, corrupt, truncate, fix_checksum, into),
             Call::SetTime { who, t } => {
-                let status = unsafe { fmi2SetTime(self.component(who), t.get()) };
+                let status = unsafe { (self.f.fmi2SetTime)(self.component(who), t.get()) };
                 if let (OK, Some(i)) = (status, World::index(who)) {
                     self.time[i] = t.get();
                 }
@@ -679,7 +836,7 @@ impl World {
                 if from_get {
                     // a valid state, perturbed where the sequence says
                     let mut got = vec![0.0; n];
-                    if unsafe { fmi2GetContinuousStates(c, got.as_mut_ptr(), n) } == OK {
+                    if unsafe { (self.f.fmi2GetContinuousStates)(c, got.as_mut_ptr(), n) } == OK {
                         for (k, g) in got.iter().enumerate() {
                             xs[k] = if x.get(k).is_some() {
                                 g * (1.0 + 1e-3 * xs[k])
@@ -689,7 +846,7 @@ impl World {
                         }
                     }
                 }
-                unsafe { fmi2SetContinuousStates(c, xs.as_ptr(), n) };
+                unsafe { (self.f.fmi2SetContinuousStates)(c, xs.as_ptr(), n) };
             }
             Call::GetVector {
                 who,
@@ -706,27 +863,34 @@ impl World {
                 let p = if null_ptr { null_mut() } else { v.as_mut_ptr() };
                 unsafe {
                     match kind % 4 {
-                        0 => fmi2GetContinuousStates(c, p, n),
-                        1 => fmi2GetDerivatives(c, p, n),
-                        2 => fmi2GetEventIndicators(c, p, n),
-                        _ => fmi2GetNominalsOfContinuousStates(c, p, n),
+                        0 => (self.f.fmi2GetContinuousStates)(c, p, n),
+                        1 => (self.f.fmi2GetDerivatives)(c, p, n),
+                        2 => (self.f.fmi2GetEventIndicators)(c, p, n),
+                        _ => (self.f.fmi2GetNominalsOfContinuousStates)(c, p, n),
                     }
                 };
             }
             Call::EnterEventMode(who) => unsafe {
-                fmi2EnterEventMode(self.component(who));
+                (self.f.fmi2EnterEventMode)(self.component(who));
             },
             Call::NewDiscreteStates { who, null_ptr } => {
-                let mut info = EventInfo::default();
+                let mut info = fmi2EventInfo {
+                    new_discrete_states_needed: 0,
+                    terminate_simulation: 0,
+                    nominals_of_continuous_states_changed: 0,
+                    values_of_continuous_states_changed: 0,
+                    next_event_time_defined: 0,
+                    next_event_time: 0.0,
+                };
                 let p = if null_ptr {
                     null_mut()
                 } else {
-                    &mut info as *mut EventInfo
+                    &mut info as *mut fmi2EventInfo
                 };
-                unsafe { fmi2NewDiscreteStates(self.component(who), p) };
+                unsafe { (self.f.fmi2NewDiscreteStates)(self.component(who), p) };
             }
             Call::EnterContinuousTimeMode(who) => unsafe {
-                fmi2EnterContinuousTimeMode(self.component(who));
+                (self.f.fmi2EnterContinuousTimeMode)(self.component(who));
             },
             Call::CompletedIntegratorStep {
                 who,
@@ -740,7 +904,12 @@ impl World {
                     (&mut event as *mut i32, &mut terminate as *mut i32)
                 };
                 unsafe {
-                    fmi2CompletedIntegratorStep(self.component(who), i32::from(no_prior), e, t)
+                    (self.f.fmi2CompletedIntegratorStep)(
+                        self.component(who),
+                        i32::from(no_prior),
+                        e,
+                        t,
+                    )
                 };
             }
             Call::DirectionalDerivative {
@@ -748,12 +917,16 @@ impl World {
                 ref unknowns,
                 ref knowns,
             } => {
-                let unknowns: Vec<u32> = unknowns.iter().map(|v| v.get()).collect();
-                let known_vrs: Vec<u32> = knowns.iter().map(|(v, _)| v.get()).collect();
+                let unknowns: Vec<u32> =
+                    unknowns.iter().map(|v| v.get(self.fmu.variables)).collect();
+                let known_vrs: Vec<u32> = knowns
+                    .iter()
+                    .map(|(v, _)| v.get(self.fmu.variables))
+                    .collect();
                 let seeds: Vec<f64> = knowns.iter().map(|(_, x)| x.get()).collect();
                 let mut out = vec![0.0; unknowns.len()];
                 unsafe {
-                    fmi2GetDirectionalDerivative(
+                    (self.f.fmi2GetDirectionalDerivative)(
                         self.component(who),
                         unknowns.as_ptr(),
                         unknowns.len(),
@@ -783,7 +956,7 @@ impl World {
         let c = self.component(who);
         let s = self.states[slot as usize % STATE_SLOTS];
         let mut n = 0usize;
-        if unsafe { fmi2SerializedFMUstateSize(c, s, &mut n) } != OK {
+        if unsafe { (self.f.fmi2SerializedFMUstateSize)(c, s, &mut n) } != OK {
             return;
         }
         let n = match size {
@@ -791,20 +964,27 @@ impl World {
             Len::Other(k) => k as usize,
         };
         let mut bytes = vec![0u8; n];
-        if unsafe { fmi2SerializeFMUstate(c, s, bytes.as_mut_ptr().cast(), n) } != OK {
+        if unsafe { (self.f.fmi2SerializeFMUstate)(c, s, bytes.as_mut_ptr().cast(), n) } != OK {
             return;
         }
         damage(&mut bytes, corrupt, truncate, fix_checksum);
         let k = into as usize % STATE_SLOTS;
         let Some(i) = World::index(who) else {
-            unsafe { fmi2DeSerializeFMUstate(c, bytes.as_ptr().cast(), bytes.len(), null_mut()) };
+            unsafe {
+                (self.f.fmi2DeSerializeFMUstate)(c, bytes.as_ptr().cast(), bytes.len(), null_mut())
+            };
             return;
         };
         if !self.states[k].is_null() && self.owner[k] != i {
             return;
         }
         let status = unsafe {
-            fmi2DeSerializeFMUstate(c, bytes.as_ptr().cast(), bytes.len(), &mut self.states[k])
+            (self.f.fmi2DeSerializeFMUstate)(
+                c,
+                bytes.as_ptr().cast(),
+                bytes.len(),
+                &mut self.states[k],
+            )
         };
         if status == OK {
             self.owner[k] = i;
@@ -820,10 +1000,10 @@ impl World {
         for k in 0..STATE_SLOTS {
             if !self.states[k].is_null() {
                 let c = unsafe {
-                    fmi2Instantiate(
+                    (self.f.fmi2Instantiate)(
                         c"cleanup".as_ptr(),
                         1,
-                        self.guid.as_ptr(),
+                        self.fmu.token.as_ptr(),
                         null(),
                         &self.callbacks,
                         0,
@@ -831,8 +1011,8 @@ impl World {
                     )
                 };
                 unsafe {
-                    fmi2FreeFMUstate(c, &mut self.states[k]);
-                    fmi2FreeInstance(c);
+                    (self.f.fmi2FreeFMUstate)(c, &mut self.states[k]);
+                    (self.f.fmi2FreeInstance)(c);
                 }
                 assert!(self.states[k].is_null(), "fmi2FreeFMUstate kept a state");
             }
@@ -840,14 +1020,17 @@ impl World {
     }
 }
 
-fuzz_target!(|calls: Vec<Call>| {
+/// Runs a sequence (its first 64 calls) against `fmu`, whose instances log to `logger`, then
+/// frees what it still holds: what the fuzz targets do with each input, and the replay with each
+/// file of their corpora.
+pub fn run(fmu: &Fmu, logger: Logger, calls: &[Call]) {
     unsafe {
-        std::hint::black_box(CStr::from_ptr(fmi2GetTypesPlatform()));
-        std::hint::black_box(CStr::from_ptr(fmi2GetVersion()));
+        std::hint::black_box(CStr::from_ptr((fmu.functions.fmi2GetTypesPlatform)()));
+        std::hint::black_box(CStr::from_ptr((fmu.functions.fmi2GetVersion)()));
     }
-    let mut world = World::new();
+    let mut world = World::new(fmu, logger);
     for call in calls.iter().take(64) {
         world.run(call);
     }
     world.finish();
-});
+}

@@ -1,5 +1,5 @@
-//! Random FMI 3.0 call sequences against an FMU's C entry points (HaselPlatform's FMI 3.0 build in
-//! target fmi3_calls, HaselPlatformReduced's in reduced_fmi3_calls), right and wrong: two instances
+//! Random FMI 3.0 call sequences against an FMU's C entry points (HaselPlatform's FMI 3.0 functions
+//! in target fmi3_calls, HaselPlatformReduced's in reduced_fmi3_calls), right and wrong: two instances
 //! (Co-Simulation or Model Exchange), NULL pointers, unknown value references, wrong array sizes,
 //! NaN and infinite values, calls of every type's getters and setters, calls in the wrong state,
 //! FMU states passed between instances, serialized states truncated or corrupted (also with a
@@ -8,177 +8,323 @@
 //! passed with it.
 //!
 //! Under libFuzzer with AddressSanitizer (`bash ci/fuzz.sh`) a crash, an out-of-bounds access,
-//! a leak at the end of a sequence or a call that hangs fails the run.
+//! a leak at the end of a sequence, a call that hangs or any panic fails the run; [`run`] also
+//! replays the committed corpora in every `cargo test` (tests/fuzz_replay.rs), as in
+//! fmi2_sequence.rs.
 
-use std::ffi::{CStr, CString, c_char, c_int, c_void};
+use std::ffi::{CStr, c_char};
 use std::ptr::{null, null_mut};
 
 use crate::common::{Len, Real, Vr, Who, damage};
 use arbitrary::Arbitrary;
-use hasel_fmu::fmi_common::model_api::FmuCore;
+use hasel_fmu::fmi3::types::*;
 use hasel_fmu::fmu::pack::FmiVersion;
 use hasel_fmu::model::Params;
-use libfuzzer_sys::fuzz_target;
 
-type Instance = *mut c_void;
-type FmuState = *mut c_void;
-type Status = c_int;
-const OK: Status = 0;
+const OK: fmi3Status = Fmi3Status::Ok;
 
-type LogMessage = unsafe extern "C" fn(*mut c_void, Status, *const c_char, *const c_char);
-
-// The functions of fmi3Functions.h that this model's FMU serves or refuses.
-unsafe extern "C" {
-    fn fmi3GetVersion() -> *const c_char;
-    fn fmi3SetDebugLogging(
-        c: Instance,
-        on: bool,
-        n: usize,
-        categories: *const *const c_char,
-    ) -> Status;
-    fn fmi3InstantiateModelExchange(
-        name: *const c_char,
-        token: *const c_char,
-        resources: *const c_char,
-        visible: bool,
-        logging_on: bool,
-        environment: *mut c_void,
-        log: Option<LogMessage>,
-    ) -> Instance;
-    fn fmi3InstantiateCoSimulation(
-        name: *const c_char,
-        token: *const c_char,
-        resources: *const c_char,
-        visible: bool,
-        logging_on: bool,
-        event_mode_used: bool,
-        early_return_allowed: bool,
-        required_intermediate: *const u32,
-        n_required_intermediate: usize,
-        environment: *mut c_void,
-        log: Option<LogMessage>,
-        intermediate_update: *const c_void,
-    ) -> Instance;
-    fn fmi3FreeInstance(c: Instance);
-    fn fmi3EnterInitializationMode(
-        c: Instance,
-        tol_on: bool,
-        tol: f64,
-        t0: f64,
-        stop_on: bool,
-        stop: f64,
-    ) -> Status;
-    fn fmi3ExitInitializationMode(c: Instance) -> Status;
-    fn fmi3EnterEventMode(c: Instance) -> Status;
-    fn fmi3Terminate(c: Instance) -> Status;
-    fn fmi3Reset(c: Instance) -> Status;
-    fn fmi3GetFloat64(c: Instance, vr: *const u32, nvr: usize, v: *mut f64, nv: usize) -> Status;
-    fn fmi3SetFloat64(c: Instance, vr: *const u32, nvr: usize, v: *const f64, nv: usize) -> Status;
-    fn fmi3GetFloat32(c: Instance, vr: *const u32, nvr: usize, v: *mut f32, nv: usize) -> Status;
-    fn fmi3GetInt32(c: Instance, vr: *const u32, nvr: usize, v: *mut i32, nv: usize) -> Status;
-    fn fmi3GetUInt64(c: Instance, vr: *const u32, nvr: usize, v: *mut u64, nv: usize) -> Status;
-    fn fmi3GetBoolean(c: Instance, vr: *const u32, nvr: usize, v: *mut bool, nv: usize) -> Status;
-    fn fmi3GetString(
-        c: Instance,
-        vr: *const u32,
+/// The functions of `fmi3Functions.h` that the sequences call (all this model's FMU serves, and
+/// some it refuses), as an importer holds them after loading its library: the library's macro
+/// [`hasel_fmu::export_fmi3`] makes them for a core ([`functions!`]).
+#[allow(non_snake_case)]
+#[derive(Clone, Copy)]
+pub struct Functions {
+    pub fmi3GetVersion: unsafe extern "C" fn() -> *const c_char,
+    pub fmi3SetDebugLogging: unsafe extern "C" fn(
+        c: fmi3Instance,
+        logging_on: fmi3Boolean,
+        n_categories: usize,
+        categories: *const fmi3String,
+    ) -> fmi3Status,
+    pub fmi3InstantiateModelExchange: unsafe extern "C" fn(
+        name: fmi3String,
+        token: fmi3String,
+        resource_path: fmi3String,
+        visible: fmi3Boolean,
+        logging_on: fmi3Boolean,
+        environment: fmi3InstanceEnvironment,
+        log_message: fmi3LogMessageCallback,
+    ) -> fmi3Instance,
+    pub fmi3InstantiateCoSimulation: unsafe extern "C" fn(
+        name: fmi3String,
+        token: fmi3String,
+        resource_path: fmi3String,
+        visible: fmi3Boolean,
+        logging_on: fmi3Boolean,
+        event_mode_used: fmi3Boolean,
+        early_return_allowed: fmi3Boolean,
+        required_intermediate_variables: *const fmi3ValueReference,
+        n_required_intermediate_variables: usize,
+        environment: fmi3InstanceEnvironment,
+        log_message: fmi3LogMessageCallback,
+        intermediate_update: fmi3IntermediateUpdateCallback,
+    ) -> fmi3Instance,
+    pub fmi3FreeInstance: unsafe extern "C" fn(c: fmi3Instance),
+    pub fmi3EnterInitializationMode: unsafe extern "C" fn(
+        c: fmi3Instance,
+        tol_defined: fmi3Boolean,
+        tol: fmi3Float64,
+        start: fmi3Float64,
+        stop_defined: fmi3Boolean,
+        stop: fmi3Float64,
+    ) -> fmi3Status,
+    pub fmi3ExitInitializationMode: unsafe extern "C" fn(c: fmi3Instance) -> fmi3Status,
+    pub fmi3EnterEventMode: unsafe extern "C" fn(c: fmi3Instance) -> fmi3Status,
+    pub fmi3Terminate: unsafe extern "C" fn(c: fmi3Instance) -> fmi3Status,
+    pub fmi3Reset: unsafe extern "C" fn(c: fmi3Instance) -> fmi3Status,
+    pub fmi3GetFloat64: unsafe extern "C" fn(
+        c: fmi3Instance,
+        vr: *const fmi3ValueReference,
         nvr: usize,
-        v: *mut *const c_char,
-        nv: usize,
-    ) -> Status;
-    fn fmi3SetInt32(c: Instance, vr: *const u32, nvr: usize, v: *const i32, nv: usize) -> Status;
-    fn fmi3SetBoolean(c: Instance, vr: *const u32, nvr: usize, v: *const bool, nv: usize)
-    -> Status;
-    fn fmi3SetString(
-        c: Instance,
-        vr: *const u32,
+        values: *mut fmi3Float64,
+        n_values: usize,
+    ) -> fmi3Status,
+    pub fmi3SetFloat64: unsafe extern "C" fn(
+        c: fmi3Instance,
+        vr: *const fmi3ValueReference,
         nvr: usize,
-        v: *const *const c_char,
-        nv: usize,
-    ) -> Status;
-    fn fmi3GetFMUState(c: Instance, s: *mut FmuState) -> Status;
-    fn fmi3SetFMUState(c: Instance, s: FmuState) -> Status;
-    fn fmi3FreeFMUState(c: Instance, s: *mut FmuState) -> Status;
-    fn fmi3SerializedFMUStateSize(c: Instance, s: FmuState, size: *mut usize) -> Status;
-    fn fmi3SerializeFMUState(c: Instance, s: FmuState, bytes: *mut u8, size: usize) -> Status;
-    fn fmi3DeserializeFMUState(
-        c: Instance,
-        bytes: *const u8,
+        values: *const fmi3Float64,
+        n_values: usize,
+    ) -> fmi3Status,
+    pub fmi3GetFloat32: unsafe extern "C" fn(
+        c: fmi3Instance,
+        vr: *const fmi3ValueReference,
+        nvr: usize,
+        values: *mut fmi3Float32,
+        n_values: usize,
+    ) -> fmi3Status,
+    pub fmi3GetInt32: unsafe extern "C" fn(
+        c: fmi3Instance,
+        vr: *const fmi3ValueReference,
+        nvr: usize,
+        values: *mut fmi3Int32,
+        n_values: usize,
+    ) -> fmi3Status,
+    pub fmi3GetUInt64: unsafe extern "C" fn(
+        c: fmi3Instance,
+        vr: *const fmi3ValueReference,
+        nvr: usize,
+        values: *mut fmi3UInt64,
+        n_values: usize,
+    ) -> fmi3Status,
+    pub fmi3GetBoolean: unsafe extern "C" fn(
+        c: fmi3Instance,
+        vr: *const fmi3ValueReference,
+        nvr: usize,
+        values: *mut fmi3Boolean,
+        n_values: usize,
+    ) -> fmi3Status,
+    pub fmi3GetString: unsafe extern "C" fn(
+        c: fmi3Instance,
+        vr: *const fmi3ValueReference,
+        nvr: usize,
+        values: *mut fmi3String,
+        n_values: usize,
+    ) -> fmi3Status,
+    pub fmi3SetInt32: unsafe extern "C" fn(
+        c: fmi3Instance,
+        vr: *const fmi3ValueReference,
+        nvr: usize,
+        values: *const fmi3Int32,
+        n_values: usize,
+    ) -> fmi3Status,
+    pub fmi3SetBoolean: unsafe extern "C" fn(
+        c: fmi3Instance,
+        vr: *const fmi3ValueReference,
+        nvr: usize,
+        values: *const fmi3Boolean,
+        n_values: usize,
+    ) -> fmi3Status,
+    pub fmi3SetString: unsafe extern "C" fn(
+        c: fmi3Instance,
+        vr: *const fmi3ValueReference,
+        nvr: usize,
+        values: *const fmi3String,
+        n_values: usize,
+    ) -> fmi3Status,
+    pub fmi3GetFMUState:
+        unsafe extern "C" fn(c: fmi3Instance, state: *mut fmi3FMUState) -> fmi3Status,
+    pub fmi3SetFMUState: unsafe extern "C" fn(c: fmi3Instance, state: fmi3FMUState) -> fmi3Status,
+    pub fmi3FreeFMUState:
+        unsafe extern "C" fn(c: fmi3Instance, state: *mut fmi3FMUState) -> fmi3Status,
+    pub fmi3SerializedFMUStateSize:
+        unsafe extern "C" fn(c: fmi3Instance, state: fmi3FMUState, size: *mut usize) -> fmi3Status,
+    pub fmi3SerializeFMUState: unsafe extern "C" fn(
+        c: fmi3Instance,
+        state: fmi3FMUState,
+        bytes: *mut fmi3Byte,
         size: usize,
-        s: *mut FmuState,
-    ) -> Status;
-    fn fmi3GetDirectionalDerivative(
-        c: Instance,
-        unknowns: *const u32,
+    ) -> fmi3Status,
+    pub fmi3DeserializeFMUState: unsafe extern "C" fn(
+        c: fmi3Instance,
+        bytes: *const fmi3Byte,
+        size: usize,
+        state: *mut fmi3FMUState,
+    ) -> fmi3Status,
+    pub fmi3GetDirectionalDerivative: unsafe extern "C" fn(
+        c: fmi3Instance,
+        unknowns: *const fmi3ValueReference,
         n_unknowns: usize,
-        knowns: *const u32,
+        knowns: *const fmi3ValueReference,
         n_knowns: usize,
-        seed: *const f64,
+        seed: *const fmi3Float64,
         n_seed: usize,
-        sensitivity: *mut f64,
+        sensitivity: *mut fmi3Float64,
         n_sensitivity: usize,
-    ) -> Status;
-    fn fmi3GetAdjointDerivative(
-        c: Instance,
-        unknowns: *const u32,
+    ) -> fmi3Status,
+    pub fmi3GetAdjointDerivative: unsafe extern "C" fn(
+        c: fmi3Instance,
+        unknowns: *const fmi3ValueReference,
         n_unknowns: usize,
-        knowns: *const u32,
+        knowns: *const fmi3ValueReference,
         n_knowns: usize,
-        seed: *const f64,
+        seed: *const fmi3Float64,
         n_seed: usize,
-        sensitivity: *mut f64,
+        sensitivity: *mut fmi3Float64,
         n_sensitivity: usize,
-    ) -> Status;
-    fn fmi3EnterConfigurationMode(c: Instance) -> Status;
-    fn fmi3ExitConfigurationMode(c: Instance) -> Status;
-    fn fmi3UpdateDiscreteStates(
-        c: Instance,
-        update_needed: *mut bool,
-        terminate: *mut bool,
-        nominals_changed: *mut bool,
-        values_changed: *mut bool,
-        next_time_defined: *mut bool,
-        next_time: *mut f64,
-    ) -> Status;
-    fn fmi3EnterContinuousTimeMode(c: Instance) -> Status;
-    fn fmi3CompletedIntegratorStep(
-        c: Instance,
-        no_prior: bool,
-        enter_event_mode: *mut bool,
-        terminate: *mut bool,
-    ) -> Status;
-    fn fmi3SetTime(c: Instance, t: f64) -> Status;
-    fn fmi3SetContinuousStates(c: Instance, x: *const f64, n: usize) -> Status;
-    fn fmi3GetContinuousStateDerivatives(c: Instance, dx: *mut f64, n: usize) -> Status;
-    fn fmi3GetEventIndicators(c: Instance, z: *mut f64, n: usize) -> Status;
-    fn fmi3GetContinuousStates(c: Instance, x: *mut f64, n: usize) -> Status;
-    fn fmi3GetNominalsOfContinuousStates(c: Instance, x: *mut f64, n: usize) -> Status;
-    fn fmi3GetNumberOfEventIndicators(c: Instance, n: *mut usize) -> Status;
-    fn fmi3GetNumberOfContinuousStates(c: Instance, n: *mut usize) -> Status;
-    fn fmi3EnterStepMode(c: Instance) -> Status;
-    fn fmi3GetOutputDerivatives(
-        c: Instance,
-        vr: *const u32,
+    ) -> fmi3Status,
+    pub fmi3EnterConfigurationMode: unsafe extern "C" fn(c: fmi3Instance) -> fmi3Status,
+    pub fmi3ExitConfigurationMode: unsafe extern "C" fn(c: fmi3Instance) -> fmi3Status,
+    pub fmi3UpdateDiscreteStates: unsafe extern "C" fn(
+        c: fmi3Instance,
+        discrete_states_need_update: *mut fmi3Boolean,
+        terminate_simulation: *mut fmi3Boolean,
+        nominals_changed: *mut fmi3Boolean,
+        values_changed: *mut fmi3Boolean,
+        next_event_time_defined: *mut fmi3Boolean,
+        next_event_time: *mut fmi3Float64,
+    ) -> fmi3Status,
+    pub fmi3EnterContinuousTimeMode: unsafe extern "C" fn(c: fmi3Instance) -> fmi3Status,
+    pub fmi3CompletedIntegratorStep: unsafe extern "C" fn(
+        c: fmi3Instance,
+        no_set_fmu_state_prior: fmi3Boolean,
+        enter_event_mode: *mut fmi3Boolean,
+        terminate_simulation: *mut fmi3Boolean,
+    ) -> fmi3Status,
+    pub fmi3SetTime: unsafe extern "C" fn(c: fmi3Instance, time: fmi3Float64) -> fmi3Status,
+    pub fmi3SetContinuousStates:
+        unsafe extern "C" fn(c: fmi3Instance, x: *const fmi3Float64, nx: usize) -> fmi3Status,
+    pub fmi3GetContinuousStateDerivatives:
+        unsafe extern "C" fn(c: fmi3Instance, dx: *mut fmi3Float64, nx: usize) -> fmi3Status,
+    pub fmi3GetEventIndicators:
+        unsafe extern "C" fn(c: fmi3Instance, z: *mut fmi3Float64, nz: usize) -> fmi3Status,
+    pub fmi3GetContinuousStates:
+        unsafe extern "C" fn(c: fmi3Instance, x: *mut fmi3Float64, nx: usize) -> fmi3Status,
+    pub fmi3GetNominalsOfContinuousStates:
+        unsafe extern "C" fn(c: fmi3Instance, nominals: *mut fmi3Float64, nx: usize) -> fmi3Status,
+    pub fmi3GetNumberOfEventIndicators:
+        unsafe extern "C" fn(c: fmi3Instance, n: *mut usize) -> fmi3Status,
+    pub fmi3GetNumberOfContinuousStates:
+        unsafe extern "C" fn(c: fmi3Instance, n: *mut usize) -> fmi3Status,
+    pub fmi3EnterStepMode: unsafe extern "C" fn(c: fmi3Instance) -> fmi3Status,
+    pub fmi3GetOutputDerivatives: unsafe extern "C" fn(
+        c: fmi3Instance,
+        vr: *const fmi3ValueReference,
         nvr: usize,
-        orders: *const i32,
-        v: *mut f64,
-        nv: usize,
-    ) -> Status;
-    fn fmi3DoStep(
-        c: Instance,
-        t: f64,
-        h: f64,
-        no_prior: bool,
-        event_handling_needed: *mut bool,
-        terminate: *mut bool,
-        early_return: *mut bool,
-        last_successful_time: *mut f64,
-    ) -> Status;
+        orders: *const fmi3Int32,
+        values: *mut fmi3Float64,
+        n_values: usize,
+    ) -> fmi3Status,
+    pub fmi3DoStep: unsafe extern "C" fn(
+        c: fmi3Instance,
+        tc: fmi3Float64,
+        h: fmi3Float64,
+        no_set_fmu_state_prior: fmi3Boolean,
+        event_handling_needed: *mut fmi3Boolean,
+        terminate_simulation: *mut fmi3Boolean,
+        early_return: *mut fmi3Boolean,
+        last_successful_time: *mut fmi3Float64,
+    ) -> fmi3Status,
+}
+
+/// The [`Functions`] of the core `$core` (a path from the crate root): the C functions the
+/// FMU's FMI 3.0 build exports, made by the same macro without the exported symbol names, as in
+/// fmi2_sequence.rs.
+macro_rules! functions {
+    ($core:ty) => {{
+        #[allow(dead_code)]
+        mod c {
+            hasel_fmu::__fmi3_functions!([] $core);
+        }
+        Functions {
+            fmi3GetVersion: c::fmi3GetVersion,
+            fmi3SetDebugLogging: c::fmi3SetDebugLogging,
+            fmi3InstantiateModelExchange: c::fmi3InstantiateModelExchange,
+            fmi3InstantiateCoSimulation: c::fmi3InstantiateCoSimulation,
+            fmi3FreeInstance: c::fmi3FreeInstance,
+            fmi3EnterInitializationMode: c::fmi3EnterInitializationMode,
+            fmi3ExitInitializationMode: c::fmi3ExitInitializationMode,
+            fmi3EnterEventMode: c::fmi3EnterEventMode,
+            fmi3Terminate: c::fmi3Terminate,
+            fmi3Reset: c::fmi3Reset,
+            fmi3GetFloat64: c::fmi3GetFloat64,
+            fmi3SetFloat64: c::fmi3SetFloat64,
+            fmi3GetFloat32: c::fmi3GetFloat32,
+            fmi3GetInt32: c::fmi3GetInt32,
+            fmi3GetUInt64: c::fmi3GetUInt64,
+            fmi3GetBoolean: c::fmi3GetBoolean,
+            fmi3GetString: c::fmi3GetString,
+            fmi3SetInt32: c::fmi3SetInt32,
+            fmi3SetBoolean: c::fmi3SetBoolean,
+            fmi3SetString: c::fmi3SetString,
+            fmi3GetFMUState: c::fmi3GetFMUState,
+            fmi3SetFMUState: c::fmi3SetFMUState,
+            fmi3FreeFMUState: c::fmi3FreeFMUState,
+            fmi3SerializedFMUStateSize: c::fmi3SerializedFMUStateSize,
+            fmi3SerializeFMUState: c::fmi3SerializeFMUState,
+            fmi3DeserializeFMUState: c::fmi3DeserializeFMUState,
+            fmi3GetDirectionalDerivative: c::fmi3GetDirectionalDerivative,
+            fmi3GetAdjointDerivative: c::fmi3GetAdjointDerivative,
+            fmi3EnterConfigurationMode: c::fmi3EnterConfigurationMode,
+            fmi3ExitConfigurationMode: c::fmi3ExitConfigurationMode,
+            fmi3UpdateDiscreteStates: c::fmi3UpdateDiscreteStates,
+            fmi3EnterContinuousTimeMode: c::fmi3EnterContinuousTimeMode,
+            fmi3CompletedIntegratorStep: c::fmi3CompletedIntegratorStep,
+            fmi3SetTime: c::fmi3SetTime,
+            fmi3SetContinuousStates: c::fmi3SetContinuousStates,
+            fmi3GetContinuousStateDerivatives: c::fmi3GetContinuousStateDerivatives,
+            fmi3GetEventIndicators: c::fmi3GetEventIndicators,
+            fmi3GetContinuousStates: c::fmi3GetContinuousStates,
+            fmi3GetNominalsOfContinuousStates: c::fmi3GetNominalsOfContinuousStates,
+            fmi3GetNumberOfEventIndicators: c::fmi3GetNumberOfEventIndicators,
+            fmi3GetNumberOfContinuousStates: c::fmi3GetNumberOfContinuousStates,
+            fmi3EnterStepMode: c::fmi3EnterStepMode,
+            fmi3GetOutputDerivatives: c::fmi3GetOutputDerivatives,
+            fmi3DoStep: c::fmi3DoStep,
+        }
+    }};
+}
+
+/// The FMU a sequence runs against.
+pub type Fmu = crate::common::Fmu<Functions>;
+
+impl Fmu {
+    /// HaselPlatform's FMI 3.0 build (target fmi3_calls).
+    pub fn platform() -> Fmu {
+        use hasel_fmu::fmu::{HaselCore, pack, variables::rows};
+        Fmu::new::<HaselCore>(
+            functions!(hasel_fmu::fmu::HaselCore),
+            FmiVersion::V3.token(&pack::platform(&Params::default())),
+            rows().len(),
+        )
+    }
+
+    /// HaselPlatformReduced's FMI 3.0 build (target reduced_fmi3_calls).
+    pub fn reduced() -> Fmu {
+        use hasel_fmu::fmu::{HaselReducedCore, pack, variables::rows_of};
+        use hasel_fmu::model::Reduction;
+        Fmu::new::<HaselReducedCore>(
+            functions!(hasel_fmu::fmu::HaselReducedCore),
+            FmiVersion::V3.token(&pack::reduced(&Params::default())),
+            rows_of(Reduction::Slow).len(),
+        )
+    }
 }
 
 /// Reads every string the FMU hands the logger, so AddressSanitizer checks each pointer.
 unsafe extern "C" fn log_message(
-    _env: *mut c_void,
-    _status: Status,
+    _env: fmi3InstanceEnvironment,
+    _status: fmi3Status,
     category: *const c_char,
     message: *const c_char,
 ) {
@@ -189,8 +335,9 @@ unsafe extern "C" fn log_message(
     }
 }
 
+/// One call of a sequence, with the arguments that matter.
 #[derive(Arbitrary, Debug)]
-enum Call {
+pub enum Call {
     Instantiate {
         who: Who,
         model_exchange: bool,
@@ -317,36 +464,30 @@ enum Call {
 
 const STATE_SLOTS: usize = 4;
 
-// The FMU under test: HaselPlatform, or with the feature `reduced` (target reduced_fmi3_calls)
-// HaselPlatformReduced, whose functions the library's `reduced-fmu,fmi3` build exports instead.
-#[cfg(not(feature = "reduced"))]
-use hasel_fmu::fmu::{HaselCore as Core, pack::platform as spec};
-#[cfg(feature = "reduced")]
-use hasel_fmu::fmu::{HaselReducedCore as Core, pack::reduced as spec};
-
 /// What the sequence holds between calls: the instances, their simulated time, FMU states.
-struct World {
-    instances: [Instance; 2],
+struct World<'a> {
+    fmu: &'a Fmu,
+    /// The FMU's functions (a copy of `fmu.functions`, for short calls).
+    f: Functions,
+    instances: [fmi3Instance; 2],
     time: [f64; 2],
-    states: [FmuState; STATE_SLOTS],
+    states: [fmi3FMUState; STATE_SLOTS],
     owner: [usize; STATE_SLOTS],
-    token: CString,
-    states_expected: usize,
 }
 
-impl World {
-    fn new() -> World {
+impl World<'_> {
+    fn new(fmu: &Fmu) -> World<'_> {
         World {
+            fmu,
+            f: fmu.functions,
             instances: [null_mut(); 2],
             time: [0.0; 2],
             states: [null_mut(); STATE_SLOTS],
             owner: [0; STATE_SLOTS],
-            token: CString::new(FmiVersion::V3.token(&spec(&Params::default()))).unwrap(),
-            states_expected: Core::model_structure().derivatives.len(),
         }
     }
 
-    fn instance(&self, who: Who) -> Instance {
+    fn instance(&self, who: Who) -> fmi3Instance {
         match who {
             Who::First => self.instances[0],
             Who::Second => self.instances[1],
@@ -377,30 +518,30 @@ impl World {
         for k in 0..STATE_SLOTS {
             if self.owner[k] == i && !self.states[k].is_null() {
                 // a refused free leaves the pointer with us: `finish` frees it
-                unsafe { fmi3FreeFMUState(c, &mut self.states[k]) };
+                unsafe { (self.f.fmi3FreeFMUState)(c, &mut self.states[k]) };
             }
         }
-        unsafe { fmi3FreeInstance(c) };
+        unsafe { (self.f.fmi3FreeInstance)(c) };
         self.instances[i] = null_mut();
         self.time[i] = 0.0;
     }
 
     /// A Co-Simulation instance of this FMU, quiet: for freeing states whose owner is gone.
-    fn cleanup_instance(&self) -> Instance {
+    fn cleanup_instance(&self) -> fmi3Instance {
         unsafe {
-            fmi3InstantiateCoSimulation(
+            (self.f.fmi3InstantiateCoSimulation)(
                 c"cleanup".as_ptr(),
-                self.token.as_ptr(),
+                self.fmu.token.as_ptr(),
                 null(),
-                false,
-                false,
-                false,
-                false,
+                0,
+                0,
+                0,
+                0,
                 null(),
                 0,
                 null_mut(),
                 None,
-                null(),
+                None,
             )
         }
     }
@@ -433,46 +574,42 @@ impl World {
                 let token = if wrong_token {
                     c"{0}"
                 } else {
-                    self.token.as_c_str()
+                    self.fmu.token.as_c_str()
                 };
                 let name = if null_name { null() } else { c"fuzz".as_ptr() };
-                let log = if no_logger {
-                    None
-                } else {
-                    Some(log_message as LogMessage)
-                };
+                let log: fmi3LogMessageCallback = if no_logger { None } else { Some(log_message) };
                 self.instances[i] = unsafe {
                     if model_exchange {
-                        fmi3InstantiateModelExchange(
+                        (self.f.fmi3InstantiateModelExchange)(
                             name,
                             token.as_ptr(),
                             resources,
-                            false,
-                            logging_on,
+                            0,
+                            u8::from(logging_on),
                             null_mut(),
                             log,
                         )
                     } else {
-                        fmi3InstantiateCoSimulation(
+                        (self.f.fmi3InstantiateCoSimulation)(
                             name,
                             token.as_ptr(),
                             resources,
-                            false,
-                            logging_on,
-                            event_mode_used,
-                            false,
+                            0,
+                            u8::from(logging_on),
+                            u8::from(event_mode_used),
+                            0,
                             null(),
                             0,
                             null_mut(),
                             log,
-                            null(),
+                            None,
                         )
                     }
                 };
             }
             Call::FreeInstance(who) => match World::index(who) {
                 Some(i) => self.free_instance(i),
-                None => unsafe { fmi3FreeInstance(null_mut()) },
+                None => unsafe { (self.f.fmi3FreeInstance)(null_mut()) },
             },
             Call::SetDebugLogging {
                 who,
@@ -486,7 +623,9 @@ impl World {
                     .map(|&k| NAMES[k as usize % NAMES.len()].as_ptr())
                     .collect();
                 let p = if null_ptr { null() } else { names.as_ptr() };
-                unsafe { fmi3SetDebugLogging(self.instance(who), on, names.len(), p) };
+                unsafe {
+                    (self.f.fmi3SetDebugLogging)(self.instance(who), u8::from(on), names.len(), p)
+                };
             }
             Call::EnterInitializationMode {
                 who,
@@ -496,12 +635,12 @@ impl World {
             } => {
                 let t0 = start.get();
                 let status = unsafe {
-                    fmi3EnterInitializationMode(
+                    (self.f.fmi3EnterInitializationMode)(
                         self.instance(who),
-                        tolerance.is_some(),
+                        u8::from(tolerance.is_some()),
                         tolerance.map_or(0.0, Real::get),
                         t0,
-                        stop.is_some(),
+                        u8::from(stop.is_some()),
                         stop.map_or(0.0, Real::get),
                     )
                 };
@@ -510,25 +649,25 @@ impl World {
                 }
             }
             Call::ExitInitializationMode(who) => unsafe {
-                fmi3ExitInitializationMode(self.instance(who));
+                (self.f.fmi3ExitInitializationMode)(self.instance(who));
             },
             Call::EnterEventMode(who) => unsafe {
-                fmi3EnterEventMode(self.instance(who));
+                (self.f.fmi3EnterEventMode)(self.instance(who));
             },
             Call::Terminate(who) => unsafe {
-                fmi3Terminate(self.instance(who));
+                (self.f.fmi3Terminate)(self.instance(who));
             },
             Call::Reset(who) => {
-                let status = unsafe { fmi3Reset(self.instance(who)) };
+                let status = unsafe { (self.f.fmi3Reset)(self.instance(who)) };
                 if let (OK, Some(i)) = (status, World::index(who)) {
                     self.time[i] = 0.0;
                 }
             }
             Call::Configuration { who, enter } => unsafe {
                 if enter {
-                    fmi3EnterConfigurationMode(self.instance(who));
+                    (self.f.fmi3EnterConfigurationMode)(self.instance(who));
                 } else {
-                    fmi3ExitConfigurationMode(self.instance(who));
+                    (self.f.fmi3ExitConfigurationMode)(self.instance(who));
                 }
             },
             Call::GetFloat64 {
@@ -537,7 +676,7 @@ impl World {
                 values,
                 null_ptr,
             } => {
-                let vrs: Vec<u32> = vrs.iter().map(|v| v.get()).collect();
+                let vrs: Vec<u32> = vrs.iter().map(|v| v.get(self.fmu.variables)).collect();
                 let n = self.len(values, vrs.len());
                 let mut out = vec![0.0; n];
                 let p = if null_ptr {
@@ -545,7 +684,9 @@ impl World {
                 } else {
                     out.as_mut_ptr()
                 };
-                unsafe { fmi3GetFloat64(self.instance(who), vrs.as_ptr(), vrs.len(), p, n) };
+                unsafe {
+                    (self.f.fmi3GetFloat64)(self.instance(who), vrs.as_ptr(), vrs.len(), p, n)
+                };
             }
             Call::SetFloat64 {
                 who,
@@ -553,13 +694,18 @@ impl World {
                 n_values,
                 null_ptr,
             } => {
-                let vrs: Vec<u32> = values.iter().map(|(v, _)| v.get()).collect();
+                let vrs: Vec<u32> = values
+                    .iter()
+                    .map(|(v, _)| v.get(self.fmu.variables))
+                    .collect();
                 let n = self.len(n_values, vrs.len());
                 let xs: Vec<f64> = (0..n)
                     .map(|k| values.get(k).map_or(1.0, |(_, x)| x.get()))
                     .collect();
                 let p = if null_ptr { null() } else { xs.as_ptr() };
-                unsafe { fmi3SetFloat64(self.instance(who), vrs.as_ptr(), vrs.len(), p, n) };
+                unsafe {
+                    (self.f.fmi3SetFloat64)(self.instance(who), vrs.as_ptr(), vrs.len(), p, n)
+                };
             }
             Call::OtherType {
                 who,
@@ -568,23 +714,23 @@ impl World {
                 value,
             } => {
                 let c = self.instance(who);
-                let vrs: Vec<u32> = vrs.iter().map(|v| v.get()).collect();
+                let vrs: Vec<u32> = vrs.iter().map(|v| v.get(self.fmu.variables)).collect();
                 let (p, n) = (vrs.as_ptr(), vrs.len());
                 let mut ints = vec![value; n];
-                let mut bools = vec![value % 2 == 0; n];
+                let mut bools = vec![u8::from(value % 2 == 0); n];
                 let mut floats = vec![value as f32; n];
                 let mut longs = vec![value as u64; n];
                 let mut strings = vec![c"x".as_ptr(); n];
                 unsafe {
                     match kind % 8 {
-                        0 => fmi3GetInt32(c, p, n, ints.as_mut_ptr(), n),
-                        1 => fmi3GetBoolean(c, p, n, bools.as_mut_ptr(), n),
-                        2 => fmi3GetString(c, p, n, strings.as_mut_ptr(), n),
-                        3 => fmi3GetFloat32(c, p, n, floats.as_mut_ptr(), n),
-                        4 => fmi3GetUInt64(c, p, n, longs.as_mut_ptr(), n),
-                        5 => fmi3SetInt32(c, p, n, ints.as_ptr(), n),
-                        6 => fmi3SetBoolean(c, p, n, bools.as_ptr(), n),
-                        _ => fmi3SetString(c, p, n, strings.as_ptr(), n),
+                        0 => (self.f.fmi3GetInt32)(c, p, n, ints.as_mut_ptr(), n),
+                        1 => (self.f.fmi3GetBoolean)(c, p, n, bools.as_mut_ptr(), n),
+                        2 => (self.f.fmi3GetString)(c, p, n, strings.as_mut_ptr(), n),
+                        3 => (self.f.fmi3GetFloat32)(c, p, n, floats.as_mut_ptr(), n),
+                        4 => (self.f.fmi3GetUInt64)(c, p, n, longs.as_mut_ptr(), n),
+                        5 => (self.f.fmi3SetInt32)(c, p, n, ints.as_ptr(), n),
+                        6 => (self.f.fmi3SetBoolean)(c, p, n, bools.as_ptr(), n),
+                        _ => (self.f.fmi3SetString)(c, p, n, strings.as_ptr(), n),
                     }
                 };
             }
@@ -601,26 +747,26 @@ impl World {
                     (true, Some(i)) => self.time[i],
                     _ => t.get(),
                 };
-                let (mut event, mut terminate, mut early) = (false, false, false);
+                let (mut event, mut terminate, mut early) = (0, 0, 0);
                 let mut last = 0.0;
                 let status = unsafe {
                     if null_outputs {
-                        fmi3DoStep(
+                        (self.f.fmi3DoStep)(
                             self.instance(who),
                             t,
                             h.get(),
-                            no_prior,
+                            u8::from(no_prior),
                             null_mut(),
                             null_mut(),
                             null_mut(),
                             null_mut(),
                         )
                     } else {
-                        fmi3DoStep(
+                        (self.f.fmi3DoStep)(
                             self.instance(who),
                             t,
                             h.get(),
-                            no_prior,
+                            u8::from(no_prior),
                             &mut event,
                             &mut terminate,
                             &mut early,
@@ -633,14 +779,17 @@ impl World {
                 }
             }
             Call::EnterStepMode(who) => unsafe {
-                fmi3EnterStepMode(self.instance(who));
+                (self.f.fmi3EnterStepMode)(self.instance(who));
             },
             Call::OutputDerivatives { who, ref values } => {
-                let vrs: Vec<u32> = values.iter().map(|(v, _)| v.get()).collect();
+                let vrs: Vec<u32> = values
+                    .iter()
+                    .map(|(v, _)| v.get(self.fmu.variables))
+                    .collect();
                 let orders: Vec<i32> = values.iter().map(|&(_, o)| i32::from(o)).collect();
                 let mut out = vec![0.0; vrs.len()];
                 unsafe {
-                    fmi3GetOutputDerivatives(
+                    (self.f.fmi3GetOutputDerivatives)(
                         self.instance(who),
                         vrs.as_ptr(),
                         vrs.len(),
@@ -658,30 +807,30 @@ impl World {
                 let k = slot as usize % STATE_SLOTS;
                 let c = self.instance(who);
                 if null_ptr {
-                    unsafe { fmi3GetFMUState(c, null_mut()) };
+                    unsafe { (self.f.fmi3GetFMUState)(c, null_mut()) };
                     return;
                 }
                 if !self.states[k].is_null() && World::index(who) != Some(self.owner[k]) {
                     return;
                 }
-                let status = unsafe { fmi3GetFMUState(c, &mut self.states[k]) };
+                let status = unsafe { (self.f.fmi3GetFMUState)(c, &mut self.states[k]) };
                 if let (OK, Some(i)) = (status, World::index(who)) {
                     self.owner[k] = i;
                 }
             }
             Call::SetFmuState { who, slot } => {
                 let s = self.states[slot as usize % STATE_SLOTS];
-                unsafe { fmi3SetFMUState(self.instance(who), s) };
+                unsafe { (self.f.fmi3SetFMUState)(self.instance(who), s) };
                 // the restored time is unknown here: steps at the current time may now be
                 // refused, which is part of what is fuzzed
             }
             Call::FreeFmuState { who, slot } => {
                 let k = slot as usize % STATE_SLOTS;
                 if World::index(who) != Some(self.owner[k]) && !self.states[k].is_null() {
-                    unsafe { fmi3FreeFMUState(self.instance(who), null_mut()) };
+                    unsafe { (self.f.fmi3FreeFMUState)(self.instance(who), null_mut()) };
                     return;
                 }
-                unsafe { fmi3FreeFMUState(self.instance(who), &mut self.states[k]) };
+                unsafe { (self.f.fmi3FreeFMUState)(self.instance(who), &mut self.states[k]) };
             }
             Call::Serialize {
                 who,
@@ -695,38 +844,46 @@ impl World {
                 let c = self.instance(who);
                 let s = self.states[slot as usize % STATE_SLOTS];
                 let mut n = 0usize;
-                if unsafe { fmi3SerializedFMUStateSize(c, s, &mut n) } != OK {
+                if unsafe { (self.f.fmi3SerializedFMUStateSize)(c, s, &mut n) } != OK {
                     return;
                 }
                 let n = self.len(size, n);
                 let mut bytes = vec![0u8; n];
-                if unsafe { fmi3SerializeFMUState(c, s, bytes.as_mut_ptr(), n) } != OK {
+                if unsafe { (self.f.fmi3SerializeFMUState)(c, s, bytes.as_mut_ptr(), n) } != OK {
                     return;
                 }
                 damage(&mut bytes, corrupt, truncate, fix_checksum);
                 let k = into as usize % STATE_SLOTS;
                 let Some(i) = World::index(who) else {
-                    unsafe { fmi3DeserializeFMUState(c, bytes.as_ptr(), bytes.len(), null_mut()) };
+                    unsafe {
+                        (self.f.fmi3DeserializeFMUState)(c, bytes.as_ptr(), bytes.len(), null_mut())
+                    };
                     return;
                 };
                 if !self.states[k].is_null() && self.owner[k] != i {
                     return;
                 }
                 let status = unsafe {
-                    fmi3DeserializeFMUState(c, bytes.as_ptr(), bytes.len(), &mut self.states[k])
+                    (self.f.fmi3DeserializeFMUState)(
+                        c,
+                        bytes.as_ptr(),
+                        bytes.len(),
+                        &mut self.states[k],
+                    )
                 };
                 if status == OK {
                     self.owner[k] = i;
                 }
             }
             Call::SetTime { who, t } => unsafe {
-                fmi3SetTime(self.instance(who), t.get());
+                (self.f.fmi3SetTime)(self.instance(who), t.get());
             },
             Call::SetContinuousStates { who, len, ref x } => {
                 let c = self.instance(who);
-                let n = self.len(len, self.states_expected);
+                let n = self.len(len, self.fmu.states);
                 let mut got = vec![0.0; n];
-                let valid = unsafe { fmi3GetContinuousStates(c, got.as_mut_ptr(), n) } == OK;
+                let valid =
+                    unsafe { (self.f.fmi3GetContinuousStates)(c, got.as_mut_ptr(), n) } == OK;
                 let xs: Vec<f64> = (0..n)
                     .map(|k| match (x.get(k), valid) {
                         (Some(r), true) => got[k] * (1.0 + 1e-3 * r.get()),
@@ -734,7 +891,7 @@ impl World {
                         (None, _) => got[k],
                     })
                     .collect();
-                unsafe { fmi3SetContinuousStates(c, xs.as_ptr(), n) };
+                unsafe { (self.f.fmi3SetContinuousStates)(c, xs.as_ptr(), n) };
             }
             Call::GetVector {
                 who,
@@ -743,20 +900,16 @@ impl World {
                 null_ptr,
             } => {
                 let c = self.instance(who);
-                let right = if kind % 4 == 2 {
-                    0
-                } else {
-                    self.states_expected
-                };
+                let right = if kind % 4 == 2 { 0 } else { self.fmu.states };
                 let n = self.len(len, right);
                 let mut v = vec![0.0; n];
                 let p = if null_ptr { null_mut() } else { v.as_mut_ptr() };
                 unsafe {
                     match kind % 4 {
-                        0 => fmi3GetContinuousStates(c, p, n),
-                        1 => fmi3GetContinuousStateDerivatives(c, p, n),
-                        2 => fmi3GetEventIndicators(c, p, n),
-                        _ => fmi3GetNominalsOfContinuousStates(c, p, n),
+                        0 => (self.f.fmi3GetContinuousStates)(c, p, n),
+                        1 => (self.f.fmi3GetContinuousStateDerivatives)(c, p, n),
+                        2 => (self.f.fmi3GetEventIndicators)(c, p, n),
+                        _ => (self.f.fmi3GetNominalsOfContinuousStates)(c, p, n),
                     }
                 };
             }
@@ -773,19 +926,19 @@ impl World {
                 };
                 unsafe {
                     if states {
-                        fmi3GetNumberOfContinuousStates(self.instance(who), p)
+                        (self.f.fmi3GetNumberOfContinuousStates)(self.instance(who), p)
                     } else {
-                        fmi3GetNumberOfEventIndicators(self.instance(who), p)
+                        (self.f.fmi3GetNumberOfEventIndicators)(self.instance(who), p)
                     }
                 };
             }
             Call::UpdateDiscreteStates { who, null_ptr } => {
-                let mut flags = [false; 5];
+                let mut flags = [0; 5];
                 let mut next = 0.0;
                 let [a, b, c, d, e] = &mut flags;
                 unsafe {
                     if null_ptr {
-                        fmi3UpdateDiscreteStates(
+                        (self.f.fmi3UpdateDiscreteStates)(
                             self.instance(who),
                             null_mut(),
                             null_mut(),
@@ -795,31 +948,39 @@ impl World {
                             null_mut(),
                         )
                     } else {
-                        fmi3UpdateDiscreteStates(self.instance(who), a, b, c, d, e, &mut next)
+                        (self.f.fmi3UpdateDiscreteStates)(
+                            self.instance(who),
+                            a,
+                            b,
+                            c,
+                            d,
+                            e,
+                            &mut next,
+                        )
                     }
                 };
             }
             Call::EnterContinuousTimeMode(who) => unsafe {
-                fmi3EnterContinuousTimeMode(self.instance(who));
+                (self.f.fmi3EnterContinuousTimeMode)(self.instance(who));
             },
             Call::CompletedIntegratorStep {
                 who,
                 no_prior,
                 null_ptr,
             } => {
-                let (mut event, mut terminate) = (false, false);
+                let (mut event, mut terminate) = (0, 0);
                 unsafe {
                     if null_ptr {
-                        fmi3CompletedIntegratorStep(
+                        (self.f.fmi3CompletedIntegratorStep)(
                             self.instance(who),
-                            no_prior,
+                            u8::from(no_prior),
                             null_mut(),
                             null_mut(),
                         )
                     } else {
-                        fmi3CompletedIntegratorStep(
+                        (self.f.fmi3CompletedIntegratorStep)(
                             self.instance(who),
-                            no_prior,
+                            u8::from(no_prior),
                             &mut event,
                             &mut terminate,
                         )
@@ -834,8 +995,12 @@ impl World {
                 n_seed,
                 n_sensitivity,
             } => {
-                let unknowns: Vec<u32> = unknowns.iter().map(|v| v.get()).collect();
-                let known_vrs: Vec<u32> = knowns.iter().map(|(v, _)| v.get()).collect();
+                let unknowns: Vec<u32> =
+                    unknowns.iter().map(|v| v.get(self.fmu.variables)).collect();
+                let known_vrs: Vec<u32> = knowns
+                    .iter()
+                    .map(|(v, _)| v.get(self.fmu.variables))
+                    .collect();
                 // directional: seeds per known, results per unknown; adjoint the other way
                 let (seeds_right, out_right) = if adjoint {
                     (unknowns.len(), known_vrs.len())
@@ -848,9 +1013,9 @@ impl World {
                     .collect();
                 let mut out = vec![0.0; self.len(n_sensitivity, out_right)];
                 let f = if adjoint {
-                    fmi3GetAdjointDerivative
+                    self.f.fmi3GetAdjointDerivative
                 } else {
-                    fmi3GetDirectionalDerivative
+                    self.f.fmi3GetDirectionalDerivative
                 };
                 unsafe {
                     f(
@@ -878,8 +1043,8 @@ impl World {
             if !self.states[k].is_null() {
                 let c = self.cleanup_instance();
                 unsafe {
-                    fmi3FreeFMUState(c, &mut self.states[k]);
-                    fmi3FreeInstance(c);
+                    (self.f.fmi3FreeFMUState)(c, &mut self.states[k]);
+                    (self.f.fmi3FreeInstance)(c);
                 }
                 assert!(self.states[k].is_null(), "fmi3FreeFMUState kept a state");
             }
@@ -887,11 +1052,13 @@ impl World {
     }
 }
 
-fuzz_target!(|calls: Vec<Call>| {
-    unsafe { std::hint::black_box(CStr::from_ptr(fmi3GetVersion())) };
-    let mut world = World::new();
+/// Runs a sequence (its first 64 calls) against `fmu`, then frees what it still holds: what
+/// the fuzz targets do with each input, and the replay with each file of their corpora.
+pub fn run(fmu: &Fmu, calls: &[Call]) {
+    unsafe { std::hint::black_box(CStr::from_ptr((fmu.functions.fmi3GetVersion)())) };
+    let mut world = World::new(fmu);
     for call in calls.iter().take(64) {
         world.run(call);
     }
     world.finish();
-});
+}

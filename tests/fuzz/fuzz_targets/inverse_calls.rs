@@ -1,7 +1,13 @@
-//! The FMI 2.0 call sequences of fmi2_sequence.rs against HaselInverse's build (feature inverse: the library's
-//! inverse-fmu build, which exports the inverse FMU's fmi2* functions instead).
+//! The FMI 2.0 call sequences of fmi2_sequence.rs against HaselInverse's functions.
 #![no_main]
 #![feature(c_variadic)]
 
 mod common;
+mod fmi2_logger;
+// each target runs one FMU of the module
+#[allow(dead_code)]
 mod fmi2_sequence;
+
+use fmi2_sequence::{Call, Fmu, run};
+
+libfuzzer_sys::fuzz_target!(|calls: Vec<Call>| run(&Fmu::inverse(), fmi2_logger::LOGGER, &calls));
