@@ -216,7 +216,7 @@ cross_env() {
 # overlap on the two cores) in CROSS_BUILD_DIR, with the profile CROSS_PROFILE, and copies what it
 # made to cross_file's place.
 cross_cargo() {
-    local set="$1" triple env file
+    local set="$1" triple env file dest
     shift
     mapfile -t env < <(cross_env "$@")
     local targets=()
@@ -226,8 +226,9 @@ cross_cargo() {
         -Zbuild-std=std,panic_unwind --target-dir "$CROSS_BUILD_DIR" ${CROSS_ARGS[$set]} < /dev/null
     for triple in "$@"; do
         file="$(cross_artifact "$triple" "$set")"
-        mkdir -p "$(dirname "$(cross_file "$triple" "$set" "$file")")"
-        cp "$CROSS_BUILD_DIR/$triple/$CROSS_PROFILE/$file" "$(cross_file "$triple" "$set" "$file")"
+        dest="$(cross_file "$triple" "$set" "$file")"
+        mkdir -p "$(dirname "$dest")"
+        cp "$CROSS_BUILD_DIR/$triple/$CROSS_PROFILE/$file" "$dest"
     done
 }
 

@@ -1089,6 +1089,13 @@ fn revisit(
             without.set(name, neutral.get(name)?)?;
         }
         tries.push((None, without));
+        let bic_now = bic(
+            &estimation[0],
+            &current.simulated[0],
+            unknowns(current, degrees(&free_list(forms), &current.params)),
+        );
+        let gap = |id: &Identification| worst_gap_to_floor(held, id);
+        let gap_now = gap(current);
         for (by, mut start) in tries {
             for (_, f) in forms.iter().enumerate().filter(|(k, _)| *k != pos) {
                 for name in form_parameters(f) {
@@ -1111,16 +1118,11 @@ fn revisit(
                         &estimation[0],
                         &id.simulated[0],
                         unknowns(&id, degrees(&o.free, &id.params)),
-                    ) - bic(
-                        &estimation[0],
-                        &current.simulated[0],
-                        unknowns(current, degrees(&free_list(forms), &current.params)),
-                    );
-                    let gap = |id: &Identification| worst_gap_to_floor(held, id);
+                    ) - bic_now;
                     // a replacement must reach the floor; fewer effects need only do no worse
                     // on held-out data than more, the BIC having found the one dropped not needed
                     let held_out_ok =
-                        gap(&id) <= FIT_TOLERANCE || (by.is_none() && gap(&id) <= gap(current));
+                        gap(&id) <= FIT_TOLERANCE || (by.is_none() && gap(&id) <= gap_now);
                     let swapped = delta <= -BIC_MARGIN && held_out_ok;
                     if swapped {
                         *forms = with;
