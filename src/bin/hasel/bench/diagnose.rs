@@ -44,18 +44,24 @@ fn hidden_families(t: Truth) -> String {
     }
 }
 
-/// The evidence weight of the hidden family in the first round (0 where it was not refitted).
+/// The evidence weight of the hidden family in the round that added it, or else in the first
+/// that refitted it (a family that took an earlier one's place on a revisit), 0 where none did.
 fn confidence(effect: Effect, d: &diagnose::Diagnosis) -> f64 {
-    d.rounds.first().map_or(0.0, |r| {
+    let weight = |r: &diagnose::Round| {
         r.evidence
             .iter()
             .find(|(e, _)| *e == Some(effect))
-            .map_or(0.0, |e| e.1)
-    })
+            .map(|e| e.1)
+    };
+    d.rounds
+        .iter()
+        .find(|r| r.added == Some(effect))
+        .and_then(weight)
+        .or_else(|| d.rounds.iter().find_map(weight))
+        .unwrap_or(0.0)
 }
 
-/// The largest distance of a held-out fit below its noise floor [points]; of the estimation
-/// record's where there is no other.
+/// The largest distance of a held-out fit below its noise floor [points].
 fn worst_gap(d: &diagnose::Diagnosis) -> f64 {
     let (first, fits) = d.last.held_out();
     let floors = &d.fits.floor[first..];
