@@ -238,8 +238,13 @@ pub struct Library {
 }
 
 /// Reads the shared library at `library`, which must be the build of `version`
-/// (`--features fmi3` for FMI 3.0) for a platform that version has a folder for.
-pub fn read_library(library: &Path, version: FmiVersion) -> Result<Library, FileError> {
+/// (`--features fmi3` for FMI 3.0, beside the model's own cargo `feature` where it has one) for
+/// a platform that version has a folder for.
+pub fn read_library(
+    library: &Path,
+    version: FmiVersion,
+    feature: Option<&str>,
+) -> Result<Library, FileError> {
     let bytes = std::fs::read(library)
         .map_err(|e| FileError::new(library, format!("cannot read the FMU library: {e}")))?;
     let platform = platform_of(&bytes).map_err(|e| FileError::new(library, e))?;
@@ -248,9 +253,13 @@ pub fn read_library(library: &Path, version: FmiVersion) -> Result<Library, File
         .map_err(|e| FileError::new(library, format!("a {platform} library: {e}")))?;
     let (needed, foreign) = version.marker_symbols();
     if !contains(&bytes, needed) || contains(&bytes, foreign) {
-        let build = match version {
-            FmiVersion::V2 => "cargo build --release --lib",
-            FmiVersion::V3 => "cargo build --release --lib --features fmi3",
+        let features: Vec<&str> = feature
+            .into_iter()
+            .chain((version == FmiVersion::V3).then_some("fmi3"))
+            .collect();
+        let build = match features.join(",") {
+            f if f.is_empty() => "cargo build --release --lib".to_string(),
+            f => format!("cargo build --release --lib --features {f}"),
         };
         return Err(FileError::new(
             library,
@@ -393,15 +402,24 @@ mod tests {
         let lib = dir.join("lib.so");
         let elf = |symbol: &str| [header(Platform::Linux), symbol.as_bytes().to_vec()].concat();
         std::fs::write(&lib, elf("fmi2Instantiate")).unwrap();
-        assert!(read_library(&lib, FmiVersion::V2).is_ok());
-        let e = read_library(&lib, FmiVersion::V3).unwrap_err().to_string();
+        assert!(read_library(&lib, FmiVersion::V2, None).is_ok());
+        let e = read_library(&lib, FmiVersion::V3, None)
+            .unwrap_err()
+            .to_string();
         assert!(
-            e.contains("not the FMI 3.0 build") && e.contains("--features fmi3"),
+            e.contains("not the FMI 3.0 build") && e.contains("--features fmi3`"),
+            "{e}"
+        );
+        let e = read_library(&lib, FmiVersion::V3, Some("reduced-fmu")).unwrap_err();
+        assert!(
+            e.to_string().contains("--features reduced-fmu,fmi3`"),
             "{e}"
         );
         std::fs::write(&lib, elf("fmi3InstantiateCoSimulation")).unwrap();
-        assert!(read_library(&lib, FmiVersion::V2).is_err());
-        assert!(read_library(&lib, FmiVersion::V3).is_ok());
+        assert!(read_library(&lib, FmiVersion::V2, None).is_err());
+        let e = read_library(&lib, FmiVersion::V2, Some("inverse-fmu")).unwrap_err();
+        assert!(e.to_string().contains("--features inverse-fmu`"), "{e}");
+        assert!(read_library(&lib, FmiVersion::V3, None).is_ok());
         std::fs::remove_dir_all(&dir).unwrap();
     }
 
@@ -450,7 +468,7 @@ mod tests {
                         let lib = dir.join(format!("lib{i}"));
                         std::fs::write(&lib, [header(pl), symbol.as_bytes().to_vec()].concat())
                             .unwrap();
-                        read_library(&lib, version).unwrap()
+                        read_library(&lib, version, None).unwrap()
                     })
                     .collect()
             };

@@ -32,6 +32,15 @@ impl Model {
         }
     }
 
+    /// The cargo feature its libraries are built with, beside `fmi3` for FMI 3.0.
+    fn feature(self) -> Option<&'static str> {
+        match self {
+            Model::Platform => None,
+            Model::Reduced => Some("reduced-fmu"),
+            Model::Inverse => Some("inverse-fmu"),
+        }
+    }
+
     fn identifier(self) -> &'static str {
         match self {
             Model::Platform => MODEL_IDENTIFIER,
@@ -159,7 +168,7 @@ pub fn run(a: Args) -> Result<(), Error> {
     for (version, libs, _) in &jobs {
         let read: Result<Vec<_>, _> = libs
             .iter()
-            .map(|lib| pack::read_library(lib, *version))
+            .map(|lib| pack::read_library(lib, *version, a.model.feature()))
             .collect();
         libraries.push(read?);
     }
