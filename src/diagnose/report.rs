@@ -297,7 +297,7 @@ pub fn forms_cell(c: &Candidate) -> String {
         .iter()
         .map(|(name, r)| match r {
             Ok(d) => format!("{name} ΔBIC {d:.1}"),
-            Err(_) => format!("{name} failed"),
+            Err(e) => format!("{name} failed: {e}"),
         })
         .collect();
     format!("`{}` (of {})", c.form.name, tried.join(", "))
