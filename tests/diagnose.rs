@@ -7,8 +7,6 @@
 //! `unexplained`; lab artifacts (sensor lag and resolution, outliers, dropped rows) must not
 //! name an effect nor hide one; two mechanisms at once must both be named.
 
-use std::time::Duration;
-
 use hasel_fmu::diagnose::hidden::{self, Truth};
 use hasel_fmu::diagnose::{self, FIT_TOLERANCE, Options, Verdict, floor_fit};
 use hasel_fmu::identify::Options as IdOptions;
@@ -352,13 +350,7 @@ fn both_named(case: &str, seed: u64) -> diagnose::Diagnosis {
         .unwrap()
         .experiments(Columns::Heights, seed)
         .unwrap();
-    // two rounds of four refits and a revisit: a budget that no refit exhausts even on a machine
-    // shared with other work, so that the answer does not depend on the load
-    let opts = Options {
-        refit_budget: Duration::from_secs(600),
-        ..Options::default()
-    };
-    let d = diagnose::diagnose(&Params::default(), exps, &opts).unwrap();
+    let d = diagnose::diagnose(&Params::default(), exps, &Options::default()).unwrap();
     let (mut want, mut got) = (truth.effects(), d.effects.clone());
     want.sort();
     got.sort();

@@ -67,10 +67,6 @@ pub const PARTIAL_GAP: f64 = 0.25;
 /// this share of the best form's worth (src/diagnose/diagnose.md, "Families of forms").
 pub const FORM_RUNNER_UP: f64 = 0.8;
 
-/// Default wall time of one candidate's refit [s] (`Options::refit_budget`): a guard against a
-/// runaway fit, not a pace; a refit takes a few seconds alone on a core, several times that on
-/// a machine shared with other work.
-pub const REFIT_BUDGET_S: u64 = 120;
 /// Levenberg–Marquardt iterations a refit may take in all (`identify::Options::
 /// iteration_budget`): a bound on the competition, not on the effect taken on, which is fitted
 /// on to convergence (src/diagnose/diagnose.md, "The workflow"). On the hidden-mechanism suite
@@ -90,8 +86,11 @@ pub struct Options {
     /// from a common scale of Kb, b and γ1², as gravity is.
     pub base_range: f64,
     pub rtol: f64,
-    /// Wall time a candidate's refit may take; a refit that runs out of it fails the candidate.
-    pub refit_budget: Duration,
+    /// Wall time a candidate's refit may take, if any; a refit that runs out of it fails the
+    /// candidate. None by default: the verdict must not depend on the machine's load (on a
+    /// shared machine a creep recorded on four sines was named `creep` where, idle, it was
+    /// `hysteresis`: the plays' refit had run out of 120 s). [`REFIT_ITERATIONS`] bounds a refit.
+    pub refit_budget: Option<Duration>,
     /// What to estimate of the records' conditions (their start, the sensor's lag) beside the
     /// paper's model; every candidate is refitted under the conditions found there.
     pub conditions: identify::conditions::Choice,
@@ -104,7 +103,7 @@ impl Default for Options {
             max_effects: 3,
             base_range: 2.0,
             rtol: FIT_RTOL,
-            refit_budget: Duration::from_secs(REFIT_BUDGET_S),
+            refit_budget: None,
             conditions: identify::conditions::Choice::default(),
         }
     }
@@ -830,7 +829,7 @@ pub fn diagnose(
                     let nested = *nested;
                     s.spawn(move || {
                         let mut o = o.clone();
-                        o.lm.deadline = Some(Instant::now() + opts.refit_budget);
+                        o.lm.deadline = opts.refit_budget.map(|b| Instant::now() + b);
                         nested_refit(here, form, start, estimation, held, &o, nested)
                     })
                 })
@@ -1028,21 +1027,21 @@ pub fn diagnose(
 }
 
 /// `id` itself, or, when its fit stopped at the iteration budget, where that fit goes on to
-/// converge: the options it was made with (`refit`) without the budget, given a fresh `time`;
-/// where going on fails (the time runs out), `id`.
+/// converge: the options it was made with (`refit`) without the iteration budget, given a fresh
+/// `time` if any; where going on fails (the time runs out), `id`.
 fn converged(
     id: Identification,
     estimation: &[Experiment],
     held: &[Experiment],
     refit: &IdOptions,
-    time: Duration,
+    time: Option<Duration>,
 ) -> Identification {
     if !id.out_of_budget {
         return id;
     }
     let mut o = refit.clone();
     o.iteration_budget = None;
-    o.lm.deadline = Some(Instant::now() + time);
+    o.lm.deadline = time.map(|t| Instant::now() + t);
     identify::identify(&id.params, estimation, held, &o).unwrap_or(id)
 }
 
@@ -1110,7 +1109,7 @@ fn revisit(
                 }
             }
             let mut o = id_opts(&with);
-            o.lm.deadline = Some(Instant::now() + opts.refit_budget);
+            o.lm.deadline = opts.refit_budget.map(|b| Instant::now() + b);
             let refit = identify::identify(&start, estimation, held, &o);
             let (delta_bic, swapped) = match refit {
                 Ok(id) => {

@@ -30,9 +30,10 @@ pub struct Args {
     #[arg(long, default_value_t = 3)]
     refits: usize,
     /// Seconds one candidate's refit may take; a refit that runs out of time fails the
-    /// candidate (reported)
-    #[arg(long, value_name = "SECONDS", default_value_t = diagnose::REFIT_BUDGET_S as f64)]
-    refit_budget: f64,
+    /// candidate (reported). Default: no limit (a refit is bounded by its iterations), so that
+    /// the verdict does not depend on the machine's load
+    #[arg(long, value_name = "SECONDS")]
+    refit_budget: Option<f64>,
     #[command(flatten)]
     conditions: ConditionArgs,
 }
@@ -50,13 +51,15 @@ pub fn run(a: Args) -> Result<(), Error> {
             "at least one candidate must be refitted",
         ));
     }
-    if !(a.refit_budget.is_finite() && a.refit_budget > 0.0) {
-        return Err(Error::flag("refit-budget", a.refit_budget, "must be > 0 s"));
+    if let Some(b) = a.refit_budget
+        && !(b.is_finite() && b > 0.0)
+    {
+        return Err(Error::flag("refit-budget", b, "must be > 0 s"));
     }
     let opts = Options {
         refits: a.refits,
         base_range: a.base_range,
-        refit_budget: std::time::Duration::from_secs_f64(a.refit_budget),
+        refit_budget: a.refit_budget.map(std::time::Duration::from_secs_f64),
         conditions: a.conditions.choice(&start)?,
         ..Options::default()
     };
