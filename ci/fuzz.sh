@@ -39,6 +39,13 @@ if ! command -v cargo-fuzz >/dev/null 2>&1; then
     cargo install -q --locked cargo-fuzz@0.13.2
 fi
 FUZZ=(--fuzz-dir tests/fuzz --release --debug-assertions)
+# the seeds of the call-sequence corpora (tests/fuzz_replay.rs, `write_seeds`): valid sequences
+# through initialization, steps, the importer's integration and FMU states, from which the
+# campaigns mutate (without them no campaign got an instance past initialization)
+if [[ " ${TARGETS[*]} " == *_calls\ * ]]; then
+    step "write the seeds of the call-sequence corpora"
+    nice -n 19 cargo test -q --release --test fuzz_replay -- --ignored write_seeds >/dev/null
+fi
 for target in "${TARGETS[@]}"; do
     # the bounds per input: a sequence may simulate (20 s), a reader of a few kilobytes may not
     # take long (5 s); no input may make one allocation above 256 MB or hold more than 1 GB. Every
