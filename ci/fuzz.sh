@@ -11,7 +11,7 @@
 # allocation beyond -malloc_limit_mb stops it with the reproducing input saved under
 # tests/fuzz/artifacts/<target>/. After a clean campaign the target's corpus is minimized
 # (libFuzzer's -merge=1). tests/fuzz_replay.rs replays every target's committed corpus in every
-# `cargo test` (so in ci/test.sh, in about a second), through the same code in the ordinary build
+# `cargo test` (so in ci/test.sh, in a few seconds), through the same code in the ordinary build
 # on stable Rust: the readers' checks (tests/fuzz/checks.rs) and the call sequences
 # (fmi2_sequence.rs, fmi3_sequence.rs) of all five FMUs; only what the sanitizer sees (memory
 # errors, leaks) and the bounds on time and memory per input need a campaign.
