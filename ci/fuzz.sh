@@ -82,5 +82,5 @@ for target in "${TARGETS[@]}"; do
     nice -n 19 "$bin" -merge=1 -timeout="$timeout" -rss_limit_mb=1024 "$corpus.min" "$corpus" \
         >"out/cmin-$target.log" 2>&1
     rm -rf "$corpus" && mv "$corpus.min" "$corpus"
-    echo "corpus $target: $(ls "$corpus" | wc -l) files, $(du -sk "$corpus" | cut -f1) KB"
+    echo "corpus $target: $(ls "$corpus" | wc -l) files, $(du -sk --apparent-size "$corpus" | cut -f1) KB"
 done
