@@ -11,7 +11,7 @@
 # allocation beyond -malloc_limit_mb stops it with the reproducing input saved under
 # tests/fuzz/artifacts/<target>/. After a clean campaign the target's corpus is minimized
 # (libFuzzer's -merge=1). tests/fuzz_replay.rs replays every target's committed corpus in every
-# `cargo test` (so in ci/test.sh, in about a second), through the same code in the ordinary build
+# `cargo test` (so in ci/test.sh, in a few seconds), through the same code in the ordinary build
 # on stable Rust: the readers' checks (tests/fuzz/checks.rs) and the call sequences
 # (fmi2_sequence.rs, fmi3_sequence.rs) of all five FMUs; only what the sanitizer sees (memory
 # errors, leaks) and the bounds on time and memory per input need a campaign.
@@ -39,6 +39,13 @@ if ! command -v cargo-fuzz >/dev/null 2>&1; then
     cargo install -q --locked cargo-fuzz@0.13.2
 fi
 FUZZ=(--fuzz-dir tests/fuzz --release --debug-assertions)
+# the seeds of the call-sequence corpora (tests/fuzz_replay.rs, `write_seeds`): valid sequences
+# through initialization, steps, the importer's integration and FMU states, from which the
+# campaigns mutate (without them no campaign got an instance past initialization)
+if [[ " ${TARGETS[*]} " == *_calls\ * ]]; then
+    step "write the seeds of the call-sequence corpora"
+    nice -n 19 cargo test -q --release --test fuzz_replay -- --ignored write_seeds >/dev/null
+fi
 for target in "${TARGETS[@]}"; do
     # the bounds per input: a sequence may simulate (20 s), a reader of a few kilobytes may not
     # take long (5 s); no input may make one allocation above 256 MB or hold more than 1 GB. Every
@@ -75,5 +82,5 @@ for target in "${TARGETS[@]}"; do
     nice -n 19 "$bin" -merge=1 -timeout="$timeout" -rss_limit_mb=1024 "$corpus.min" "$corpus" \
         >"out/cmin-$target.log" 2>&1
     rm -rf "$corpus" && mv "$corpus.min" "$corpus"
-    echo "corpus $target: $(ls "$corpus" | wc -l) files, $(du -sk "$corpus" | cut -f1) KB"
+    echo "corpus $target: $(ls "$corpus" | wc -l) files, $(du -sk --apparent-size "$corpus" | cut -f1) KB"
 done

@@ -14,6 +14,13 @@
 //!   names, so this one build (default features) serves all five FMUs; the features that select
 //!   which FMU a cdylib exports add no other code (src/fmu/mod.rs).
 //!
+//! Each call-sequence replay also counts how deep its corpus gets (how many
+//! `ExitInitializationMode`, `DoStep`, Model Exchange derivative and state serialization calls
+//! return OK) and fails below a floor: the first campaigns' corpora never got an instance past
+//! initialization. The seeds every campaign starts from (valid sequences through the life of an
+//! FMU, `common::seeds`) are written by `write_seeds` and checked here: written as the harness
+//! decodes them, and reaching stepping on every FMU.
+//!
 //! A sequence fails the replay where its target fails a campaign, but for what only the
 //! instrumented build sees: a panic anywhere, even one the FMU's shell catches at the C boundary
 //! and turns into an error status (libfuzzer-sys aborts on any panic; here a panic hook counts
@@ -39,6 +46,7 @@ use std::sync::Once;
 use std::time::Instant;
 
 use arbitrary::{Arbitrary, Unstructured};
+use common::{Bytes, Encode, Reached};
 use hasel_fmu::fmi2::types::{fmi2Status, fmi2String};
 
 /// The files of a target's corpus.
@@ -89,10 +97,14 @@ fn panics() -> u64 {
 /// Replays the corpus of a call-sequence target: each file decoded into calls as
 /// `libfuzzer_sys::fuzz_target!` decodes it (too short for the type, or not decodable: skipped,
 /// as libFuzzer skips it), then run. A panic, caught or not, fails the replay and names the file.
-fn replay<C: for<'a> Arbitrary<'a>>(target: &str, run: impl Fn(&[C])) {
+/// Then how deep the corpus gets must reach `floor`: at least as many calls of each kind that
+/// only succeed past initialization returned OK (a corpus whose sequences stop at the state
+/// machine's door, as the first campaigns' did, fails here).
+fn replay<C: for<'a> Arbitrary<'a>>(target: &str, floor: Floor, run: impl Fn(&[C]) -> Reached) {
     let start = Instant::now();
     let files = corpus(target);
     let mut ran = 0;
+    let mut reached = Reached::default();
     for file in &files {
         let data = std::fs::read(file).unwrap();
         if data.len() < <Vec<C> as Arbitrary>::size_hint(0).0 {
@@ -102,8 +114,11 @@ fn replay<C: for<'a> Arbitrary<'a>>(target: &str, run: impl Fn(&[C])) {
             continue;
         };
         let before = panics();
-        let failed = catch_unwind(AssertUnwindSafe(|| run(&calls))).is_err();
-        if failed || panics() != before {
+        let result = catch_unwind(AssertUnwindSafe(|| run(&calls)));
+        if let Ok(r) = result {
+            reached += r;
+        }
+        if result.is_err() || panics() != before {
             panic!(
                 "{target}: {} panics (the panic is printed above)",
                 file.display()
@@ -112,16 +127,79 @@ fn replay<C: for<'a> Arbitrary<'a>>(target: &str, run: impl Fn(&[C])) {
         ran += 1;
     }
     eprintln!(
-        "{target}: {ran} of {} files run as call sequences in {:.2} s",
+        "{target}: {ran} of {} files run as call sequences in {:.2} s; OK of calls: \
+         ExitInitializationMode {}/{}, DoStep {}/{}, derivatives {}/{}, serialize {}/{}",
         files.len(),
-        start.elapsed().as_secs_f64()
+        start.elapsed().as_secs_f64(),
+        reached.exit_initialization.ok,
+        reached.exit_initialization.calls,
+        reached.do_step.ok,
+        reached.do_step.calls,
+        reached.derivatives.ok,
+        reached.derivatives.calls,
+        reached.serialize.ok,
+        reached.serialize.calls,
     );
+    for (what, got, least) in [
+        (
+            "ExitInitializationMode",
+            reached.exit_initialization.ok,
+            floor.exit_initialization,
+        ),
+        ("DoStep", reached.do_step.ok, floor.do_step),
+        (
+            "GetDerivatives (Model Exchange)",
+            reached.derivatives.ok,
+            floor.derivatives,
+        ),
+        ("SerializeFMUstate", reached.serialize.ok, floor.serialize),
+    ] {
+        assert!(
+            got >= least,
+            "{target}: the corpus no longer reaches deep: {got} {what} calls return OK, \
+             fewer than {least}"
+        );
+    }
     // the corpus is what the campaign minimized: every file of it reached something
     assert!(
         ran * 10 >= files.len() * 9,
         "{target}: only {ran} of {} files decode into a call sequence",
         files.len()
     );
+}
+
+/// The least number of OK calls of each kind a target's corpus must make (see [`replay`]).
+struct Floor {
+    exit_initialization: u64,
+    do_step: u64,
+    derivatives: u64,
+    serialize: u64,
+}
+
+/// The floors of the call-sequence targets: about half of what the committed corpora reach
+/// (README, Fuzzing), so a minimization or a change of the interpreter that loses the deep
+/// sequences fails, and one that merely reshuffles them does not.
+mod floor {
+    use super::Floor;
+    const fn floor(
+        exit_initialization: u64,
+        do_step: u64,
+        derivatives: u64,
+        serialize: u64,
+    ) -> Floor {
+        Floor {
+            exit_initialization,
+            do_step,
+            derivatives,
+            serialize,
+        }
+    }
+    pub const FMI2_CALLS: Floor = floor(48, 56, 16, 19);
+    // Co-Simulation only: no derivatives
+    pub const INVERSE_CALLS: Floor = floor(115, 82, 0, 39);
+    pub const REDUCED_CALLS: Floor = floor(101, 103, 28, 30);
+    pub const FMI3_CALLS: Floor = floor(71, 66, 28, 20);
+    pub const REDUCED_FMI3_CALLS: Floor = floor(79, 51, 37, 21);
 }
 
 /// The FMI 2.0 logger, declared with the fixed arguments the FMU passes: `fmi2CallbackLogger`
@@ -179,7 +257,7 @@ fn logger() -> fmi2_sequence::Logger {
 #[test]
 fn fmi2_calls_replays() {
     let fmu = fmi2_sequence::Fmu::platform();
-    replay("fmi2_calls", |calls| {
+    replay("fmi2_calls", floor::FMI2_CALLS, |calls| {
         fmi2_sequence::run(&fmu, logger(), calls)
     });
 }
@@ -191,7 +269,7 @@ fn fmi2_calls_replays() {
 #[test]
 fn inverse_calls_replays() {
     let fmu = fmi2_sequence::Fmu::inverse();
-    replay("inverse_calls", |calls| {
+    replay("inverse_calls", floor::INVERSE_CALLS, |calls| {
         fmi2_sequence::run(&fmu, logger(), calls)
     });
 }
@@ -203,7 +281,7 @@ fn inverse_calls_replays() {
 #[test]
 fn reduced_calls_replays() {
     let fmu = fmi2_sequence::Fmu::reduced();
-    replay("reduced_calls", |calls| {
+    replay("reduced_calls", floor::REDUCED_CALLS, |calls| {
         fmi2_sequence::run(&fmu, logger(), calls)
     });
 }
@@ -211,13 +289,172 @@ fn reduced_calls_replays() {
 #[test]
 fn fmi3_calls_replays() {
     let fmu = fmi3_sequence::Fmu::platform();
-    replay("fmi3_calls", |calls| fmi3_sequence::run(&fmu, calls));
+    replay("fmi3_calls", floor::FMI3_CALLS, |calls| {
+        fmi3_sequence::run(&fmu, calls)
+    });
 }
 
 #[test]
 fn reduced_fmi3_calls_replays() {
     let fmu = fmi3_sequence::Fmu::reduced();
-    replay("reduced_fmi3_calls", |calls| {
+    replay("reduced_fmi3_calls", floor::REDUCED_FMI3_CALLS, |calls| {
         fmi3_sequence::run(&fmu, calls)
     });
+}
+
+/// The inputs the seeds set, by value reference, with their values: the first three variables
+/// of each FMU, the voltages of the platform's two models (kV), the inverse FMU's tip position
+/// and mean height (m); and the outputs they read, the next six variables of all three.
+fn seed_inputs(target: &str) -> [(u32, common::Real); 3] {
+    use common::{Real::Raw, pick};
+    match target {
+        "inverse_calls" => [(0, Raw(20e-6)), (1, Raw(-10e-6)), (2, Raw(70e-6))],
+        _ => [(0, pick::HALF), (1, pick::ONE), (2, pick::HALF)],
+    }
+}
+const SEED_OUTPUTS: [u32; 6] = [3, 4, 5, 6, 7, 8];
+
+/// The byte writer of the seeds ([`common::Bytes`]) against `arbitrary`'s reader: any input
+/// decodes into calls that, written back, decode into the same calls (every kind of call, every
+/// field, checked on a few thousand pseudo-random inputs), and each seed decodes into itself.
+fn round_trip<C: for<'a> Arbitrary<'a> + Encode + std::fmt::Debug>(seeds: &[(&str, Vec<C>)]) {
+    let mut x = 0x2545_f491_4f6c_dd1d_u64;
+    let mut kinds = std::collections::BTreeSet::new();
+    for n in 0..4000 {
+        let bytes: Vec<u8> = (0..(n % 300))
+            .map(|_| {
+                x ^= x << 13;
+                x ^= x >> 7;
+                x ^= x << 17;
+                // mostly a 1 where a sequence asks "one more?", so sequences get long
+                if x.is_multiple_of(5) {
+                    1
+                } else {
+                    (x >> 24) as u8
+                }
+            })
+            .collect();
+        let calls = Vec::<C>::arbitrary_take_rest(Unstructured::new(&bytes)).unwrap();
+        for c in &calls {
+            kinds.insert(
+                format!("{c:?}")
+                    .split([' ', '('])
+                    .next()
+                    .unwrap()
+                    .to_string(),
+            );
+        }
+        let again = Bytes::sequence(&calls);
+        let decoded = Vec::<C>::arbitrary_take_rest(Unstructured::new(&again)).unwrap();
+        assert_eq!(format!("{decoded:?}"), format!("{calls:?}"));
+    }
+    assert_eq!(
+        kinds.len(),
+        27,
+        "not every kind of call was written back: {kinds:?}"
+    );
+    for (name, calls) in seeds {
+        let decoded = Vec::<C>::arbitrary_take_rest(Unstructured::new(&Bytes::sequence(calls)));
+        assert_eq!(
+            format!("{:?}", decoded.unwrap()),
+            format!("{calls:?}"),
+            "seed {name}"
+        );
+    }
+}
+
+#[test]
+fn seeds_are_written_as_decoded() {
+    round_trip(&common::seeds::<fmi2_sequence::Call>(
+        &seed_inputs("fmi2_calls"),
+        &SEED_OUTPUTS,
+    ));
+    round_trip(&common::seeds::<fmi3_sequence::Call>(
+        &seed_inputs("fmi3_calls"),
+        &SEED_OUTPUTS,
+    ));
+}
+
+/// What the seeds of each target reach, all of them together.
+fn seeds_reach() -> Vec<(&'static str, Reached)> {
+    let mut out = Vec::new();
+    #[cfg(all(
+        target_os = "linux",
+        any(target_arch = "x86_64", target_arch = "aarch64")
+    ))]
+    for (target, fmu) in [
+        ("fmi2_calls", fmi2_sequence::Fmu::platform()),
+        ("inverse_calls", fmi2_sequence::Fmu::inverse()),
+        ("reduced_calls", fmi2_sequence::Fmu::reduced()),
+    ] {
+        let mut r = Reached::default();
+        for (_, calls) in common::seeds::<fmi2_sequence::Call>(&seed_inputs(target), &SEED_OUTPUTS)
+        {
+            r += fmi2_sequence::run(&fmu, logger(), &calls);
+        }
+        out.push((target, r));
+    }
+    for (target, fmu) in [
+        ("fmi3_calls", fmi3_sequence::Fmu::platform()),
+        ("reduced_fmi3_calls", fmi3_sequence::Fmu::reduced()),
+    ] {
+        let mut r = Reached::default();
+        for (_, calls) in common::seeds::<fmi3_sequence::Call>(&seed_inputs(target), &SEED_OUTPUTS)
+        {
+            r += fmi3_sequence::run(&fmu, &calls);
+        }
+        out.push((target, r));
+    }
+    out
+}
+
+/// The seeds take every FMU past initialization: every ExitInitializationMode they make returns
+/// OK, and so does every step, derivative and serialization of the FMUs that have them (the
+/// inverse FMU is Co-Simulation only).
+#[test]
+fn seeds_reach_stepping() {
+    for (target, r) in seeds_reach() {
+        eprintln!("{target}: seeds reach {r:?}");
+        if target == "inverse_calls" {
+            // its Model Exchange instance is refused at instantiation
+            assert_eq!(
+                r.exit_initialization.ok + 1,
+                r.exit_initialization.calls,
+                "{target}"
+            );
+        } else {
+            assert_eq!(
+                r.exit_initialization.ok, r.exit_initialization.calls,
+                "{target}"
+            );
+            assert_eq!(r.derivatives.ok, r.derivatives.calls, "{target}");
+        }
+        assert_eq!(r.do_step.ok, r.do_step.calls, "{target}");
+        assert!(r.do_step.ok > 0 && r.serialize.ok > 0, "{target}: {r:?}");
+    }
+}
+
+/// Writes the seeds into the corpora (tests/fuzz/corpus/<target>/seed-<name>), which `bash
+/// ci/fuzz.sh` does before its campaigns; the campaign's minimization then keeps what of them
+/// adds coverage, under libFuzzer's names.
+#[test]
+#[ignore = "writes files: run by ci/fuzz.sh"]
+fn write_seeds() {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fuzz/corpus");
+    for target in ["fmi2_calls", "inverse_calls", "reduced_calls"] {
+        for (name, calls) in
+            common::seeds::<fmi2_sequence::Call>(&seed_inputs(target), &SEED_OUTPUTS)
+        {
+            let file = dir.join(target).join(format!("seed-{name}"));
+            std::fs::write(file, Bytes::sequence(&calls)).unwrap();
+        }
+    }
+    for target in ["fmi3_calls", "reduced_fmi3_calls"] {
+        for (name, calls) in
+            common::seeds::<fmi3_sequence::Call>(&seed_inputs(target), &SEED_OUTPUTS)
+        {
+            let file = dir.join(target).join(format!("seed-{name}"));
+            std::fs::write(file, Bytes::sequence(&calls)).unwrap();
+        }
+    }
 }

@@ -1,7 +1,9 @@
 //! What the call-sequence fuzzers of both FMI versions share: the arguments a sequence
 //! chooses (reals, value references, array lengths, which instance) and their meaning. With
 //! fmi2_sequence.rs and fmi3_sequence.rs also a module of tests/fuzz_replay.rs, which replays
-//! the committed corpora through the same code in the ordinary build.
+//! the committed corpora through the same code in the ordinary build. Also what a sequence
+//! reached ([`Reached`]) and the writer of inputs ([`Bytes`], [`Encode`]) with which the seeds of
+//! the corpora are made (tests/fuzz_replay.rs, `write_seeds`).
 
 use std::ffi::CString;
 
@@ -114,4 +116,357 @@ pub fn damage(bytes: &mut Vec<u8>, flips: &[(u16, u8)], truncate: Option<u16>, f
         let sum = Sha256::digest(&bytes[..body]);
         bytes[body..].copy_from_slice(&sum[..8]);
     }
+}
+
+/// How many of one kind of call a sequence made, and how many returned OK.
+#[derive(Default, Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Count {
+    pub calls: u64,
+    pub ok: u64,
+}
+
+impl Count {
+    pub fn add(&mut self, ok: bool) {
+        self.calls += 1;
+        self.ok += u64::from(ok);
+    }
+}
+
+/// How deep a sequence got: the calls that only succeed on an instance past initialization
+/// (and the one that gets it there), counted by the interpreters and summed by the replay,
+/// which asserts a floor on them so a corpus that stops reaching them fails.
+#[derive(Default, Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Reached {
+    /// `fmi*ExitInitializationMode`.
+    pub exit_initialization: Count,
+    /// `fmi*DoStep` (Co-Simulation).
+    pub do_step: Count,
+    /// `fmi2GetDerivatives` / `fmi3GetContinuousStateDerivatives` (Model Exchange).
+    pub derivatives: Count,
+    /// `fmi*SerializeFMU*state` (an FMU state written into bytes).
+    pub serialize: Count,
+}
+
+impl std::ops::AddAssign for Reached {
+    fn add_assign(&mut self, other: Reached) {
+        for (a, b) in [
+            (&mut self.exit_initialization, other.exit_initialization),
+            (&mut self.do_step, other.do_step),
+            (&mut self.derivatives, other.derivatives),
+            (&mut self.serialize, other.serialize),
+        ] {
+            a.calls += b.calls;
+            a.ok += b.ok;
+        }
+    }
+}
+
+/// An input in the byte format in which `arbitrary` 1.x decodes a value (what libFuzzer's Rust
+/// harness, `fuzz_target!`, does with each input): integers little-endian in their width, a
+/// `bool` one byte (its low bit), an `f64` its bits, an enum's variant `k` of `n` a `u32` whose
+/// product with `n`, shifted right by 32, is `k`, then its fields in order; an `Option` a `bool`
+/// then the value; a `Vec` each element after a byte 1, then a byte 0. A sequence (the whole
+/// input) is its calls, each after a byte 1. The round trip (decode what is written, get the same
+/// value) is checked by tests/fuzz_replay.rs for every kind of call.
+#[derive(Default)]
+pub struct Bytes(pub Vec<u8>);
+
+impl Bytes {
+    pub fn variant(&mut self, k: u32, n: u32) -> &mut Bytes {
+        let x = ((u64::from(k) << 32).div_ceil(u64::from(n))) as u32;
+        self.put(&x)
+    }
+
+    pub fn put<T: Encode + ?Sized>(&mut self, x: &T) -> &mut Bytes {
+        x.encode(self);
+        self
+    }
+
+    /// The input that decodes into the sequence `calls`.
+    pub fn sequence<C: Encode>(calls: &[C]) -> Vec<u8> {
+        let mut b = Bytes::default();
+        for c in calls {
+            b.put(&true).put(c);
+        }
+        b.0
+    }
+}
+
+/// A value written as `arbitrary` reads it (see [`Bytes`]).
+pub trait Encode {
+    fn encode(&self, b: &mut Bytes);
+}
+
+macro_rules! encode_le {
+    ($($t:ty),*) => {$(
+        impl Encode for $t {
+            fn encode(&self, b: &mut Bytes) {
+                b.0.extend_from_slice(&self.to_le_bytes());
+            }
+        }
+    )*};
+}
+encode_le!(u8, i8, u16, u32, i32, f64);
+
+impl Encode for bool {
+    fn encode(&self, b: &mut Bytes) {
+        b.put(&u8::from(*self));
+    }
+}
+
+impl<T: Encode> Encode for Option<T> {
+    fn encode(&self, b: &mut Bytes) {
+        b.put(&self.is_some());
+        if let Some(x) = self {
+            b.put(x);
+        }
+    }
+}
+
+impl<T: Encode> Encode for Vec<T> {
+    fn encode(&self, b: &mut Bytes) {
+        for x in self {
+            b.put(&true).put(x);
+        }
+        b.put(&false);
+    }
+}
+
+impl<A: Encode, B: Encode> Encode for (A, B) {
+    fn encode(&self, b: &mut Bytes) {
+        b.put(&self.0).put(&self.1);
+    }
+}
+
+impl<A: Encode, B: Encode, C: Encode> Encode for (A, B, C) {
+    fn encode(&self, b: &mut Bytes) {
+        b.put(&self.0).put(&self.1).put(&self.2);
+    }
+}
+
+impl Encode for Real {
+    fn encode(&self, b: &mut Bytes) {
+        match self {
+            Real::Pick(k) => b.variant(0, 2).put(k),
+            Real::Raw(x) => b.variant(1, 2).put(x),
+        };
+    }
+}
+
+impl Encode for Vr {
+    fn encode(&self, b: &mut Bytes) {
+        match self {
+            Vr::Known(k) => b.variant(0, 2).put(k),
+            Vr::Any(v) => b.variant(1, 2).put(v),
+        };
+    }
+}
+
+impl Encode for Len {
+    fn encode(&self, b: &mut Bytes) {
+        match self {
+            Len::Right => b.variant(0, 2),
+            Len::Other(n) => b.variant(1, 2).put(n),
+        };
+    }
+}
+
+impl Encode for Who {
+    fn encode(&self, b: &mut Bytes) {
+        b.variant(*self as u32, 3);
+    }
+}
+
+/// The calls the seeds are made of, in one FMI version's terms (fmi2_sequence.rs and
+/// fmi3_sequence.rs implement it for their `Call`), so [`seeds`] writes the sequences once.
+pub trait SeedCalls: Sized {
+    /// Instantiate (the right token, no resources), set up at time 0 and initialize: a
+    /// Co-Simulation instance ends ready to step (out of Event Mode when `event_mode_used`, which
+    /// only FMI 3.0 has), a Model Exchange one in Continuous-Time Mode.
+    fn start(
+        who: Who,
+        model_exchange: bool,
+        event_mode_used: bool,
+        tolerance: Option<Real>,
+    ) -> Vec<Self>;
+    /// An event iteration: into Event Mode, the discrete states updated, and back to stepping
+    /// or to Continuous-Time Mode (none for an FMI 2.0 Co-Simulation instance, which has none).
+    fn event(who: Who, model_exchange: bool) -> Vec<Self>;
+    fn set(who: Who, inputs: &[(u32, Real)]) -> Self;
+    fn get(who: Who, outputs: &[u32]) -> Self;
+    /// A step at the instance's current time.
+    fn step(who: Who, h: Real) -> Self;
+    fn get_state(who: Who, slot: u8) -> Self;
+    fn set_state(who: Who, slot: u8) -> Self;
+    /// The state in `slot` serialized and deserialized into `into`; `damaged`: a bit flipped
+    /// behind a recomputed checksum.
+    fn serialize(who: Who, slot: u8, into: u8, damaged: bool) -> Self;
+    /// The vector `kind` (0 states, 1 derivatives, 2 event indicators, 3 nominals).
+    fn vector(who: Who, kind: u8) -> Self;
+    fn set_time(who: Who, t: Real) -> Self;
+    /// The continuous states set to those got, perturbed.
+    fn perturb_states(who: Who) -> Self;
+    fn completed_integrator_step(who: Who) -> Self;
+    fn terminate(who: Who) -> Self;
+    fn reset(who: Who) -> Self;
+    fn free(who: Who) -> Self;
+}
+
+/// The [`SeedCalls`] whose calls are the same in both versions' `Call` (variants and fields of
+/// the same names), written once: used inside each version's `impl SeedCalls for Call`.
+macro_rules! seed_calls_alike {
+    () => {
+        fn get_state(who: Who, slot: u8) -> Call {
+            Call::GetFmuState {
+                who,
+                slot,
+                null_ptr: false,
+            }
+        }
+
+        fn set_state(who: Who, slot: u8) -> Call {
+            Call::SetFmuState { who, slot }
+        }
+
+        fn serialize(who: Who, slot: u8, into: u8, damaged: bool) -> Call {
+            Call::Serialize {
+                who,
+                slot,
+                size: Len::Right,
+                corrupt: if damaged { vec![(40, 1)] } else { vec![] },
+                truncate: None,
+                fix_checksum: damaged,
+                into,
+            }
+        }
+
+        fn vector(who: Who, kind: u8) -> Call {
+            Call::GetVector {
+                who,
+                kind,
+                len: Len::Right,
+                null_ptr: false,
+            }
+        }
+
+        fn set_time(who: Who, t: Real) -> Call {
+            Call::SetTime { who, t }
+        }
+
+        fn completed_integrator_step(who: Who) -> Call {
+            Call::CompletedIntegratorStep {
+                who,
+                no_prior: false,
+                null_ptr: false,
+            }
+        }
+
+        fn terminate(who: Who) -> Call {
+            Call::Terminate(who)
+        }
+
+        fn reset(who: Who) -> Call {
+            Call::Reset(who)
+        }
+
+        fn free(who: Who) -> Call {
+            Call::FreeInstance(who)
+        }
+    };
+}
+pub(crate) use seed_calls_alike;
+
+/// The seeds of a call-sequence corpus: sequences an importer makes, that take instances through
+/// the whole life of an FMU (instantiate, set up, initialize, set inputs, step or integrate, get
+/// outputs, get, set and serialize states, terminate, reset, free), for an FMU with the
+/// value references `inputs` (set to their values) and `outputs` (read). The campaigns start
+/// from them (`bash ci/fuzz.sh` writes them into the corpora first: tests/fuzz_replay.rs,
+/// `write_seeds`), so the fuzzer mutates sequences that reach stepping and the solver instead of
+/// having to find each step of the valid path by chance (no campaign without them got an instance
+/// past initialization); the mutations keep sending every wrong call too.
+pub fn seeds<C: SeedCalls>(inputs: &[(u32, Real)], outputs: &[u32]) -> Vec<(&'static str, Vec<C>)> {
+    use Who::{First, Second};
+    let mut co_simulation = C::start(First, false, false, Some(pick::MILLI));
+    co_simulation.extend([
+        C::set(First, inputs),
+        C::step(First, pick::MILLI),
+        C::get(First, outputs),
+        C::step(First, pick::ONE),
+        C::get(First, outputs),
+        C::get_state(First, 0),
+        C::serialize(First, 0, 1, false),
+        C::set(First, inputs),
+        C::step(First, pick::MILLI),
+        C::set_state(First, 1),
+        C::step(First, pick::MILLI),
+        C::get(First, outputs),
+        C::terminate(First),
+        C::reset(First),
+    ]);
+    co_simulation.extend(C::start(First, false, false, None));
+    co_simulation.extend([
+        C::step(First, pick::TEN),
+        C::get(First, outputs),
+        C::free(First),
+    ]);
+
+    // two instances (the second with event mode used), a state passed between them, serialized
+    // and damaged past its checksum
+    let mut two = C::start(First, false, false, None);
+    two.extend(C::start(Second, false, true, Some(pick::MILLI)));
+    two.extend([
+        C::set(First, inputs),
+        C::step(First, pick::ONE),
+        C::get_state(First, 2),
+        C::step(Second, pick::MILLI),
+    ]);
+    two.extend(C::event(Second, false));
+    two.extend([
+        C::set_state(Second, 2),
+        C::step(Second, pick::MILLI),
+        C::serialize(First, 2, 3, true),
+        C::serialize(Second, 2, 0, false),
+        C::set_state(First, 0),
+        C::step(First, pick::MILLI),
+        C::get(Second, outputs),
+    ]);
+
+    // Model Exchange: an importer's integrator (explicit Euler) around the FMU
+    let mut model_exchange = C::start(First, true, false, None);
+    for t in [pick::MILLI, Real::Raw(2e-3), Real::Raw(3e-3)] {
+        model_exchange.extend([
+            C::set(First, inputs),
+            C::vector(First, 0),
+            C::vector(First, 1),
+            C::set_time(First, t),
+            C::perturb_states(First),
+            C::completed_integrator_step(First),
+            C::get(First, outputs),
+        ]);
+    }
+    model_exchange.extend([
+        C::vector(First, 3),
+        C::vector(First, 2),
+        C::get_state(First, 0),
+        C::serialize(First, 0, 1, false),
+        C::set_state(First, 1),
+        C::vector(First, 1),
+    ]);
+    model_exchange.extend(C::event(First, true));
+    model_exchange.extend([C::vector(First, 1), C::terminate(First)]);
+    vec![
+        ("co_simulation", co_simulation),
+        ("two_instances", two),
+        ("model_exchange", model_exchange),
+    ]
+}
+
+/// The picks of [`Real`] a seed uses: its index in `Real::get`'s table.
+pub mod pick {
+    use super::Real;
+    pub const ZERO: Real = Real::Pick(0);
+    pub const MILLI: Real = Real::Pick(1);
+    pub const ONE: Real = Real::Pick(3);
+    pub const HALF: Real = Real::Pick(7);
+    pub const TEN: Real = Real::Pick(8);
 }

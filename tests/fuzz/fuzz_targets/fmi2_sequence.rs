@@ -16,7 +16,7 @@
 use std::ffi::{CStr, c_char, c_void};
 use std::ptr::{null, null_mut};
 
-use crate::common::{Len, Real, Vr, Who, damage};
+use crate::common::{Bytes, Encode, Len, Reached, Real, SeedCalls, Vr, Who, damage, pick};
 use arbitrary::Arbitrary;
 use hasel_fmu::fmi2::types::*;
 use hasel_fmu::fmu::pack::guid;
@@ -456,6 +456,232 @@ pub enum Call {
     },
 }
 
+/// A call written as `arbitrary`'s derive reads it ([`Bytes`]): its variant (of the 27, in the
+/// order declared), then its fields in order. A new variant or field goes here too, or
+/// tests/fuzz_replay.rs (`seeds_are_written_as_decoded`) fails.
+impl Encode for Call {
+    fn encode(&self, b: &mut Bytes) {
+        const N: u32 = 27;
+        match self {
+            Call::Instantiate {
+                who,
+                model_exchange,
+                wrong_guid,
+                null_name,
+                null_callbacks,
+                resources,
+                logging_on,
+            } => b
+                .variant(0, N)
+                .put(who)
+                .put(model_exchange)
+                .put(wrong_guid)
+                .put(null_name)
+                .put(null_callbacks)
+                .put(resources)
+                .put(logging_on),
+            Call::FreeInstance(who) => b.variant(1, N).put(who),
+            Call::SetDebugLogging {
+                who,
+                on,
+                categories,
+                null_ptr,
+            } => b
+                .variant(2, N)
+                .put(who)
+                .put(on)
+                .put(categories)
+                .put(null_ptr),
+            Call::SetupExperiment {
+                who,
+                tolerance,
+                start,
+                stop,
+            } => b.variant(3, N).put(who).put(tolerance).put(start).put(stop),
+            Call::EnterInitializationMode(who) => b.variant(4, N).put(who),
+            Call::ExitInitializationMode(who) => b.variant(5, N).put(who),
+            Call::Terminate(who) => b.variant(6, N).put(who),
+            Call::Reset(who) => b.variant(7, N).put(who),
+            Call::GetReal { who, vrs, null_ptr } => b.variant(8, N).put(who).put(vrs).put(null_ptr),
+            Call::SetReal {
+                who,
+                values,
+                null_ptr,
+            } => b.variant(9, N).put(who).put(values).put(null_ptr),
+            Call::OtherType {
+                who,
+                kind,
+                vrs,
+                value,
+            } => b.variant(10, N).put(who).put(kind).put(vrs).put(value),
+            Call::DoStep {
+                who,
+                at_current_time,
+                t,
+                h,
+                no_prior,
+            } => b
+                .variant(11, N)
+                .put(who)
+                .put(at_current_time)
+                .put(t)
+                .put(h)
+                .put(no_prior),
+            Call::CancelStep(who) => b.variant(12, N).put(who),
+            Call::Status {
+                who,
+                kind,
+                status_kind,
+                null_ptr,
+            } => b
+                .variant(13, N)
+                .put(who)
+                .put(kind)
+                .put(status_kind)
+                .put(null_ptr),
+            Call::InputOutputDerivatives { who, set, values } => {
+                b.variant(14, N).put(who).put(set).put(values)
+            }
+            Call::GetFmuState {
+                who,
+                slot,
+                null_ptr,
+            } => b.variant(15, N).put(who).put(slot).put(null_ptr),
+            Call::SetFmuState { who, slot } => b.variant(16, N).put(who).put(slot),
+            Call::FreeFmuState { who, slot } => b.variant(17, N).put(who).put(slot),
+            Call::Serialize {
+                who,
+                slot,
+                size,
+                corrupt,
+                truncate,
+                fix_checksum,
+                into,
+            } => b
+                .variant(18, N)
+                .put(who)
+                .put(slot)
+                .put(size)
+                .put(corrupt)
+                .put(truncate)
+                .put(fix_checksum)
+                .put(into),
+            Call::SetTime { who, t } => b.variant(19, N).put(who).put(t),
+            Call::SetContinuousStates {
+                who,
+                len,
+                x,
+                from_get,
+            } => b.variant(20, N).put(who).put(len).put(x).put(from_get),
+            Call::GetVector {
+                who,
+                kind,
+                len,
+                null_ptr,
+            } => b.variant(21, N).put(who).put(kind).put(len).put(null_ptr),
+            Call::EnterEventMode(who) => b.variant(22, N).put(who),
+            Call::NewDiscreteStates { who, null_ptr } => b.variant(23, N).put(who).put(null_ptr),
+            Call::EnterContinuousTimeMode(who) => b.variant(24, N).put(who),
+            Call::CompletedIntegratorStep {
+                who,
+                no_prior,
+                null_ptr,
+            } => b.variant(25, N).put(who).put(no_prior).put(null_ptr),
+            Call::DirectionalDerivative {
+                who,
+                unknowns,
+                knowns,
+            } => b.variant(26, N).put(who).put(unknowns).put(knowns),
+        };
+    }
+}
+
+/// The calls of the seeds ([`crate::common::seeds`]) in FMI 2.0.
+impl SeedCalls for Call {
+    crate::common::seed_calls_alike!();
+
+    fn start(who: Who, model_exchange: bool, _: bool, tolerance: Option<Real>) -> Vec<Call> {
+        let mut calls = vec![
+            Call::Instantiate {
+                who,
+                model_exchange,
+                wrong_guid: false,
+                null_name: false,
+                null_callbacks: false,
+                resources: 0,
+                logging_on: false,
+            },
+            Call::SetupExperiment {
+                who,
+                tolerance,
+                start: pick::ZERO,
+                stop: None,
+            },
+            Call::EnterInitializationMode(who),
+            Call::ExitInitializationMode(who),
+        ];
+        if model_exchange {
+            calls.extend([
+                Call::NewDiscreteStates {
+                    who,
+                    null_ptr: false,
+                },
+                Call::EnterContinuousTimeMode(who),
+            ]);
+        }
+        calls
+    }
+
+    fn event(who: Who, model_exchange: bool) -> Vec<Call> {
+        if !model_exchange {
+            return vec![];
+        }
+        vec![
+            Call::EnterEventMode(who),
+            Call::NewDiscreteStates {
+                who,
+                null_ptr: false,
+            },
+            Call::EnterContinuousTimeMode(who),
+        ]
+    }
+
+    fn set(who: Who, inputs: &[(u32, Real)]) -> Call {
+        Call::SetReal {
+            who,
+            values: inputs.iter().map(|&(v, x)| (Vr::Any(v), x)).collect(),
+            null_ptr: false,
+        }
+    }
+
+    fn get(who: Who, outputs: &[u32]) -> Call {
+        Call::GetReal {
+            who,
+            vrs: outputs.iter().map(|&v| Vr::Any(v)).collect(),
+            null_ptr: false,
+        }
+    }
+
+    fn step(who: Who, h: Real) -> Call {
+        Call::DoStep {
+            who,
+            at_current_time: true,
+            t: pick::ZERO,
+            h,
+            no_prior: false,
+        }
+    }
+
+    fn perturb_states(who: Who) -> Call {
+        Call::SetContinuousStates {
+            who,
+            len: Len::Right,
+            x: vec![pick::MILLI],
+            from_get: true,
+        }
+    }
+}
+
 const STATE_SLOTS: usize = 4;
 
 /// What the sequence holds between calls: the instances, their simulated time, FMU states.
@@ -469,6 +695,7 @@ struct World<'a> {
     /// The owner of each FMU state, which is also the instance that frees it.
     owner: [usize; STATE_SLOTS],
     callbacks: fmi2CallbackFunctions,
+    reached: Reached,
 }
 
 impl World<'_> {
@@ -487,6 +714,7 @@ impl World<'_> {
                 step_finished: None,
                 component_environment: null_mut(),
             },
+            reached: Reached::default(),
         }
     }
 
@@ -628,9 +856,10 @@ impl World<'_> {
             Call::EnterInitializationMode(who) => unsafe {
                 (self.f.fmi2EnterInitializationMode)(self.component(who));
             },
-            Call::ExitInitializationMode(who) => unsafe {
-                (self.f.fmi2ExitInitializationMode)(self.component(who));
-            },
+            Call::ExitInitializationMode(who) => {
+                let status = unsafe { (self.f.fmi2ExitInitializationMode)(self.component(who)) };
+                self.reached.exit_initialization.add(status == OK);
+            }
             Call::Terminate(who) => unsafe {
                 (self.f.fmi2Terminate)(self.component(who));
             },
@@ -704,6 +933,7 @@ impl World<'_> {
                 let h = h.get();
                 let status =
                     unsafe { (self.f.fmi2DoStep)(self.component(who), t, h, i32::from(no_prior)) };
+                self.reached.do_step.add(status == OK);
                 if let (OK, Some(i)) = (status, i) {
                     self.time[i] = t + h;
                 }
@@ -861,7 +1091,7 @@ impl World<'_> {
                 };
                 let mut v = vec![0.0; n];
                 let p = if null_ptr { null_mut() } else { v.as_mut_ptr() };
-                unsafe {
+                let status = unsafe {
                     match kind % 4 {
                         0 => (self.f.fmi2GetContinuousStates)(c, p, n),
                         1 => (self.f.fmi2GetDerivatives)(c, p, n),
@@ -869,6 +1099,9 @@ impl World<'_> {
                         _ => (self.f.fmi2GetNominalsOfContinuousStates)(c, p, n),
                     }
                 };
+                if kind % 4 == 1 {
+                    self.reached.derivatives.add(status == OK);
+                }
             }
             Call::EnterEventMode(who) => unsafe {
                 (self.f.fmi2EnterEventMode)(self.component(who));
@@ -964,7 +1197,9 @@ impl World<'_> {
             Len::Other(k) => k as usize,
         };
         let mut bytes = vec![0u8; n];
-        if unsafe { (self.f.fmi2SerializeFMUstate)(c, s, bytes.as_mut_ptr().cast(), n) } != OK {
+        let status = unsafe { (self.f.fmi2SerializeFMUstate)(c, s, bytes.as_mut_ptr().cast(), n) };
+        self.reached.serialize.add(status == OK);
+        if status != OK {
             return;
         }
         damage(&mut bytes, corrupt, truncate, fix_checksum);
@@ -1022,8 +1257,8 @@ impl World<'_> {
 
 /// Runs a sequence (its first 64 calls) against `fmu`, whose instances log to `logger`, then
 /// frees what it still holds: what the fuzz targets do with each input, and the replay with each
-/// file of their corpora.
-pub fn run(fmu: &Fmu, logger: Logger, calls: &[Call]) {
+/// file of their corpora. Returns how deep it got.
+pub fn run(fmu: &Fmu, logger: Logger, calls: &[Call]) -> Reached {
     unsafe {
         std::hint::black_box(CStr::from_ptr((fmu.functions.fmi2GetTypesPlatform)()));
         std::hint::black_box(CStr::from_ptr((fmu.functions.fmi2GetVersion)()));
@@ -1033,4 +1268,5 @@ pub fn run(fmu: &Fmu, logger: Logger, calls: &[Call]) {
         world.run(call);
     }
     world.finish();
+    world.reached
 }

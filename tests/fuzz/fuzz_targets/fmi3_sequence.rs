@@ -15,7 +15,7 @@
 use std::ffi::{CStr, c_char};
 use std::ptr::{null, null_mut};
 
-use crate::common::{Len, Real, Vr, Who, damage};
+use crate::common::{Bytes, Encode, Len, Reached, Real, SeedCalls, Vr, Who, damage, pick};
 use arbitrary::Arbitrary;
 use hasel_fmu::fmi3::types::*;
 use hasel_fmu::fmu::pack::FmiVersion;
@@ -462,6 +462,261 @@ pub enum Call {
     },
 }
 
+/// A call written as `arbitrary`'s derive reads it ([`Bytes`]): its variant (of the 27, in the
+/// order declared), then its fields in order. A new variant or field goes here too, or
+/// tests/fuzz_replay.rs (`seeds_are_written_as_decoded`) fails.
+impl Encode for Call {
+    fn encode(&self, b: &mut Bytes) {
+        const N: u32 = 27;
+        match self {
+            Call::Instantiate {
+                who,
+                model_exchange,
+                wrong_token,
+                null_name,
+                no_logger,
+                resources,
+                logging_on,
+                event_mode_used,
+            } => b
+                .variant(0, N)
+                .put(who)
+                .put(model_exchange)
+                .put(wrong_token)
+                .put(null_name)
+                .put(no_logger)
+                .put(resources)
+                .put(logging_on)
+                .put(event_mode_used),
+            Call::FreeInstance(who) => b.variant(1, N).put(who),
+            Call::SetDebugLogging {
+                who,
+                on,
+                categories,
+                null_ptr,
+            } => b
+                .variant(2, N)
+                .put(who)
+                .put(on)
+                .put(categories)
+                .put(null_ptr),
+            Call::EnterInitializationMode {
+                who,
+                tolerance,
+                start,
+                stop,
+            } => b.variant(3, N).put(who).put(tolerance).put(start).put(stop),
+            Call::ExitInitializationMode(who) => b.variant(4, N).put(who),
+            Call::EnterEventMode(who) => b.variant(5, N).put(who),
+            Call::Terminate(who) => b.variant(6, N).put(who),
+            Call::Reset(who) => b.variant(7, N).put(who),
+            Call::Configuration { who, enter } => b.variant(8, N).put(who).put(enter),
+            Call::GetFloat64 {
+                who,
+                vrs,
+                values,
+                null_ptr,
+            } => b.variant(9, N).put(who).put(vrs).put(values).put(null_ptr),
+            Call::SetFloat64 {
+                who,
+                values,
+                n_values,
+                null_ptr,
+            } => b
+                .variant(10, N)
+                .put(who)
+                .put(values)
+                .put(n_values)
+                .put(null_ptr),
+            Call::OtherType {
+                who,
+                kind,
+                vrs,
+                value,
+            } => b.variant(11, N).put(who).put(kind).put(vrs).put(value),
+            Call::DoStep {
+                who,
+                at_current_time,
+                t,
+                h,
+                no_prior,
+                null_outputs,
+            } => b
+                .variant(12, N)
+                .put(who)
+                .put(at_current_time)
+                .put(t)
+                .put(h)
+                .put(no_prior)
+                .put(null_outputs),
+            Call::EnterStepMode(who) => b.variant(13, N).put(who),
+            Call::OutputDerivatives { who, values } => b.variant(14, N).put(who).put(values),
+            Call::GetFmuState {
+                who,
+                slot,
+                null_ptr,
+            } => b.variant(15, N).put(who).put(slot).put(null_ptr),
+            Call::SetFmuState { who, slot } => b.variant(16, N).put(who).put(slot),
+            Call::FreeFmuState { who, slot } => b.variant(17, N).put(who).put(slot),
+            Call::Serialize {
+                who,
+                slot,
+                size,
+                corrupt,
+                truncate,
+                fix_checksum,
+                into,
+            } => b
+                .variant(18, N)
+                .put(who)
+                .put(slot)
+                .put(size)
+                .put(corrupt)
+                .put(truncate)
+                .put(fix_checksum)
+                .put(into),
+            Call::SetTime { who, t } => b.variant(19, N).put(who).put(t),
+            Call::SetContinuousStates { who, len, x } => b.variant(20, N).put(who).put(len).put(x),
+            Call::GetVector {
+                who,
+                kind,
+                len,
+                null_ptr,
+            } => b.variant(21, N).put(who).put(kind).put(len).put(null_ptr),
+            Call::Counts {
+                who,
+                states,
+                null_ptr,
+            } => b.variant(22, N).put(who).put(states).put(null_ptr),
+            Call::UpdateDiscreteStates { who, null_ptr } => b.variant(23, N).put(who).put(null_ptr),
+            Call::EnterContinuousTimeMode(who) => b.variant(24, N).put(who),
+            Call::CompletedIntegratorStep {
+                who,
+                no_prior,
+                null_ptr,
+            } => b.variant(25, N).put(who).put(no_prior).put(null_ptr),
+            Call::Derivative {
+                who,
+                adjoint,
+                unknowns,
+                knowns,
+                n_seed,
+                n_sensitivity,
+            } => b
+                .variant(26, N)
+                .put(who)
+                .put(adjoint)
+                .put(unknowns)
+                .put(knowns)
+                .put(n_seed)
+                .put(n_sensitivity),
+        };
+    }
+}
+
+/// The calls of the seeds ([`crate::common::seeds`]) in FMI 3.0.
+impl SeedCalls for Call {
+    crate::common::seed_calls_alike!();
+
+    fn start(
+        who: Who,
+        model_exchange: bool,
+        event_mode_used: bool,
+        tolerance: Option<Real>,
+    ) -> Vec<Call> {
+        let mut calls = vec![
+            Call::Instantiate {
+                who,
+                model_exchange,
+                wrong_token: false,
+                null_name: false,
+                no_logger: false,
+                resources: 0,
+                logging_on: false,
+                event_mode_used,
+            },
+            Call::EnterInitializationMode {
+                who,
+                tolerance,
+                start: pick::ZERO,
+                stop: None,
+            },
+            Call::ExitInitializationMode(who),
+        ];
+        // initialization ends in Event Mode
+        let update = Call::UpdateDiscreteStates {
+            who,
+            null_ptr: false,
+        };
+        if model_exchange {
+            calls.extend([
+                update,
+                Call::EnterContinuousTimeMode(who),
+                Call::Counts {
+                    who,
+                    states: true,
+                    null_ptr: false,
+                },
+            ]);
+        } else if event_mode_used {
+            calls.extend([update, Call::EnterStepMode(who)]);
+        }
+        calls
+    }
+
+    fn event(who: Who, model_exchange: bool) -> Vec<Call> {
+        vec![
+            Call::EnterEventMode(who),
+            Call::UpdateDiscreteStates {
+                who,
+                null_ptr: false,
+            },
+            if model_exchange {
+                Call::EnterContinuousTimeMode(who)
+            } else {
+                Call::EnterStepMode(who)
+            },
+        ]
+    }
+
+    fn set(who: Who, inputs: &[(u32, Real)]) -> Call {
+        Call::SetFloat64 {
+            who,
+            values: inputs.iter().map(|&(v, x)| (Vr::Any(v), x)).collect(),
+            n_values: Len::Right,
+            null_ptr: false,
+        }
+    }
+
+    fn get(who: Who, outputs: &[u32]) -> Call {
+        Call::GetFloat64 {
+            who,
+            vrs: outputs.iter().map(|&v| Vr::Any(v)).collect(),
+            values: Len::Right,
+            null_ptr: false,
+        }
+    }
+
+    fn step(who: Who, h: Real) -> Call {
+        Call::DoStep {
+            who,
+            at_current_time: true,
+            t: pick::ZERO,
+            h,
+            no_prior: false,
+            null_outputs: false,
+        }
+    }
+
+    fn perturb_states(who: Who) -> Call {
+        Call::SetContinuousStates {
+            who,
+            len: Len::Right,
+            x: vec![pick::MILLI],
+        }
+    }
+}
+
 const STATE_SLOTS: usize = 4;
 
 /// What the sequence holds between calls: the instances, their simulated time, FMU states.
@@ -473,6 +728,9 @@ struct World<'a> {
     time: [f64; 2],
     states: [fmi3FMUState; STATE_SLOTS],
     owner: [usize; STATE_SLOTS],
+    /// The time of each FMU state (so a step after restoring one starts where it does).
+    state_time: [f64; STATE_SLOTS],
+    reached: Reached,
 }
 
 impl World<'_> {
@@ -484,6 +742,8 @@ impl World<'_> {
             time: [0.0; 2],
             states: [null_mut(); STATE_SLOTS],
             owner: [0; STATE_SLOTS],
+            state_time: [0.0; STATE_SLOTS],
+            reached: Reached::default(),
         }
     }
 
@@ -648,9 +908,10 @@ impl World<'_> {
                     self.time[i] = t0;
                 }
             }
-            Call::ExitInitializationMode(who) => unsafe {
-                (self.f.fmi3ExitInitializationMode)(self.instance(who));
-            },
+            Call::ExitInitializationMode(who) => {
+                let status = unsafe { (self.f.fmi3ExitInitializationMode)(self.instance(who)) };
+                self.reached.exit_initialization.add(status == OK);
+            }
             Call::EnterEventMode(who) => unsafe {
                 (self.f.fmi3EnterEventMode)(self.instance(who));
             },
@@ -774,6 +1035,7 @@ impl World<'_> {
                         )
                     }
                 };
+                self.reached.do_step.add(status == OK);
                 if let (OK, Some(i)) = (status, i) {
                     self.time[i] = t + h.get();
                 }
@@ -816,13 +1078,17 @@ impl World<'_> {
                 let status = unsafe { (self.f.fmi3GetFMUState)(c, &mut self.states[k]) };
                 if let (OK, Some(i)) = (status, World::index(who)) {
                     self.owner[k] = i;
+                    self.state_time[k] = self.time[i];
                 }
             }
             Call::SetFmuState { who, slot } => {
-                let s = self.states[slot as usize % STATE_SLOTS];
-                unsafe { (self.f.fmi3SetFMUState)(self.instance(who), s) };
-                // the restored time is unknown here: steps at the current time may now be
-                // refused, which is part of what is fuzzed
+                let k = slot as usize % STATE_SLOTS;
+                let status =
+                    unsafe { (self.f.fmi3SetFMUState)(self.instance(who), self.states[k]) };
+                // the time the state was taken at (FMI 3.0 has no call to ask the FMU)
+                if let (OK, Some(i)) = (status, World::index(who)) {
+                    self.time[i] = self.state_time[k];
+                }
             }
             Call::FreeFmuState { who, slot } => {
                 let k = slot as usize % STATE_SLOTS;
@@ -849,7 +1115,9 @@ impl World<'_> {
                 }
                 let n = self.len(size, n);
                 let mut bytes = vec![0u8; n];
-                if unsafe { (self.f.fmi3SerializeFMUState)(c, s, bytes.as_mut_ptr(), n) } != OK {
+                let status = unsafe { (self.f.fmi3SerializeFMUState)(c, s, bytes.as_mut_ptr(), n) };
+                self.reached.serialize.add(status == OK);
+                if status != OK {
                     return;
                 }
                 damage(&mut bytes, corrupt, truncate, fix_checksum);
@@ -873,6 +1141,7 @@ impl World<'_> {
                 };
                 if status == OK {
                     self.owner[k] = i;
+                    self.state_time[k] = self.state_time[slot as usize % STATE_SLOTS];
                 }
             }
             Call::SetTime { who, t } => unsafe {
@@ -904,7 +1173,7 @@ impl World<'_> {
                 let n = self.len(len, right);
                 let mut v = vec![0.0; n];
                 let p = if null_ptr { null_mut() } else { v.as_mut_ptr() };
-                unsafe {
+                let status = unsafe {
                     match kind % 4 {
                         0 => (self.f.fmi3GetContinuousStates)(c, p, n),
                         1 => (self.f.fmi3GetContinuousStateDerivatives)(c, p, n),
@@ -912,6 +1181,9 @@ impl World<'_> {
                         _ => (self.f.fmi3GetNominalsOfContinuousStates)(c, p, n),
                     }
                 };
+                if kind % 4 == 1 {
+                    self.reached.derivatives.add(status == OK);
+                }
             }
             Call::Counts {
                 who,
@@ -1053,12 +1325,14 @@ impl World<'_> {
 }
 
 /// Runs a sequence (its first 64 calls) against `fmu`, then frees what it still holds: what
-/// the fuzz targets do with each input, and the replay with each file of their corpora.
-pub fn run(fmu: &Fmu, calls: &[Call]) {
+/// the fuzz targets do with each input, and the replay with each file of their corpora. Returns
+/// how deep it got.
+pub fn run(fmu: &Fmu, calls: &[Call]) -> Reached {
     unsafe { std::hint::black_box(CStr::from_ptr((fmu.functions.fmi3GetVersion)())) };
     let mut world = World::new(fmu);
     for call in calls.iter().take(64) {
         world.run(call);
     }
     world.finish();
+    world.reached
 }

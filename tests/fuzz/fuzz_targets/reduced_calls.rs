@@ -2,6 +2,8 @@
 #![no_main]
 #![feature(c_variadic)]
 
+// the seeds' writer is the replay's (tests/fuzz_replay.rs)
+#[allow(dead_code)]
 mod common;
 mod fmi2_logger;
 // each target runs one FMU of the module
@@ -10,4 +12,9 @@ mod fmi2_sequence;
 
 use fmi2_sequence::{Call, Fmu, run};
 
-libfuzzer_sys::fuzz_target!(|calls: Vec<Call>| run(&Fmu::reduced(), fmi2_logger::LOGGER, &calls));
+// made once: its GUID hashes the model description
+static FMU: std::sync::OnceLock<Fmu> = std::sync::OnceLock::new();
+
+libfuzzer_sys::fuzz_target!(|calls: Vec<Call>| {
+    run(FMU.get_or_init(Fmu::reduced), fmi2_logger::LOGGER, &calls);
+});
