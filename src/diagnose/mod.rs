@@ -1046,10 +1046,10 @@ fn converged(
 }
 
 /// Once a later effect has been added, each earlier effect (the model's `forms`, `current`) is
-/// tried against the best other candidate that passed in its round, refitted with the later
-/// effects beside it, and, where that one does not take its place, against nothing: the model
-/// without it, the later effects may explain all it stood in for (a charge drift chosen for the
-/// first share of a slewing amplifier). The replacement is taken when it lowers the BIC on the
+/// tried against nothing, the model without it, as the later effects may explain all it stood
+/// in for (a charge drift chosen for the first share of a slewing amplifier), and, where the
+/// model needs it, against the best other candidate that passed in its round, refitted with the
+/// later effects beside it. The replacement is taken when it lowers the BIC on the
 /// estimation data by [`BIC_MARGIN`] and keeps every held-out fit within [`FIT_TOLERANCE`] of its
 /// noise floor; the model without the effect, when it lowers the BIC so and leaves no held-out
 /// fit farther from its floor than the model with it (src/diagnose/diagnose.md, "Two mechanisms
@@ -1078,16 +1078,17 @@ fn revisit(
         let replaced = forms[pos].effect;
         // the runner-up's refit, with the other effects' parameters as the model has them; the
         // model without the effect, its parameters neutral (off)
-        let mut tries = Vec::new();
-        if let Some((form, r)) = runner_up {
-            tries.push((Some(form), r.id.params.clone()));
-        }
+        // the drop first: when the later effects explain all the earlier one stood in for, a
+        // runner-up swapped in would be a spurious second effect that happens to fit
         let mut without = current.params.clone();
         let neutral = Params::default();
         for name in form_parameters(forms[pos]) {
             without.set(name, neutral.get(name)?)?;
         }
-        tries.push((None, without));
+        let mut tries = vec![(None, without)];
+        if let Some((form, r)) = runner_up {
+            tries.push((Some(form), r.id.params.clone()));
+        }
         let bic_now = bic(
             &estimation[0],
             &current.simulated[0],

@@ -82,6 +82,7 @@ pub fn run(
     only: Option<String>,
     artifacts: bool,
     protocols: bool,
+    reports: Option<std::path::PathBuf>,
 ) -> Result<(), Error> {
     say!(
         "diagnosis of hidden mechanisms: {seeds} seed(s) per case, {columns:?} data{}, {}, target <= 30 s per diagnosis, median <= 5 s (issue #29)",
@@ -133,6 +134,9 @@ pub fn run(
             }
             let exps = case.experiments(columns, seed)?;
             let d = diagnose::diagnose(&Params::default(), exps, &Options::default())?;
+            if let Some(dir) = &reports {
+                diagnose::report::write(&dir.join(format!("{}-{seed}", truth.name())), &d)?;
+            }
             let got = d.answer();
             let ok = right(truth, &d);
             let seconds = d.timing.last().map_or(0.0, |t| t.1);

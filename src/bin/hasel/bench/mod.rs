@@ -54,6 +54,10 @@ pub struct Args {
     /// of them of the tip; about half from 1.3 s into the drive) and print the score per protocol
     #[arg(long)]
     protocols: bool,
+    /// With --diagnose: write each case's diagnosis (report.md, diagnosis.json, figures) into
+    /// DIR/CASE-SEED
+    #[arg(long, value_name = "DIR")]
+    reports: Option<std::path::PathBuf>,
 }
 
 pub fn run(a: Args) -> Result<(), Error> {
@@ -64,6 +68,7 @@ pub fn run(a: Args) -> Result<(), Error> {
             a.only,
             a.artifacts,
             a.protocols,
+            a.reports,
         );
     }
     if a.identify {
