@@ -1,7 +1,8 @@
 //! An actuator's invariant curve l_p(θ) tabulated once, for the slow reduced model
-//! (src/model/reduced.rs), which reads it at every evaluation.
+//! (src/model/reduced.rs), which reads it at every evaluation, and with it the model's rate
+//! θ̇ = a(θ) + b(θ) u² along the curve ([`Actuator::slow_rate`]).
 
-use super::actuator::Actuator;
+use super::actuator::{Actuator, SlowRate};
 use super::shell::{DomainError, Shell};
 
 /// Nodes of a [`Curve`] per θ* = π/(2γ2) (where the input gain vanishes): h = θ*/256 makes the
@@ -16,7 +17,10 @@ const CURVE_REACH: f64 = 2.0;
 /// once at nodes h apart by the same RK4 steps as [`Actuator::l_p_on_curve`], marching from 0,
 /// with its exact slopes d(θ, l_p) there, and read between them by the cubic Hermite
 /// interpolant: the slow model reads l_p at every evaluation, where integrating from 0 each
-/// time costs 64 shell geometries.
+/// time costs 64 shell geometries. The slow model's rate parts a(θ), b(θ) are tabulated at the
+/// same nodes with their exact slopes along the curve and read by the same interpolant, so
+/// that θ̇ costs no geometry and no trigonometry (the curve's error bound above holds for them
+/// as for l_p: both are as smooth along the curve).
 #[derive(Clone, Debug)]
 pub(super) struct Curve {
     /// θ of the first node [rad] and the spacing h [rad].
@@ -25,6 +29,16 @@ pub(super) struct Curve {
     /// l_p [m] and d = dl_p/dθ [m/rad] at the nodes.
     l: Vec<f64>,
     d: Vec<f64>,
+    /// The rate parts and their slopes at the nodes.
+    rate: Vec<SlowRate>,
+}
+
+/// Where θ falls between two nodes: the left node k and the cubic Hermite basis on [0, 1] at
+/// the fraction s, [h00, h10, h01, h11] (values at k and k + 1 weigh h00 and h01, slopes times
+/// h weigh h10 and h11).
+struct Between {
+    k: usize,
+    basis: [f64; 4],
 }
 
 impl Curve {
@@ -34,24 +48,27 @@ impl Curve {
         let theta_star = std::f64::consts::FRAC_PI_2 / a.par.gamma2;
         let h = theta_star / CURVE_NODES_PER_THETA_STAR;
         let steps = (CURVE_REACH * CURVE_NODES_PER_THETA_STAR) as usize;
-        let node = |theta: f64, l: f64| Shell::new(theta, l, lv).ok().map(|s| (l, s.d));
+        let node = |theta: f64, l: f64| {
+            let d = Shell::new(theta, l, lv).ok()?.d;
+            Some((l, d, a.slow_rate(theta, l).ok()?))
+        };
         // march out from (0, Lp) each way until the shell geometry ends
         let march = |dir: f64| {
             let mut nodes = Vec::new();
             let mut next = a.l_p_on_curve(0.0).ok();
             for k in 0..=steps {
                 let theta = dir * k as f64 * h;
-                let Some((l, d)) = next.and_then(|l| node(theta, l)) else {
+                let Some(n) = next.and_then(|l| node(theta, l)) else {
                     break;
                 };
-                nodes.push((l, d));
-                next = a.curve_step(theta, l, dir * h).ok();
+                nodes.push(n);
+                next = a.curve_step(theta, n.0, dir * h).ok();
             }
             nodes
         };
         let (up, down) = (march(1.0), march(-1.0));
         let below = down.len().saturating_sub(1);
-        let nodes: Vec<(f64, f64)> = down
+        let nodes: Vec<(f64, f64, SlowRate)> = down
             .into_iter()
             .rev()
             .chain(up.into_iter().skip(1))
@@ -61,26 +78,59 @@ impl Curve {
             h,
             l: nodes.iter().map(|n| n.0).collect(),
             d: nodes.iter().map(|n| n.1).collect(),
+            rate: nodes.iter().map(|n| n.2).collect(),
         }
+    }
+
+    /// Where θ falls inside the nodes, if it does.
+    #[inline(always)]
+    fn between(&self, theta: f64) -> Option<Between> {
+        let x = (theta - self.theta0) / self.h;
+        let k = x.floor();
+        if !(k >= 0.0 && (k as usize) + 1 < self.l.len()) {
+            return None;
+        }
+        let s = x - k;
+        let (s2, s3) = (s * s, s * s * s);
+        Some(Between {
+            k: k as usize,
+            basis: [
+                2.0 * s3 - 3.0 * s2 + 1.0,
+                s3 - 2.0 * s2 + s,
+                -2.0 * s3 + 3.0 * s2,
+                s3 - s2,
+            ],
+        })
+    }
+
+    /// The interpolant of values `v` with slopes `dv` at `at`.
+    #[inline(always)]
+    fn hermite(&self, at: &Between, v: [f64; 2], dv: [f64; 2]) -> f64 {
+        let [h00, h10, h01, h11] = at.basis;
+        h00 * v[0] + h10 * self.h * dv[0] + h01 * v[1] + h11 * self.h * dv[1]
     }
 
     /// l_p on the curve at θ: the interpolant inside the nodes, the integration from 0 outside.
     pub(super) fn l_p(&self, a: &Actuator, theta: f64) -> Result<f64, DomainError> {
-        let x = (theta - self.theta0) / self.h;
-        let k = x.floor();
-        if !(k >= 0.0 && (k as usize) + 1 < self.l.len()) {
-            return a.l_p_on_curve(theta);
+        match self.between(theta) {
+            Some(at) => {
+                let k = at.k;
+                Ok(self.hermite(&at, [self.l[k], self.l[k + 1]], [self.d[k], self.d[k + 1]]))
+            }
+            None => a.l_p_on_curve(theta),
         }
-        let (k, s) = (k as usize, x - k);
-        // cubic Hermite basis on [0, 1]
-        let (s2, s3) = (s * s, s * s * s);
-        let h00 = 2.0 * s3 - 3.0 * s2 + 1.0;
-        let h10 = s3 - 2.0 * s2 + s;
-        let h01 = -2.0 * s3 + 3.0 * s2;
-        let h11 = s3 - s2;
-        Ok(h00 * self.l[k]
-            + h10 * self.h * self.d[k]
-            + h01 * self.l[k + 1]
-            + h11 * self.h * self.d[k + 1])
+    }
+
+    /// The slow model's θ̇ at θ and port voltage u [V]: the interpolated rate parts inside the
+    /// nodes, [`Actuator::slow_rate`] at the integrated curve outside.
+    #[inline]
+    pub(super) fn slow_rate(&self, a: &Actuator, theta: f64, u: f64) -> Result<f64, DomainError> {
+        let Some(at) = self.between(theta) else {
+            return Ok(a.slow_rate(theta, a.l_p_on_curve(theta)?)?.at(u));
+        };
+        let (r0, r1) = (&self.rate[at.k], &self.rate[at.k + 1]);
+        let rate_a = self.hermite(&at, [r0.a, r1.a], [r0.a_t, r1.a_t]);
+        let rate_b = self.hermite(&at, [r0.b, r1.b], [r0.b_t, r1.b_t]);
+        Ok(rate_a + rate_b * u * u)
     }
 }
