@@ -86,14 +86,19 @@ impl Curve {
     #[inline(always)]
     fn between(&self, theta: f64) -> Option<Between> {
         let x = (theta - self.theta0) / self.h;
-        let k = x.floor();
-        if !(k >= 0.0 && (k as usize) + 1 < self.l.len()) {
+        // for x ≥ 0 the conversion truncates, which is the floor there, and takes an
+        // instruction where `floor` is a call on the baseline x86-64 target
+        if x.is_nan() || x < 0.0 {
             return None;
         }
-        let s = x - k;
+        let k = x as usize;
+        if k + 1 >= self.l.len() {
+            return None;
+        }
+        let s = x - k as f64;
         let (s2, s3) = (s * s, s * s * s);
         Some(Between {
-            k: k as usize,
+            k,
             basis: [
                 2.0 * s3 - 3.0 * s2 + 1.0,
                 s3 - 2.0 * s2 + s,
