@@ -23,14 +23,24 @@ const CURVE_REACH: f64 = 2.0;
 /// as for l_p: both are as smooth along the curve).
 #[derive(Clone, Debug)]
 pub(super) struct Curve {
-    /// θ of the first node [rad] and the spacing h [rad].
+    /// θ of the first node [rad] and 1/h, h the spacing [rad].
     theta0: f64,
-    h: f64,
-    /// l_p [m] and d = dl_p/dθ [m/rad] at the nodes.
-    l: Vec<f64>,
-    d: Vec<f64>,
-    /// The rate parts and their slopes at the nodes.
-    rate: Vec<SlowRate>,
+    inv_h: f64,
+    nodes: Vec<Node>,
+}
+
+/// What the interpolant needs at one node: each value with its slope along the curve times h
+/// (the weight the cubic Hermite form gives a slope).
+#[derive(Clone, Copy, Debug)]
+struct Node {
+    /// l_p [m] and h d, d = dl_p/dθ.
+    l: f64,
+    l_h: f64,
+    /// The rate parts a, b of θ̇ = a + b u² ([`Actuator::slow_rate`]) and h a', h b'.
+    a: f64,
+    a_h: f64,
+    b: f64,
+    b_h: f64,
 }
 
 /// Where θ falls between two nodes: the left node k and the cubic Hermite basis on [0, 1] at
@@ -50,7 +60,15 @@ impl Curve {
         let steps = (CURVE_REACH * CURVE_NODES_PER_THETA_STAR) as usize;
         let node = |theta: f64, l: f64| {
             let d = Shell::new(theta, l, lv).ok()?.d;
-            Some((l, d, a.slow_rate(theta, l).ok()?))
+            let r: SlowRate = a.slow_rate(theta, l).ok()?;
+            Some(Node {
+                l,
+                l_h: h * d,
+                a: r.a,
+                a_h: h * r.a_t,
+                b: r.b,
+                b_h: h * r.b_t,
+            })
         };
         // march out from (0, Lp) each way until the shell geometry ends
         let march = |dir: f64| {
@@ -62,37 +80,34 @@ impl Curve {
                     break;
                 };
                 nodes.push(n);
-                next = a.curve_step(theta, n.0, dir * h).ok();
+                next = a.curve_step(theta, n.l, dir * h).ok();
             }
             nodes
         };
         let (up, down) = (march(1.0), march(-1.0));
         let below = down.len().saturating_sub(1);
-        let nodes: Vec<(f64, f64, SlowRate)> = down
-            .into_iter()
-            .rev()
-            .chain(up.into_iter().skip(1))
-            .collect();
         Curve {
             theta0: -(below as f64) * h,
-            h,
-            l: nodes.iter().map(|n| n.0).collect(),
-            d: nodes.iter().map(|n| n.1).collect(),
-            rate: nodes.iter().map(|n| n.2).collect(),
+            inv_h: 1.0 / h,
+            nodes: down
+                .into_iter()
+                .rev()
+                .chain(up.into_iter().skip(1))
+                .collect(),
         }
     }
 
     /// Where θ falls inside the nodes, if it does.
     #[inline(always)]
     fn between(&self, theta: f64) -> Option<Between> {
-        let x = (theta - self.theta0) / self.h;
+        let x = (theta - self.theta0) * self.inv_h;
         // for x ≥ 0 the conversion truncates, which is the floor there, and takes an
         // instruction where `floor` is a call on the baseline x86-64 target
         if x.is_nan() || x < 0.0 {
             return None;
         }
         let k = x as usize;
-        if k + 1 >= self.l.len() {
+        if k + 1 >= self.nodes.len() {
             return None;
         }
         let s = x - k as f64;
@@ -108,34 +123,35 @@ impl Curve {
         })
     }
 
-    /// The interpolant of values `v` with slopes `dv` at `at`.
-    #[inline(always)]
-    fn hermite(&self, at: &Between, v: [f64; 2], dv: [f64; 2]) -> f64 {
-        let [h00, h10, h01, h11] = at.basis;
-        h00 * v[0] + h10 * self.h * dv[0] + h01 * v[1] + h11 * self.h * dv[1]
-    }
-
     /// l_p on the curve at θ: the interpolant inside the nodes, the integration from 0 outside.
     pub(super) fn l_p(&self, a: &Actuator, theta: f64) -> Result<f64, DomainError> {
-        match self.between(theta) {
-            Some(at) => {
-                let k = at.k;
-                Ok(self.hermite(&at, [self.l[k], self.l[k + 1]], [self.d[k], self.d[k + 1]]))
-            }
-            None => a.l_p_on_curve(theta),
-        }
+        let Some(Between {
+            k,
+            basis: [h00, h10, h01, h11],
+        }) = self.between(theta)
+        else {
+            return a.l_p_on_curve(theta);
+        };
+        let (n0, n1) = (&self.nodes[k], &self.nodes[k + 1]);
+        Ok(h00 * n0.l + h10 * n0.l_h + h01 * n1.l + h11 * n1.l_h)
     }
 
-    /// The slow model's θ̇ at θ and port voltage u [V]: the interpolated rate parts inside the
-    /// nodes, [`Actuator::slow_rate`] at the integrated curve outside.
+    /// The slow model's θ̇ at θ and port voltage u [V]: the interpolant of a + b u² (values
+    /// and slopes combined at the nodes first) inside them, [`Actuator::slow_rate`] at the
+    /// integrated curve outside.
     #[inline]
     pub(super) fn slow_rate(&self, a: &Actuator, theta: f64, u: f64) -> Result<f64, DomainError> {
-        let Some(at) = self.between(theta) else {
+        let Some(Between {
+            k,
+            basis: [h00, h10, h01, h11],
+        }) = self.between(theta)
+        else {
             return Ok(a.slow_rate(theta, a.l_p_on_curve(theta)?)?.at(u));
         };
-        let (r0, r1) = (&self.rate[at.k], &self.rate[at.k + 1]);
-        let rate_a = self.hermite(&at, [r0.a, r1.a], [r0.a_t, r1.a_t]);
-        let rate_b = self.hermite(&at, [r0.b, r1.b], [r0.b_t, r1.b_t]);
-        Ok(rate_a + rate_b * u * u)
+        let (n0, n1, u2) = (&self.nodes[k], &self.nodes[k + 1], u * u);
+        Ok(h00 * (n0.a + n0.b * u2)
+            + h10 * (n0.a_h + n0.b_h * u2)
+            + h01 * (n1.a + n1.b * u2)
+            + h11 * (n1.a_h + n1.b_h * u2))
     }
 }
