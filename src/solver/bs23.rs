@@ -34,15 +34,17 @@ const FAC_MIN: f64 = 0.2;
 const FAC_MAX: f64 = 5.0;
 const UROUND: f64 = 1e-16;
 
-/// x^(1/3) for x > 0 to about 1e-5 relative: a third of the bits (of the exponent, mostly) as the
-/// first guess (within 4 %), then two Newton steps y ← (2y + x/y²)/3, each squaring the relative
-/// error. For the step-size factor, which needs no more; `cbrt` is a software call here that
-/// took a tenth of a held step.
-fn cube_root(x: f64) -> f64 {
-    const ONE_THIRD_BIAS: u64 = 0x2A9F_7893_782D_A1CE;
-    let mut y = f64::from_bits(x.to_bits() / 3 + ONE_THIRD_BIAS);
+/// x^(−1/6) for x ≥ 1e-30 to about 5e-5 relative, without a division: a sixth of the bits
+/// (of the exponent, mostly) subtracted from a constant as the first guess (within 3.2 %), then
+/// two Newton steps y ← y (7 − x y⁶)/6 on y⁻⁶ = x. For the step-size factor from the mean square
+/// of the scaled error, err^(−1/3) = (err²)^(−1/6), which needs no more; `cbrt` is a software
+/// call here that took a tenth of a held step.
+fn inverse_sixth_root(x: f64) -> f64 {
+    const GUESS: u64 = 0x4A97_2000_0000_0000;
+    let mut y = f64::from_bits(GUESS - x.to_bits() / 6);
     for _ in 0..2 {
-        y = (2.0 * y + x / (y * y)) / 3.0;
+        let y3 = y * y * y;
+        y *= (7.0 - x * y3 * y3) / 6.0;
     }
     y
 }
@@ -190,7 +192,7 @@ impl Bs23 {
     }
 
     /// The stages of a step of size h, up to the new state (stage 4 is f there, into
-    /// `f_end`), and its error norm (Hairer, Nørsett & Wanner I, II.4 (4.11)).
+    /// `f_end`), and the square of its error norm (Hairer, Nørsett & Wanner I, II.4 (4.11)).
     fn attempt<S: OdeSystem>(&mut self, sys: &S, h: f64, t_new: f64) -> Result<f64, RhsError> {
         let n = self.n;
         self.stage_point(h, [0.5, 0.0, 0.0]);
@@ -212,7 +214,7 @@ impl Bs23 {
             let scale = self.tol.atol[i] + self.tol.rtol * self.y[i].abs().max(self.y_new[i].abs());
             sum += (e / scale) * (e / scale);
         }
-        Ok((sum / n as f64).sqrt())
+        Ok(sum / n as f64)
     }
 
     /// Takes one accepted step, never past `t_end`.
@@ -235,8 +237,8 @@ impl Bs23 {
             let t_new = if last { t_end } else { self.t + h };
             let tried = self.attempt(sys, h, t_new);
             self.stats.rhs_evals += 3;
-            let err = match tried {
-                Ok(err) if err.is_finite() => err,
+            let err2 = match tried {
+                Ok(err2) if err2.is_finite() => err2,
                 // a stage outside the system's domain: a smaller step may stay inside
                 _ => {
                     h *= 0.5;
@@ -245,10 +247,10 @@ impl Bs23 {
                     continue;
                 }
             };
-            // q = min(p, p̂) = 2: h_new = h · (1/err)^(1/3), bounded (HNW I, II.4 (4.13))
-            // (err = 0 gives the largest factor, as the infinity of 1/0 does)
-            let fac = (SAFE / cube_root(err)).clamp(FAC_MIN, FAC_MAX);
-            if err <= 1.0 {
+            // q = min(p, p̂) = 2: h_new = h · (1/err)^(1/3), bounded (HNW I, II.4 (4.13));
+            // err = 0 takes the largest factor
+            let fac = (SAFE * inverse_sixth_root(err2.max(1e-30))).clamp(FAC_MIN, FAC_MAX);
+            if err2 <= 1.0 {
                 self.accept(h, t_new);
                 self.stats.accepted += 1;
                 let h_new = if rejected { h * fac.min(1.0) } else { h * fac };
@@ -369,10 +371,11 @@ mod tests {
     }
 
     #[test]
-    fn the_cube_root_is_the_cube_root() {
-        for x in [1e-300, 1e-20, 3e-7, 0.1, 1.0, 2.0, 7.5, 1e5, 1e300] {
-            let y = cube_root(x);
-            assert!((y - x.cbrt()).abs() <= 1e-5 * x.cbrt(), "{x:e}: {y:e}");
+    fn the_inverse_sixth_root_is_one() {
+        for k in 0..=4000 {
+            let x = 10f64.powf(-30.0 + 40.0 * k as f64 / 4000.0);
+            let (y, want) = (inverse_sixth_root(x), x.powf(-1.0 / 6.0));
+            assert!((y - want).abs() <= 5e-5 * want, "{x:e}: {y:e}");
         }
     }
 
