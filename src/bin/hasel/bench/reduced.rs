@@ -147,7 +147,7 @@ fn step_costs(repeat: usize) -> Result<(), Error> {
         let stats = sim.stats();
         let (dh, dtip) = largest_difference(&reference, &run(&model, held, DEFAULT_RTOL)?, 0.0);
         say!(
-            "  {:<12} {us:.2} us{verdict}; {}, per step {:.2} right-hand sides of {:.0} ns each, {:.4} Jacobians; {:.4} / {:.4} um",
+            "  {:<12} {us:.3} us{verdict}; {}, per step {:.2} right-hand sides of {:.0} ns each, {:.4} Jacobians; {:.4} / {:.4} um",
             reduction.name(),
             sim.method(),
             stats.rhs_evals as f64 / STEPS as f64,
