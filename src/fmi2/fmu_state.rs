@@ -13,7 +13,9 @@ use crate::fmi_common::fmu_state::{self, Format, check_origin, seal, unseal};
 use crate::fmi_common::model_api::{FmuCore, InstanceKind};
 
 const MAGIC: &[u8; 8] = b"FMI2RSST";
-const FORMAT_VERSION: u32 = 2;
+/// 3: a Co-Simulation run holds which integrator it steps with (Radau IIA or the explicit
+/// pair, src/simulation/mod.rs), where 2 held Radau IIA alone.
+const FORMAT_VERSION: u32 = 3;
 
 /// An FMU state of this shell.
 pub type Snapshot<M> = fmu_state::Snapshot<M, Phase>;

@@ -14,7 +14,9 @@ use crate::fmi_common::fmu_state::{self, Format, check_origin, seal, unseal};
 use crate::fmi_common::model_api::FmuCore;
 
 const MAGIC: &[u8; 8] = b"FMI3HSST";
-const FORMAT_VERSION: u32 = 1;
+/// 2: a Co-Simulation run holds which integrator it steps with (Radau IIA or the explicit
+/// pair, src/simulation/mod.rs), where 1 held Radau IIA alone.
+const FORMAT_VERSION: u32 = 2;
 
 /// An FMU state of this shell.
 pub type Snapshot<M> = fmu_state::Snapshot<M, Phase>;

@@ -105,6 +105,23 @@ pub struct Structure {
     pub g: [f64; N],
 }
 
+/// The slow model's θ̇ = a + b u² at one angle on the invariant curve, at port voltage u, and
+/// the derivatives of a and b along the curve [`Actuator::slow_rate`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(super) struct SlowRate {
+    pub(super) a: f64,
+    pub(super) a_t: f64,
+    pub(super) b: f64,
+    pub(super) b_t: f64,
+}
+
+impl SlowRate {
+    /// θ̇ [rad/s] at port voltage `u` [V].
+    pub(super) fn at(&self, u: f64) -> f64 {
+        self.a + self.b * u * u
+    }
+}
+
 /// Quantities shared by H, ∇H, f and ∂f/∂x at one state.
 struct Eval {
     shell: Shell,
@@ -173,13 +190,40 @@ impl Actuator {
     }
 
     /// θ̇ of the slow model without effects (src/model/reduced.rs) at (θ, l_p) on the invariant
-    /// curve: on the DC circuit V2 = R2 i, and ṗ = 0 gives ω = −(∂H/∂θ + d ∂H/∂l_p)/b, from one
-    /// evaluation of the geometry (lifting to the full state and evaluating its f takes three).
-    pub(super) fn slow_rate(&self, theta: f64, l_p: f64, u: f64) -> Result<f64, DomainError> {
+    /// curve, as θ̇ = a(θ) + b(θ) u² with its derivatives along the curve. On the DC circuit
+    /// V2 = R2 ga(θ) u/(R0 + R1 + R2), so the electrode's term e_x = −½ V2² ∂C2/∂A_s of
+    /// [`Actuator::geometric_gradient`] is −E(θ) u², E = ½ c2_a (R2 ga/(R0 + R1 + R2))², and
+    /// ṗ = 0 gives ω = −(∂H/∂θ + d ∂H/∂l_p)/b:
+    ///
+    /// ```text
+    /// a = −(kb θ + G cos θ + ½ k d (l_p − Lp)) / b          b = E S / b,  S = A_s,θ + d A_s,l
+    /// a' = −(kb − G sin θ + ½ k (d' (l_p − Lp) + d²)) / b    b' = (E' S + E S') / b
+    /// ```
+    ///
+    /// with ' = ∂/∂θ + d ∂/∂l_p along the curve (dl_p/dθ = d): d' = d_θ + d d_l,
+    /// S' = A_s,θθ + 2 d A_s,θl + d² A_s,ll + d' A_s,l, E' = c2_a (R2/(R0 + R1 + R2))² ga ga'.
+    /// One geometry and its curvature, for the table of [`super::invariant_curve::Curve`].
+    pub(super) fn slow_rate(&self, theta: f64, l_p: f64) -> Result<SlowRate, DomainError> {
         let shell = Shell::new(theta, l_p, self.lv)?;
-        let v2 = self.par.r2 * self.dc_current(theta, u);
-        let (h_t, h_l) = self.geometric_gradient(&shell, theta, l_p, v2);
-        Ok(-(h_t + shell.d * h_l) / self.par.b)
+        let c = shell.curvature();
+        let damping = self.par.b;
+        let (d, dl) = (shell.d, l_p - self.lp);
+        let d_t = c.d_t + d * c.d_l;
+        let gain = self.par.r2 / (self.par.r0 + self.par.r1 + self.par.r2);
+        let (ga, ga_t) = (self.ga(theta), self.ga_prime(theta));
+        let e = 0.5 * self.c2_a * gain * gain * ga * ga;
+        let e_t = self.c2_a * gain * gain * ga * ga_t;
+        let s = shell.a_s_t + d * shell.a_s_l;
+        let s_t = c.a_s_tt + 2.0 * d * c.a_s_tl + d * d * c.a_s_ll + d_t * shell.a_s_l;
+        Ok(SlowRate {
+            a: -(self.par.kb * theta + self.gravity * shell.cos_theta + 0.5 * self.par.k * d * dl)
+                / damping,
+            a_t: -(self.par.kb - self.gravity * shell.sin_theta
+                + 0.5 * self.par.k * (d_t * dl + d * d))
+                / damping,
+            b: e * s / damping,
+            b_t: (e_t * s + e * s_t) / damping,
+        })
     }
 
     /// Electrode capacitance C2(θ, l_p) [F].

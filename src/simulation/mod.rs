@@ -8,7 +8,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::model::{ModelError, Platform};
 use crate::solver::sensitivity::SensitivityError;
-use crate::solver::{OdeSystem, Radau5, RhsError, SolverError, Stats, Tolerances};
+use crate::solver::{Bs23, OdeSystem, Radau5, RhsError, SolverError, Stats, Tolerances};
 pub use input::{Input, InputError, Interpolation, Piece, Tone};
 
 /// Relative tolerance of every way of running the model unless the user picks another
@@ -41,6 +41,18 @@ const SLIVER: f64 = 1e-12;
 
 /// First step size [s] from a fresh start: the electrical modes have a 2.7 ns time constant.
 const FIRST_STEP: f64 = 1e-9;
+
+/// The step a model must be non-stiff at for the explicit pair [s]: the FMUs' communication
+/// step (the paper's 1 kHz sampling).
+const NON_STIFF_STEP: f64 = 1e-3;
+
+/// The largest h ρ (step size times the spectral radius of ∂f/∂x) at which a step counts as
+/// not stiff: well inside the explicit pair's stability interval (−2.5, 0] ([`Bs23::stiffness`]),
+/// so that the pair's steps are set by its accuracy, not by its stability.
+const NON_STIFF_H_RHO: f64 = 1.0;
+
+/// Most steps of the explicit pair in one call (as [`Radau5`]'s default).
+const MAX_EXPLICIT_STEPS: usize = 100_000;
 
 /// Why a simulation could not go on.
 #[derive(Clone, Debug, PartialEq)]
@@ -124,10 +136,136 @@ impl OdeSystem for Driven<'_> {
     }
 }
 
+/// The integrator of a run. A model that is not stiff at the co-simulation step starts with the
+/// explicit Bogacki–Shampine pair: its Jacobian's spectral radius ρ at the start, bounded by the
+/// largest row sum of |∂f/∂x|, keeps h ρ ≤ [`NON_STIFF_H_RHO`] at h = [`NON_STIFF_STEP`]. It
+/// stays with it while every step's own estimate of h ρ does ([`Bs23::stiffness`]); the first
+/// step that exceeds it hands the run to Radau IIA at that point for good (an effect's stiff
+/// state, a larger drive). Either way every step meets the same error control.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+enum Integrator {
+    Radau(Box<Radau5>),
+    Explicit(Box<Bs23>),
+}
+
+impl Integrator {
+    /// The integrator for `sys` from `y` at `t`, by the rule above.
+    fn choose(
+        sys: &Driven<'_>,
+        t: f64,
+        y: &[f64],
+        tol: Tolerances,
+    ) -> Result<Integrator, SolverError> {
+        let n = y.len();
+        let mut jac = vec![0.0; n * n];
+        sys.jacobian(t, y, &mut jac)
+            .map_err(|e| SolverError::Rhs { t, message: e.0 })?;
+        // Gershgorin: every eigenvalue lies within a row's sum of |entries| (column-major)
+        let rho = (0..n)
+            .map(|r| (0..n).map(|c| jac[c * n + r].abs()).sum::<f64>())
+            .fold(0.0, f64::max);
+        Ok(if rho * NON_STIFF_STEP <= NON_STIFF_H_RHO {
+            Integrator::Explicit(Box::new(Bs23::new(n, tol)))
+        } else {
+            Integrator::Radau(Box::new(Radau5::new(n, tol)))
+        })
+    }
+
+    fn init(&mut self, sys: &Driven<'_>, t: f64, y: &[f64], h0: f64) -> Result<(), SolverError> {
+        match self {
+            Integrator::Radau(r) => r.init(sys, t, y, h0),
+            Integrator::Explicit(e) => e.init(sys, t, y, h0),
+        }
+    }
+
+    fn restart(&mut self, sys: &Driven<'_>) -> Result<(), SolverError> {
+        match self {
+            Integrator::Radau(r) => r.restart(sys),
+            Integrator::Explicit(e) => e.restart(sys),
+        }
+    }
+
+    fn t(&self) -> f64 {
+        match self {
+            Integrator::Radau(r) => r.t(),
+            Integrator::Explicit(e) => e.t(),
+        }
+    }
+
+    fn y(&self) -> &[f64] {
+        match self {
+            Integrator::Radau(r) => r.y(),
+            Integrator::Explicit(e) => e.y(),
+        }
+    }
+
+    fn name(&self) -> &'static str {
+        match self {
+            Integrator::Radau(_) => "Radau IIA",
+            Integrator::Explicit(_) => "Bogacki-Shampine 3(2)",
+        }
+    }
+
+    fn stats(&self) -> Stats {
+        match self {
+            Integrator::Radau(r) => r.stats(),
+            Integrator::Explicit(e) => e.stats(),
+        }
+    }
+
+    fn interpolate(&self, t: f64, out: &mut [f64]) {
+        match self {
+            Integrator::Radau(r) => r.interpolate(t, out),
+            Integrator::Explicit(e) => e.interpolate(t, out),
+        }
+    }
+
+    /// One accepted step, never past `t_end`; an explicit step that met h ρ above
+    /// [`NON_STIFF_H_RHO`] hands the run to Radau IIA (its first step the explicit pair's
+    /// last).
+    fn step(&mut self, sys: &Driven<'_>, t_end: f64) -> Result<(), SolverError> {
+        match self {
+            Integrator::Radau(r) => r.step(sys, t_end),
+            Integrator::Explicit(e) => {
+                let t_start = e.t();
+                e.step(sys, t_end)?;
+                if e.stiffness() > NON_STIFF_H_RHO {
+                    let mut radau = Radau5::new(e.y().len(), e.tolerances().clone());
+                    radau.init(sys, e.t(), e.y(), e.t() - t_start)?;
+                    *self = Integrator::Radau(Box::new(radau));
+                }
+                Ok(())
+            }
+        }
+    }
+
+    /// Integrates until t = `t_end` exactly.
+    fn advance(&mut self, sys: &Driven<'_>, t_end: f64) -> Result<(), SolverError> {
+        let mut steps = 0;
+        while let Integrator::Explicit(e) = self {
+            if e.t() >= t_end {
+                return Ok(());
+            }
+            if steps == MAX_EXPLICIT_STEPS {
+                return Err(SolverError::TooManySteps {
+                    t: e.t(),
+                    limit: MAX_EXPLICIT_STEPS,
+                });
+            }
+            self.step(sys, t_end)?;
+            steps += 1;
+        }
+        match self {
+            Integrator::Radau(r) => r.advance(sys, t_end),
+            Integrator::Explicit(_) => unreachable!("left the loop above"),
+        }
+    }
+}
+
 /// What a run tells besides its samples (`Simulator::run_observed`).
 trait Observer {
     /// After every accepted step, with the system that made it.
-    fn stepped(&mut self, solver: &Radau5, sys: &Driven<'_>) -> Result<(), SimError>;
+    fn stepped(&mut self, solver: &Integrator, sys: &Driven<'_>) -> Result<(), SimError>;
     /// At every output time, with the state there.
     fn sampled(&mut self, sample: &Sample, x: &[f64]);
 }
@@ -200,7 +338,7 @@ impl Start {
 #[derive(Clone, Debug)]
 pub struct Simulator {
     model: Platform,
-    solver: Radau5,
+    solver: Integrator,
     /// Voltage the model sees at the current point (the command, late by the delay), to detect
     /// jumps between calls.
     u_now: [f64; 3],
@@ -214,7 +352,7 @@ pub struct Simulator {
 /// Everything of a [`Simulator`] beyond its model: restoring it replays bit for bit.
 #[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct Snapshot {
-    solver: Radau5,
+    solver: Integrator,
     u_now: [f64; 3],
     history: Vec<(f64, [f64; 3])>,
 }
@@ -269,11 +407,11 @@ impl Simulator {
                 "start time t0 = {t0}: must be finite"
             )));
         }
-        let mut solver = Radau5::new(model.n_states(), tol);
         let sys = Driven {
             model: &model,
             piece: Drive::held([0.0; 3]),
         };
+        let mut solver = Integrator::choose(&sys, t0, x0, tol)?;
         solver.init(&sys, t0, x0, FIRST_STEP)?;
         Ok(Simulator {
             x_start: x0.to_vec(),
@@ -323,8 +461,16 @@ impl Simulator {
         self.solver.y()
     }
 
+    /// The integrator's work since it started (the explicit pair's is left behind when it
+    /// hands the run to Radau IIA).
     pub fn stats(&self) -> Stats {
         self.solver.stats()
+    }
+
+    /// The integrator that steps the run now: "Radau IIA" or "Bogacki-Shampine 3(2)"
+    /// (`Integrator`).
+    pub fn method(&self) -> &'static str {
+        self.solver.name()
     }
 
     fn delay(&self) -> f64 {
@@ -500,7 +646,7 @@ impl Simulator {
         /// Samples only.
         struct Samples<F>(F);
         impl<F: FnMut(&Sample)> Observer for Samples<F> {
-            fn stepped(&mut self, _: &Radau5, _: &Driven<'_>) -> Result<(), SimError> {
+            fn stepped(&mut self, _: &Integrator, _: &Driven<'_>) -> Result<(), SimError> {
                 Ok(())
             }
             fn sampled(&mut self, sample: &Sample, _: &[f64]) {
@@ -562,5 +708,88 @@ impl Simulator {
                 return Ok(());
             }
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::model::{Params, Reduction};
+
+    fn slow(params: Params) -> Platform {
+        Platform::reduced(params, Reduction::Slow).unwrap()
+    }
+
+    /// The slow model starts with the explicit pair, the stiff models with Radau IIA, and so
+    /// does the slow model with an effect that adds a fast state (an amplifier lag of 10 µs).
+    #[test]
+    fn the_integrator_follows_the_models_stiffness() {
+        let explicit = "Bogacki-Shampine 3(2)";
+        for r in Reduction::ALL {
+            let model = Platform::reduced(Params::default(), r).unwrap();
+            let sim = Simulator::new(model, 0.0, DEFAULT_RTOL).unwrap();
+            assert_eq!(
+                sim.method() == explicit,
+                r == Reduction::Slow,
+                "{}",
+                r.name()
+            );
+        }
+        let mut lagged = Params::default();
+        lagged.set("tau_a", 1e-5).unwrap();
+        let sim = Simulator::new(slow(lagged), 0.0, DEFAULT_RTOL).unwrap();
+        assert_eq!(sim.method(), "Radau IIA");
+        let mut slow_lag = Params::default();
+        slow_lag.set("tau_a", 0.1).unwrap();
+        let sim = Simulator::new(slow(slow_lag), 0.0, DEFAULT_RTOL).unwrap();
+        assert_eq!(sim.method(), explicit);
+    }
+
+    /// A step held for 5 s: the explicit pair's steps grow as the motion settles until one
+    /// meets h ρ > 1, and Radau IIA takes over there; the run ends where one at a hundredfold
+    /// tighter tolerance does, within the tolerance.
+    #[test]
+    fn a_settling_run_hands_over_to_radau_and_stays_accurate() {
+        let input = Input::constant([60.0, 40.0, 20.0]);
+        let run = |rtol: f64| {
+            let mut sim = Simulator::new(slow(Params::default()), 0.0, rtol).unwrap();
+            let mut last = None;
+            sim.run(&input, 5.0, 0.5, |s| last = Some(*s)).unwrap();
+            (sim.method(), last.unwrap())
+        };
+        let (method, loose) = run(DEFAULT_RTOL);
+        let (_, tight) = run(1e-8);
+        assert_eq!(method, "Radau IIA");
+        for i in 0..3 {
+            let dh = (loose.h[i] - tight.h[i]).abs();
+            assert!(
+                dh <= 1e-6 * tight.h[i].abs() + 1e-12,
+                "h{}: {dh:e} m",
+                i + 1
+            );
+        }
+    }
+
+    /// A snapshot taken while the explicit pair steps replays bit for bit, through serde.
+    #[test]
+    fn an_explicit_run_replays_from_its_snapshot() {
+        let input = Input::sine(60.0, 3.0 * std::f64::consts::PI);
+        let mut sim = Simulator::new(slow(Params::default()), 0.0, DEFAULT_RTOL).unwrap();
+        let held = |sim: &mut Simulator, from: usize, to: usize| {
+            for k in from..to {
+                sim.step_held(input.value(k as f64 * 1e-3), (k + 1) as f64 * 1e-3)
+                    .unwrap();
+            }
+        };
+        held(&mut sim, 0, 100);
+        let bytes = postcard::to_stdvec(&sim.snapshot()).unwrap();
+        let snapshot: Snapshot = postcard::from_bytes(&bytes).unwrap();
+        let mut copy = Simulator::from_snapshot(slow(Params::default()), snapshot).unwrap();
+        held(&mut sim, 100, 200);
+        held(&mut copy, 100, 200);
+        assert_eq!(sim.method(), "Bogacki-Shampine 3(2)");
+        let bits = |s: &Simulator| s.state().iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+        assert_eq!(bits(&sim), bits(&copy));
+        assert_eq!(sim.stats(), copy.stats());
     }
 }

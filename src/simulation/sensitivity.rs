@@ -9,10 +9,10 @@
 //! equation. The delay `tau_d` acts on the input's timing, not on f: a direction that moves it
 //! is refused.
 
-use super::{Driven, Input, Observer, Sample, SimError, Simulator, Start};
+use super::{Driven, Input, Integrator, Observer, Sample, SimError, Simulator, Start};
 use crate::model::{Params, Platform};
 use crate::solver::sensitivity::{ParametricSystem, Sensitivities};
-use crate::solver::{OdeSystem, Radau5, RhsError};
+use crate::solver::{OdeSystem, RhsError};
 
 /// One parameter direction: the parameters with coordinate θ_j moved by `step`.
 #[derive(Clone, Debug)]
@@ -95,7 +95,13 @@ struct Follower<'a> {
 }
 
 impl Observer for Follower<'_> {
-    fn stepped(&mut self, solver: &Radau5, sys: &Driven<'_>) -> Result<(), SimError> {
+    fn stepped(&mut self, solver: &Integrator, sys: &Driven<'_>) -> Result<(), SimError> {
+        // the full model, whose electrical modes keep it with Radau IIA from the start
+        let Integrator::Radau(solver) = solver else {
+            return Err(SimError::Setting(
+                "sensitivities follow Radau IIA's stages, and this run is explicit".into(),
+            ));
+        };
         let sys = Parametric {
             driven: sys,
             models: self.models,
