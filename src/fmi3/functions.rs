@@ -1,6 +1,6 @@
 //! [`export_fmi3!`](crate::export_fmi3): the functions of `fmi3Functions.h` for one core,
-//! each handing its arguments to the function of [`exports`](super::exports) that does the
-//! work.
+//! each handing its arguments to the function of [`calls`](crate::fmi_common::calls) both
+//! versions share, or of [`exports`](super::exports) where FMI 3.0 has its own.
 
 /// Exports the functions of `fmi3Functions.h` for the core type `$core` (an
 /// [`FmuCore`](crate::fmi_common::model_api::FmuCore)). Invoke exactly once per shared
@@ -307,11 +307,14 @@ macro_rules! __fmi3_functions {
             sensitivity: *mut fmi3Float64,
             n_sensitivity: usize,
         ) -> fmi3Status {
-            unsafe {
-                shell::get_directional_derivative::<$core>(
-                    c, unknowns, n_unknowns, knowns, n_knowns, seed, n_seed, sensitivity, n_sensitivity,
-                )
-            }
+            let arrays = common::DerivativeArrays {
+                unknowns: (unknowns, n_unknowns),
+                knowns: (knowns, n_knowns),
+                seed: (seed, n_seed),
+                sensitivity: (sensitivity, n_sensitivity),
+            };
+            let call = Instance::directional_derivative;
+            unsafe { common::get_directional_derivative::<Fmi3, $core>(c, arrays, call) }
         }
         $crate::__fmi3_not_offered!([$($attr)*] $core, fmi3GetAdjointDerivative, "providesAdjointDerivatives",
             (_unknowns: *const fmi3ValueReference, _n_unknowns: usize,
@@ -433,12 +436,12 @@ macro_rules! __fmi3_model_exchange {
             enter_event_mode: *mut fmi3Boolean,
             terminate_simulation: *mut fmi3Boolean,
         ) -> fmi3Status {
-            unsafe { shell::completed_integrator_step::<$core>(c, enter_event_mode, terminate_simulation) }
+            unsafe { common::completed_integrator_step::<Fmi3, $core>(c, enter_event_mode, terminate_simulation) }
         }
 
         $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)]
         pub unsafe extern "C" fn fmi3SetTime(c: fmi3Instance, time: fmi3Float64) -> fmi3Status {
-            unsafe { shell::set_time::<$core>(c, time) }
+            unsafe { common::set_time::<Fmi3, $core>(c, time) }
         }
 
         $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)]
@@ -447,7 +450,7 @@ macro_rules! __fmi3_model_exchange {
             x: *const fmi3Float64,
             nx: usize,
         ) -> fmi3Status {
-            unsafe { shell::set_continuous_states::<$core>(c, x, nx) }
+            unsafe { common::set_continuous_states::<Fmi3, $core>(c, (x, nx), Instance::set_continuous_states) }
         }
 
         $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)]
@@ -456,8 +459,9 @@ macro_rules! __fmi3_model_exchange {
             dx: *mut fmi3Float64,
             nx: usize,
         ) -> fmi3Status {
-            let f = "fmi3GetContinuousStateDerivatives";
-            unsafe { shell::state_vector::<$core>(c, f, dx, nx, |m, out| m.derivatives(out)) }
+            let names = ("fmi3GetContinuousStateDerivatives", shell::OUTPUT_ARRAY);
+            let get = |inst: &mut Instance<$core>, out: &mut [f64]| inst.state_vector(names.0, out, |m, out| m.derivatives(out));
+            unsafe { common::get_state_vector::<Fmi3, $core>(c, names, (dx, nx), get) }
         }
 
         $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)]
@@ -466,7 +470,7 @@ macro_rules! __fmi3_model_exchange {
             z: *mut fmi3Float64,
             nz: usize,
         ) -> fmi3Status {
-            unsafe { shell::get_event_indicators::<$core>(c, z, nz) }
+            unsafe { common::get_event_indicators::<Fmi3, $core>(c, (z, nz)) }
         }
 
         $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)]
@@ -475,8 +479,9 @@ macro_rules! __fmi3_model_exchange {
             x: *mut fmi3Float64,
             nx: usize,
         ) -> fmi3Status {
-            let f = "fmi3GetContinuousStates";
-            unsafe { shell::state_vector::<$core>(c, f, x, nx, |m, out| m.continuous_states(out)) }
+            let names = ("fmi3GetContinuousStates", shell::OUTPUT_ARRAY);
+            let get = |inst: &mut Instance<$core>, out: &mut [f64]| inst.state_vector(names.0, out, |m, out| m.continuous_states(out));
+            unsafe { common::get_state_vector::<Fmi3, $core>(c, names, (x, nx), get) }
         }
 
         $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)]
@@ -485,8 +490,9 @@ macro_rules! __fmi3_model_exchange {
             nominals: *mut fmi3Float64,
             nx: usize,
         ) -> fmi3Status {
-            let f = "fmi3GetNominalsOfContinuousStates";
-            unsafe { shell::state_vector::<$core>(c, f, nominals, nx, |m, out| m.nominals(out)) }
+            let names = ("fmi3GetNominalsOfContinuousStates", shell::OUTPUT_ARRAY);
+            let get = |inst: &mut Instance<$core>, out: &mut [f64]| inst.state_vector(names.0, out, |m, out| m.nominals(out));
+            unsafe { common::get_state_vector::<Fmi3, $core>(c, names, (nominals, nx), get) }
         }
 
         $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)]
