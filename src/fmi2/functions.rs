@@ -38,17 +38,13 @@ macro_rules! __fmi2_functions {
             shell::static_c_str(VERSION)
         }
 
-        // Creation and destruction of instances, debug logging (sections 2.1.5, 2.1.6)
+        // Creation and destruction of instances, debug logging, and the calls without arguments
+        // (sections 2.1.5, 2.1.6, 3.2.2)
 
-        $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)]
-        pub unsafe extern "C" fn fmi2SetDebugLogging(
-            c: fmi2Component,
-            logging_on: fmi2Boolean,
-            n_categories: usize,
-            categories: *const fmi2String,
-        ) -> fmi2Status {
-            unsafe { common::set_debug_logging::<Fmi2, $core>(c, logging_on != FMI2_FALSE, n_categories, categories) }
-        }
+        $crate::__fmi_lifecycle_functions!([$($attr)*] $core, Fmi2, fmi2Component, fmi2Status, fmi2Boolean, fmi2String,
+            [fmi2SetDebugLogging, fmi2FreeInstance],
+            [fmi2ExitInitializationMode: exit_initialization_mode, fmi2Terminate: terminate, fmi2Reset: reset,
+             fmi2EnterEventMode: enter_event_mode]);
 
         $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)]
         pub unsafe extern "C" fn fmi2Instantiate(
@@ -63,11 +59,6 @@ macro_rules! __fmi2_functions {
             unsafe {
                 shell::instantiate::<$core>(name, fmu_type, guid, resources, functions, logging_on)
             }
-        }
-
-        $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)]
-        pub unsafe extern "C" fn fmi2FreeInstance(c: fmi2Component) {
-            unsafe { common::free_instance::<Fmi2, $core>(c) }
         }
 
         // Initialization, termination and reset (section 2.1.6)
@@ -91,21 +82,6 @@ macro_rules! __fmi2_functions {
             unsafe { common::simple::<Fmi2, $core>(c, "fmi2EnterInitializationMode", Instance::enter_initialization_mode) }
         }
 
-        $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)]
-        pub unsafe extern "C" fn fmi2ExitInitializationMode(c: fmi2Component) -> fmi2Status {
-            unsafe { common::simple::<Fmi2, $core>(c, "fmi2ExitInitializationMode", Instance::exit_initialization_mode) }
-        }
-
-        $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)]
-        pub unsafe extern "C" fn fmi2Terminate(c: fmi2Component) -> fmi2Status {
-            unsafe { common::simple::<Fmi2, $core>(c, "fmi2Terminate", Instance::terminate) }
-        }
-
-        $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)]
-        pub unsafe extern "C" fn fmi2Reset(c: fmi2Component) -> fmi2Status {
-            unsafe { common::simple::<Fmi2, $core>(c, "fmi2Reset", Instance::reset) }
-        }
-
         // Getting and setting variable values (section 2.1.7); Real variables only
 
         $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)]
@@ -119,36 +95,6 @@ macro_rules! __fmi2_functions {
         }
 
         $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)]
-        pub unsafe extern "C" fn fmi2GetInteger(
-            c: fmi2Component,
-            vr: *const fmi2ValueReference,
-            nvr: usize,
-            value: *mut fmi2Integer,
-        ) -> fmi2Status {
-            unsafe { common::no_variables::<Fmi2, $core>(c, "fmi2GetInteger", (vr, nvr), value.cast()) }
-        }
-
-        $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)]
-        pub unsafe extern "C" fn fmi2GetBoolean(
-            c: fmi2Component,
-            vr: *const fmi2ValueReference,
-            nvr: usize,
-            value: *mut fmi2Boolean,
-        ) -> fmi2Status {
-            unsafe { common::no_variables::<Fmi2, $core>(c, "fmi2GetBoolean", (vr, nvr), value.cast()) }
-        }
-
-        $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)]
-        pub unsafe extern "C" fn fmi2GetString(
-            c: fmi2Component,
-            vr: *const fmi2ValueReference,
-            nvr: usize,
-            value: *mut fmi2String,
-        ) -> fmi2Status {
-            unsafe { common::no_variables::<Fmi2, $core>(c, "fmi2GetString", (vr, nvr), value.cast()) }
-        }
-
-        $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)]
         pub unsafe extern "C" fn fmi2SetReal(
             c: fmi2Component,
             vr: *const fmi2ValueReference,
@@ -158,90 +104,15 @@ macro_rules! __fmi2_functions {
             unsafe { common::set_values::<Fmi2, $core>(c, (vr, nvr), (value, nvr)) }
         }
 
-        $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)]
-        pub unsafe extern "C" fn fmi2SetInteger(
-            c: fmi2Component,
-            vr: *const fmi2ValueReference,
-            nvr: usize,
-            value: *const fmi2Integer,
-        ) -> fmi2Status {
-            unsafe { common::no_variables::<Fmi2, $core>(c, "fmi2SetInteger", (vr, nvr), value.cast()) }
-        }
-
-        $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)]
-        pub unsafe extern "C" fn fmi2SetBoolean(
-            c: fmi2Component,
-            vr: *const fmi2ValueReference,
-            nvr: usize,
-            value: *const fmi2Boolean,
-        ) -> fmi2Status {
-            unsafe { common::no_variables::<Fmi2, $core>(c, "fmi2SetBoolean", (vr, nvr), value.cast()) }
-        }
-
-        $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)]
-        pub unsafe extern "C" fn fmi2SetString(
-            c: fmi2Component,
-            vr: *const fmi2ValueReference,
-            nvr: usize,
-            value: *const fmi2String,
-        ) -> fmi2Status {
-            unsafe { common::no_variables::<Fmi2, $core>(c, "fmi2SetString", (vr, nvr), value.cast()) }
-        }
+        $crate::__fmi_no_variables_functions!([$($attr)*] $core, Fmi2, fmi2Component, fmi2Status, fmi2ValueReference,
+            [(fmi2GetInteger, fmi2SetInteger, fmi2Integer), (fmi2GetBoolean, fmi2SetBoolean, fmi2Boolean),
+             (fmi2GetString, fmi2SetString, fmi2String)]);
 
         // FMU states (section 2.1.8)
 
-        $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)]
-        pub unsafe extern "C" fn fmi2GetFMUstate(
-            c: fmi2Component,
-            state: *mut fmi2FMUstate,
-        ) -> fmi2Status {
-            unsafe { common::get_fmu_state::<Fmi2, $core>(c, "fmi2GetFMUstate", state) }
-        }
-
-        $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)]
-        pub unsafe extern "C" fn fmi2SetFMUstate(
-            c: fmi2Component,
-            state: fmi2FMUstate,
-        ) -> fmi2Status {
-            unsafe { common::set_fmu_state::<Fmi2, $core>(c, "fmi2SetFMUstate", state) }
-        }
-
-        $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)]
-        pub unsafe extern "C" fn fmi2FreeFMUstate(
-            c: fmi2Component,
-            state: *mut fmi2FMUstate,
-        ) -> fmi2Status {
-            unsafe { common::free_fmu_state::<Fmi2, $core>(c, "fmi2FreeFMUstate", state) }
-        }
-
-        $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)]
-        pub unsafe extern "C" fn fmi2SerializedFMUstateSize(
-            c: fmi2Component,
-            state: fmi2FMUstate,
-            size: *mut usize,
-        ) -> fmi2Status {
-            unsafe { common::serialized_fmu_state_size::<Fmi2, $core>(c, "fmi2SerializedFMUstateSize", state, size) }
-        }
-
-        $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)]
-        pub unsafe extern "C" fn fmi2SerializeFMUstate(
-            c: fmi2Component,
-            state: fmi2FMUstate,
-            bytes: *mut fmi2Byte,
-            size: usize,
-        ) -> fmi2Status {
-            unsafe { common::serialize_fmu_state::<Fmi2, $core>(c, "fmi2SerializeFMUstate", state, bytes.cast(), size) }
-        }
-
-        $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)]
-        pub unsafe extern "C" fn fmi2DeSerializeFMUstate(
-            c: fmi2Component,
-            bytes: *const fmi2Byte,
-            size: usize,
-            state: *mut fmi2FMUstate,
-        ) -> fmi2Status {
-            unsafe { common::deserialize_fmu_state::<Fmi2, $core>(c, "fmi2DeSerializeFMUstate", bytes.cast(), size, state) }
-        }
+        $crate::__fmi_fmu_state_functions!([$($attr)*] $core, Fmi2, fmi2Component, fmi2Status, fmi2FMUstate, fmi2Byte,
+            [fmi2GetFMUstate, fmi2SetFMUstate, fmi2FreeFMUstate, fmi2SerializedFMUstateSize, fmi2SerializeFMUstate,
+             fmi2DeSerializeFMUstate]);
 
         // Directional derivatives (section 2.1.9)
 
@@ -268,11 +139,6 @@ macro_rules! __fmi2_functions {
         // Model Exchange (section 3.2)
 
         $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)]
-        pub unsafe extern "C" fn fmi2EnterEventMode(c: fmi2Component) -> fmi2Status {
-            unsafe { common::simple::<Fmi2, $core>(c, "fmi2EnterEventMode", Instance::enter_event_mode) }
-        }
-
-        $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)]
         pub unsafe extern "C" fn fmi2NewDiscreteStates(
             c: fmi2Component,
             event_info: *mut fmi2EventInfo,
@@ -280,73 +146,11 @@ macro_rules! __fmi2_functions {
             unsafe { shell::new_discrete_states::<$core>(c, event_info) }
         }
 
-        $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)]
-        pub unsafe extern "C" fn fmi2EnterContinuousTimeMode(c: fmi2Component) -> fmi2Status {
-            unsafe { common::simple::<Fmi2, $core>(c, "fmi2EnterContinuousTimeMode", Instance::enter_continuous_time_mode) }
-        }
-
-        $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)]
-        pub unsafe extern "C" fn fmi2CompletedIntegratorStep(
-            c: fmi2Component,
-            _no_set_fmu_state_prior_to_current_point: fmi2Boolean,
-            enter_event_mode: *mut fmi2Boolean,
-            terminate_simulation: *mut fmi2Boolean,
-        ) -> fmi2Status {
-            unsafe { common::completed_integrator_step::<Fmi2, $core>(c, enter_event_mode, terminate_simulation) }
-        }
-
-        $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)]
-        pub unsafe extern "C" fn fmi2SetTime(c: fmi2Component, time: fmi2Real) -> fmi2Status {
-            unsafe { common::set_time::<Fmi2, $core>(c, time) }
-        }
-
-        $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)]
-        pub unsafe extern "C" fn fmi2SetContinuousStates(
-            c: fmi2Component,
-            x: *const fmi2Real,
-            nx: usize,
-        ) -> fmi2Status {
-            unsafe { common::set_continuous_states::<Fmi2, $core>(c, (x, nx), Instance::set_continuous_states) }
-        }
-
-        $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)]
-        pub unsafe extern "C" fn fmi2GetDerivatives(
-            c: fmi2Component,
-            derivatives: *mut fmi2Real,
-            nx: usize,
-        ) -> fmi2Status {
-            let names = ("fmi2GetDerivatives", "derivatives");
-            unsafe { common::get_state_vector::<Fmi2, $core>(c, names, (derivatives, nx), Instance::get_derivatives) }
-        }
-
-        $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)]
-        pub unsafe extern "C" fn fmi2GetEventIndicators(
-            c: fmi2Component,
-            event_indicators: *mut fmi2Real,
-            ni: usize,
-        ) -> fmi2Status {
-            unsafe { common::get_event_indicators::<Fmi2, $core>(c, (event_indicators, ni)) }
-        }
-
-        $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)]
-        pub unsafe extern "C" fn fmi2GetContinuousStates(
-            c: fmi2Component,
-            x: *mut fmi2Real,
-            nx: usize,
-        ) -> fmi2Status {
-            let names = ("fmi2GetContinuousStates", "x");
-            unsafe { common::get_state_vector::<Fmi2, $core>(c, names, (x, nx), Instance::get_continuous_states) }
-        }
-
-        $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)]
-        pub unsafe extern "C" fn fmi2GetNominalsOfContinuousStates(
-            c: fmi2Component,
-            x_nominal: *mut fmi2Real,
-            nx: usize,
-        ) -> fmi2Status {
-            let names = ("fmi2GetNominalsOfContinuousStates", "x_nominal");
-            unsafe { common::get_state_vector::<Fmi2, $core>(c, names, (x_nominal, nx), Instance::get_nominals) }
-        }
+        $crate::__fmi_model_exchange_functions!([$($attr)*] $core, Fmi2, fmi2Component, fmi2Status, fmi2Boolean,
+            [fmi2EnterContinuousTimeMode, fmi2CompletedIntegratorStep, fmi2SetTime, fmi2SetContinuousStates,
+             fmi2GetEventIndicators],
+            [(fmi2GetDerivatives, "derivatives", get_derivatives), (fmi2GetContinuousStates, "x", get_continuous_states),
+             (fmi2GetNominalsOfContinuousStates, "x_nominal", get_nominals)]);
 
         // Co-Simulation (section 4.2)
 

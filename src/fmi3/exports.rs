@@ -194,9 +194,6 @@ pub unsafe fn do_step<M: FmuCore>(
     }
 }
 
-/// How the NULL messages of the state-vector functions name their array.
-pub const OUTPUT_ARRAY: &str = "the output array";
-
 /// `fmi3GetNumberOfContinuousStates` and `fmi3GetNumberOfEventIndicators` (`func`): `count`
 /// gives the number.
 pub unsafe fn get_number_of<M: FmuCore>(

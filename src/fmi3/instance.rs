@@ -311,11 +311,28 @@ impl<M: FmuCore> Instance<M> {
         self.core_call(F, |core| core.set_continuous_states(x))
     }
 
+    /// `fmi3GetContinuousStates` (section 3.2.1).
+    pub fn get_continuous_states(&mut self, x: &mut [f64]) -> Status {
+        self.state_vector("fmi3GetContinuousStates", x, M::continuous_states)
+    }
+
+    /// `fmi3GetContinuousStateDerivatives` (section 3.2.1).
+    pub fn get_derivatives(&mut self, dx: &mut [f64]) -> Status {
+        self.state_vector("fmi3GetContinuousStateDerivatives", dx, M::derivatives)
+    }
+
+    /// `fmi3GetNominalsOfContinuousStates` (section 3.2.1).
+    pub fn get_nominals(&mut self, nominals: &mut [f64]) -> Status {
+        self.state_vector("fmi3GetNominalsOfContinuousStates", nominals, |m, out| {
+            m.nominals(out)
+        })
+    }
+
     /// `fmi3GetContinuousStates`, `fmi3GetContinuousStateDerivatives` and
     /// `fmi3GetNominalsOfContinuousStates` (`func`, section 3.2.1): one value per state from
     /// `call`. Where the model cannot be evaluated (a state outside its domain), the
     /// derivatives give `fmi3Discard` (the importer may retry with a smaller step).
-    pub fn state_vector(
+    fn state_vector(
         &mut self,
         func: &str,
         out: &mut [f64],
