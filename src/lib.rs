@@ -1,5 +1,5 @@
-//! hasel-fmu: the HASEL-actuated 3PS micro parallel platform as a library, an FMI 2.0
-//! Co-Simulation FMU and the `hasel` command-line tool.
+//! hasel-fmu: the HASEL-actuated 3PS micro parallel platform as a library, FMUs of FMI 2.0 and
+//! 3.0 (Co-Simulation and Model Exchange) and the `hasel` command-line tool.
 
 #[cfg(feature = "tools")]
 pub mod control;

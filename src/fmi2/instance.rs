@@ -2,9 +2,11 @@
 //! [`Instance`](crate::fmi_common::instance::Instance) of [`fmi_common`](crate::fmi_common)
 //! with what FMI 2.0 brings to it ([`Fmi2`]: its status, state table, logger, names, messages
 //! and FMU-state format) and its own calls: `fmi2Instantiate`, `fmi2SetupExperiment`, the
-//! Co-Simulation step and status calls, the Model Exchange calls and directional derivatives.
-//! Which call is allowed in which state is the table of [`super::state_machine`]. The
-//! `extern "C"` layer in [`super::exports`] only converts pointers and catches panics.
+//! Co-Simulation step and status calls, the Model Exchange calls that check the state vector
+//! FMI 2.0's way and directional derivatives (`fmi2SetTime`, the event indicators and
+//! `fmi2CompletedIntegratorStep` are the generic instance's). Which call is allowed in which
+//! state is the table of [`super::state_machine`]. The `extern "C"` layer ([`super::functions`])
+//! only converts pointers and catches panics.
 //!
 //! Error policy: that of the generic instance; core failures of `fmi2DoStep` are
 //! `fmi2Discard` (state stepFailed). A panic puts the instance into the error state, where
@@ -17,7 +19,7 @@ use super::model_description::guid_for;
 use super::state_machine::{Experiment, Mask, Phase, allowed};
 use super::types::{
     FMI2_DO_STEP_STATUS, FMI2_LAST_SUCCESSFUL_TIME, FMI2_PENDING_STATUS, FMI2_TERMINATED,
-    Fmi2Status, fmi2CallbackFunctions, fmi2StatusKind,
+    Fmi2Status, fmi2Boolean, fmi2CallbackFunctions, fmi2StatusKind,
 };
 use super::uri::path_from_file_uri;
 use crate::fmi_common::instance::{self, Masks, Names, Request, Version, Wording, optional};
@@ -37,6 +39,7 @@ pub type Instance<M> = instance::Instance<Fmi2, M>;
 
 impl Version for Fmi2 {
     type Status = Fmi2Status;
+    type Boolean = fmi2Boolean;
     type Sink = Callbacks;
     type Options = ();
 
@@ -56,17 +59,31 @@ impl Version for Fmi2 {
         values: "value",
         fmu_state: "FMUstate",
         value_type: "",
+        set_time: "fmi2SetTime",
+        set_continuous_states: "fmi2SetContinuousStates",
+        get_event_indicators: "fmi2GetEventIndicators",
+        completed_integrator_step: "fmi2CompletedIntegratorStep",
+        get_directional_derivative: "fmi2GetDirectionalDerivative",
+        continuous_states: "x",
+        unknowns: "vUnknown_ref",
+        knowns: "vKnown_ref",
+        seed: "dvKnown",
+        sensitivity: "dvUnknown",
     };
     const MASKS: Masks = Masks {
         terminate: allowed::TERMINATE,
         get_values: allowed::GET_VALUES,
         set_values: allowed::SET_VALUES,
+        set_time: allowed::SET_TIME,
+        get_event_indicators: allowed::GET_STATES,
+        completed_integrator_step: allowed::COMPLETED_INTEGRATOR_STEP,
     };
     const WORDING: Wording = Wording {
         wrong_interface: "is a {} function; this instance was instantiated for {}",
         token_mismatch: "GUID {} given by the importer does not match the FMU's GUID {}",
         token_changed: "GUID is now {} instead of {}",
         foreign_state: "the state belongs to GUID {}, this instance has GUID {}",
+        no_event_indicators: "ni = {}, but the FMU has no event indicators (numberOfEventIndicators = 0)",
     };
 
     /// The core's table as it is, checked, and the GUID of its description.
@@ -309,19 +326,6 @@ impl<M: FmuCore> Instance<M> {
         Ok(())
     }
 
-    /// `fmi2SetTime` (section 3.2.1).
-    pub fn set_time(&mut self, time: f64) -> Status {
-        const F: &str = "fmi2SetTime";
-        self.trace(|| format!("{F}(time={time:?})"));
-        if let Err(s) = self.require_of(F, InstanceKind::ModelExchange, allowed::SET_TIME) {
-            return s;
-        }
-        if !time.is_finite() {
-            return self.error(F, format_args!("time = {time:?} is not finite"));
-        }
-        self.core_call(F, |core| core.set_time(time))
-    }
-
     /// `fmi2SetContinuousStates` (section 3.2.1).
     pub fn set_continuous_states(&mut self, x: &[f64]) -> Status {
         const F: &str = "fmi2SetContinuousStates";
@@ -371,24 +375,6 @@ impl<M: FmuCore> Instance<M> {
         self.core_call(F, |core| core.nominals(nominal))
     }
 
-    /// `fmi2GetEventIndicators` (section 3.2.2): the FMU has none (`numberOfEventIndicators`
-    /// is 0), so `ni` must be 0.
-    pub fn get_event_indicators(&self, ni: usize) -> Status {
-        const F: &str = "fmi2GetEventIndicators";
-        if let Err(s) = self.require_of(F, InstanceKind::ModelExchange, allowed::GET_STATES) {
-            return s;
-        }
-        if ni != 0 {
-            return self.error(
-                F,
-                format_args!(
-                    "ni = {ni}, but the FMU has no event indicators (numberOfEventIndicators = 0)"
-                ),
-            );
-        }
-        Status::Ok
-    }
-
     /// `fmi2EnterEventMode` (section 3.2.2).
     pub fn enter_event_mode(&mut self) -> Status {
         let mask = allowed::ENTER_EVENT_MODE;
@@ -411,18 +397,6 @@ impl<M: FmuCore> Instance<M> {
             allowed::ENTER_CONTINUOUS_TIME_MODE,
         );
         self.move_to(f, ME, mask, ContinuousTimeMode)
-    }
-
-    /// `fmi2CompletedIntegratorStep` (section 3.2.2): no step event, no termination. Returns
-    /// `(enterEventMode, terminateSimulation)`.
-    pub fn completed_integrator_step(&mut self) -> Result<(bool, bool), Status> {
-        const F: &str = "fmi2CompletedIntegratorStep";
-        self.require_of(
-            F,
-            InstanceKind::ModelExchange,
-            allowed::COMPLETED_INTEGRATOR_STEP,
-        )?;
-        Ok((false, false))
     }
 
     /// Whether `vr` may be a known: an input, or a state outside Initialization Mode (where the

@@ -6,6 +6,7 @@
 
 pub mod exports;
 pub mod fmu_state;
+pub mod functions;
 pub mod instance;
 pub mod logging;
 pub mod model_description;

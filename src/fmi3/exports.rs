@@ -1,5 +1,8 @@
-//! The `extern "C"` layer: the functions of `fmi3Functions.h` (FMI 3.0 standard, sections 2.3,
-//! 3.2, 4.2 and 5.2), generated for one core by [`export_fmi3!`](crate::export_fmi3).
+//! The bodies of the C functions of `fmi3Functions.h` (FMI 3.0 standard, sections 2.3, 3.2, 4.2
+//! and 5.2) that FMI 3.0 has of its own: instantiation, `fmi3EnterInitializationMode`,
+//! `fmi3UpdateDiscreteStates`, the step and the counts of states and event indicators. The
+//! functions [`export_fmi3!`](crate::export_fmi3) generates ([`super::functions`]) call them, or
+//! the bodies both versions share in [`calls`](crate::fmi_common::calls).
 //!
 //! Each function checks its pointers, converts them to slices and strings, and calls the safe
 //! [`Instance`] method inside `catch_unwind`; nothing unwinds across the C boundary. A caught
@@ -25,7 +28,7 @@ use super::types::*;
 use crate::fmi_common::calls::with_instance;
 use crate::fmi_common::logging::Status;
 use crate::fmi_common::model_api::FmuCore;
-use crate::fmi_common::shell::{in_slice, opt_str, out_slice, panic_message};
+use crate::fmi_common::shell::{opt_str, panic_message};
 
 /// The strings and flags of `fmi3Instantiate…`, as received.
 pub struct CRequest {
@@ -191,81 +194,6 @@ pub unsafe fn do_step<M: FmuCore>(
     }
 }
 
-pub unsafe fn completed_integrator_step<M: FmuCore>(
-    c: fmi3Instance,
-    enter_event_mode: *mut fmi3Boolean,
-    terminate_simulation: *mut fmi3Boolean,
-) -> Fmi3Status {
-    const F: &str = "fmi3CompletedIntegratorStep";
-    unsafe {
-        with_instance::<Fmi3, M>(c, F, |inst| {
-            let flags = [
-                ("enterEventMode", enter_event_mode),
-                ("terminateSimulation", terminate_simulation),
-            ];
-            if let Some((name, _)) = flags.iter().find(|(_, p)| p.is_null()) {
-                return inst.null_argument(F, name);
-            }
-            let status = inst.completed_integrator_step();
-            if status == Status::Ok
-                && let Err(s) = set_flags(inst, F, &flags, FMI3_FALSE)
-            {
-                return s;
-            }
-            status
-        })
-    }
-}
-
-pub unsafe fn set_time<M: FmuCore>(c: fmi3Instance, time: f64) -> Fmi3Status {
-    unsafe { with_instance::<Fmi3, M>(c, "fmi3SetTime", |inst| inst.set_time(time)) }
-}
-
-pub unsafe fn set_continuous_states<M: FmuCore>(
-    c: fmi3Instance,
-    x: *const f64,
-    nx: usize,
-) -> Fmi3Status {
-    const F: &str = "fmi3SetContinuousStates";
-    unsafe {
-        with_instance::<Fmi3, M>(c, F, |inst| match in_slice(x, nx) {
-            Some(x) => inst.set_continuous_states(x),
-            None => inst.null_argument(F, "continuousStates"),
-        })
-    }
-}
-
-/// `fmi3GetContinuousStates`, `fmi3GetContinuousStateDerivatives`,
-/// `fmi3GetNominalsOfContinuousStates` (`func`): `call` is the core's method.
-pub unsafe fn state_vector<M: FmuCore>(
-    c: fmi3Instance,
-    func: &'static str,
-    out: *mut f64,
-    n: usize,
-    call: fn(&mut M, &mut [f64]) -> Result<(), String>,
-) -> Fmi3Status {
-    unsafe {
-        with_instance::<Fmi3, M>(c, func, |inst| match out_slice(out, n) {
-            Some(out) => inst.state_vector(func, out, call),
-            None => inst.null_argument(func, "the output array"),
-        })
-    }
-}
-
-pub unsafe fn get_event_indicators<M: FmuCore>(
-    c: fmi3Instance,
-    z: *mut f64,
-    nz: usize,
-) -> Fmi3Status {
-    const F: &str = "fmi3GetEventIndicators";
-    unsafe {
-        with_instance::<Fmi3, M>(c, F, |inst| match out_slice(z, nz) {
-            Some(_) => inst.event_indicators(nz),
-            None => inst.null_argument(F, "eventIndicators"),
-        })
-    }
-}
-
 /// `fmi3GetNumberOfContinuousStates` and `fmi3GetNumberOfEventIndicators` (`func`): `count`
 /// gives the number.
 pub unsafe fn get_number_of<M: FmuCore>(
@@ -285,37 +213,6 @@ pub unsafe fn get_number_of<M: FmuCore>(
                     Status::Ok
                 }
                 Err(s) => s,
-            }
-        })
-    }
-}
-
-#[allow(clippy::too_many_arguments)]
-pub unsafe fn get_directional_derivative<M: FmuCore>(
-    c: fmi3Instance,
-    unknowns: *const fmi3ValueReference,
-    n_unknowns: usize,
-    knowns: *const fmi3ValueReference,
-    n_knowns: usize,
-    seed: *const f64,
-    n_seed: usize,
-    sensitivity: *mut f64,
-    n_sensitivity: usize,
-) -> Fmi3Status {
-    const F: &str = "fmi3GetDirectionalDerivative";
-    unsafe {
-        with_instance::<Fmi3, M>(c, F, |inst| {
-            let (Some(u), Some(k)) = (in_slice(unknowns, n_unknowns), in_slice(knowns, n_knowns))
-            else {
-                return inst.null_argument(F, "unknowns or knowns");
-            };
-            match (
-                in_slice(seed, n_seed),
-                out_slice(sensitivity, n_sensitivity),
-            ) {
-                (Some(s), Some(out)) => inst.directional_derivative(u, k, s, out),
-                (None, _) => inst.null_argument(F, "seed"),
-                (_, None) => inst.null_argument(F, "sensitivity"),
             }
         })
     }

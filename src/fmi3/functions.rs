@@ -1,6 +1,6 @@
 //! [`export_fmi3!`](crate::export_fmi3): the functions of `fmi3Functions.h` for one core,
-//! each handing its arguments to the function of [`exports`](super::exports) that does the
-//! work.
+//! each handing its arguments to the function of [`calls`](crate::fmi_common::calls) both
+//! versions share, or of [`exports`](super::exports) where FMI 3.0 has its own.
 
 /// Exports the functions of `fmi3Functions.h` for the core type `$core` (an
 /// [`FmuCore`](crate::fmi_common::model_api::FmuCore)). Invoke exactly once per shared
@@ -24,25 +24,22 @@ macro_rules! __fmi3_functions {
         use $crate::fmi3::Fmi3;
         use $crate::fmi3::instance::Instance;
         use $crate::fmi_common::calls as common;
-        use $crate::fmi_common::model_api::FmuCore as _;
         use $crate::fmi3::types::*;
 
-        // Inquire version number and set debug logging (section 2.3.1)
+        // Inquire version number (section 2.3.1)
 
         $($attr)* #[allow(non_snake_case)]
         pub extern "C" fn fmi3GetVersion() -> *const ::std::ffi::c_char {
             shell::version()
         }
 
-        $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)]
-        pub unsafe extern "C" fn fmi3SetDebugLogging(
-            c: fmi3Instance,
-            logging_on: fmi3Boolean,
-            n_categories: usize,
-            categories: *const fmi3String,
-        ) -> fmi3Status {
-            unsafe { common::set_debug_logging::<Fmi3, $core>(c, logging_on != FMI3_FALSE, n_categories, categories) }
-        }
+        // Debug logging, freeing an instance, and the calls without arguments (sections 2.3.1 to
+        // 2.3.5)
+
+        $crate::__fmi_lifecycle_functions!([$($attr)*] $core, Fmi3, fmi3Instance, fmi3Status, fmi3Boolean, fmi3String,
+            [fmi3SetDebugLogging, fmi3FreeInstance],
+            [fmi3ExitInitializationMode: exit_initialization_mode, fmi3Terminate: terminate, fmi3Reset: reset,
+             fmi3EnterEventMode: enter_event_mode]);
 
         // Creation and destruction of instances (section 2.3.1)
 
@@ -116,11 +113,6 @@ macro_rules! __fmi3_functions {
             unsafe { shell::instantiate_not_offered(f, what, environment, log_message) }
         }
 
-        $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)]
-        pub unsafe extern "C" fn fmi3FreeInstance(c: fmi3Instance) {
-            unsafe { common::free_instance::<Fmi3, $core>(c) }
-        }
-
         // Initialization, events, termination and reset (sections 2.3.2 to 2.3.5)
 
         $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)]
@@ -135,27 +127,6 @@ macro_rules! __fmi3_functions {
             unsafe {
                 shell::enter_initialization_mode::<$core>(c, tol_defined, tol, start, stop_defined, stop)
             }
-        }
-
-        $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)]
-        pub unsafe extern "C" fn fmi3ExitInitializationMode(c: fmi3Instance) -> fmi3Status {
-            let f = "fmi3ExitInitializationMode";
-            unsafe { common::simple::<Fmi3, $core>(c, f, Instance::exit_initialization_mode) }
-        }
-
-        $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)]
-        pub unsafe extern "C" fn fmi3EnterEventMode(c: fmi3Instance) -> fmi3Status {
-            unsafe { common::simple::<Fmi3, $core>(c, "fmi3EnterEventMode", Instance::enter_event_mode) }
-        }
-
-        $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)]
-        pub unsafe extern "C" fn fmi3Terminate(c: fmi3Instance) -> fmi3Status {
-            unsafe { common::simple::<Fmi3, $core>(c, "fmi3Terminate", Instance::terminate) }
-        }
-
-        $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)]
-        pub unsafe extern "C" fn fmi3Reset(c: fmi3Instance) -> fmi3Status {
-            unsafe { common::simple::<Fmi3, $core>(c, "fmi3Reset", Instance::reset) }
         }
 
         // Getting and setting variable values (section 2.3.3); Float64 variables only
@@ -218,25 +189,8 @@ macro_rules! __fmi3_functions {
             unsafe { common::no_variables::<Fmi3, $core>(c, "fmi3SetBinary", (vr, nvr), values.cast()) }
         }
 
-        $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)]
-        pub unsafe extern "C" fn fmi3GetClock(
-            c: fmi3Instance,
-            vr: *const fmi3ValueReference,
-            nvr: usize,
-            values: *mut fmi3Clock,
-        ) -> fmi3Status {
-            unsafe { common::no_variables::<Fmi3, $core>(c, "fmi3GetClock", (vr, nvr), values.cast()) }
-        }
-
-        $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)]
-        pub unsafe extern "C" fn fmi3SetClock(
-            c: fmi3Instance,
-            vr: *const fmi3ValueReference,
-            nvr: usize,
-            values: *const fmi3Clock,
-        ) -> fmi3Status {
-            unsafe { common::no_variables::<Fmi3, $core>(c, "fmi3SetClock", (vr, nvr), values.cast()) }
-        }
+        $crate::__fmi_no_variables_functions!([$($attr)*] $core, Fmi3, fmi3Instance, fmi3Status, fmi3ValueReference,
+            [(fmi3GetClock, fmi3SetClock, fmi3Clock)]);
 
         // Variable dependency information (section 2.3.7): not offered
 
@@ -249,49 +203,9 @@ macro_rules! __fmi3_functions {
 
         // FMU states (section 2.3.6)
 
-        $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)]
-        pub unsafe extern "C" fn fmi3GetFMUState(c: fmi3Instance, state: *mut fmi3FMUState) -> fmi3Status {
-            unsafe { common::get_fmu_state::<Fmi3, $core>(c, "fmi3GetFMUState", state) }
-        }
-
-        $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)]
-        pub unsafe extern "C" fn fmi3SetFMUState(c: fmi3Instance, state: fmi3FMUState) -> fmi3Status {
-            unsafe { common::set_fmu_state::<Fmi3, $core>(c, "fmi3SetFMUState", state) }
-        }
-
-        $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)]
-        pub unsafe extern "C" fn fmi3FreeFMUState(c: fmi3Instance, state: *mut fmi3FMUState) -> fmi3Status {
-            unsafe { common::free_fmu_state::<Fmi3, $core>(c, "fmi3FreeFMUState", state) }
-        }
-
-        $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)]
-        pub unsafe extern "C" fn fmi3SerializedFMUStateSize(
-            c: fmi3Instance,
-            state: fmi3FMUState,
-            size: *mut usize,
-        ) -> fmi3Status {
-            unsafe { common::serialized_fmu_state_size::<Fmi3, $core>(c, "fmi3SerializedFMUStateSize", state, size) }
-        }
-
-        $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)]
-        pub unsafe extern "C" fn fmi3SerializeFMUState(
-            c: fmi3Instance,
-            state: fmi3FMUState,
-            bytes: *mut fmi3Byte,
-            size: usize,
-        ) -> fmi3Status {
-            unsafe { common::serialize_fmu_state::<Fmi3, $core>(c, "fmi3SerializeFMUState", state, bytes.cast(), size) }
-        }
-
-        $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)]
-        pub unsafe extern "C" fn fmi3DeserializeFMUState(
-            c: fmi3Instance,
-            bytes: *const fmi3Byte,
-            size: usize,
-            state: *mut fmi3FMUState,
-        ) -> fmi3Status {
-            unsafe { common::deserialize_fmu_state::<Fmi3, $core>(c, "fmi3DeserializeFMUState", bytes.cast(), size, state) }
-        }
+        $crate::__fmi_fmu_state_functions!([$($attr)*] $core, Fmi3, fmi3Instance, fmi3Status, fmi3FMUState, fmi3Byte,
+            [fmi3GetFMUState, fmi3SetFMUState, fmi3FreeFMUState, fmi3SerializedFMUStateSize, fmi3SerializeFMUState,
+             fmi3DeserializeFMUState]);
 
         // Partial derivatives (section 2.3.8)
 
@@ -307,11 +221,14 @@ macro_rules! __fmi3_functions {
             sensitivity: *mut fmi3Float64,
             n_sensitivity: usize,
         ) -> fmi3Status {
-            unsafe {
-                shell::get_directional_derivative::<$core>(
-                    c, unknowns, n_unknowns, knowns, n_knowns, seed, n_seed, sensitivity, n_sensitivity,
-                )
-            }
+            let arrays = common::DerivativeArrays {
+                unknowns: (unknowns, n_unknowns),
+                knowns: (knowns, n_knowns),
+                seed: (seed, n_seed),
+                sensitivity: (sensitivity, n_sensitivity),
+            };
+            let call = Instance::directional_derivative;
+            unsafe { common::get_directional_derivative::<Fmi3, $core>(c, arrays, call) }
         }
         $crate::__fmi3_not_offered!([$($attr)*] $core, fmi3GetAdjointDerivative, "providesAdjointDerivatives",
             (_unknowns: *const fmi3ValueReference, _n_unknowns: usize,
@@ -420,74 +337,12 @@ macro_rules! __fmi3_functions {
 #[macro_export]
 macro_rules! __fmi3_model_exchange {
     ([$($attr:tt)*] $core:ty) => {
-        $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)]
-        pub unsafe extern "C" fn fmi3EnterContinuousTimeMode(c: fmi3Instance) -> fmi3Status {
-            let f = "fmi3EnterContinuousTimeMode";
-            unsafe { common::simple::<Fmi3, $core>(c, f, Instance::enter_continuous_time_mode) }
-        }
-
-        $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)]
-        pub unsafe extern "C" fn fmi3CompletedIntegratorStep(
-            c: fmi3Instance,
-            _no_set_fmu_state_prior: fmi3Boolean, // states are kept whole either way
-            enter_event_mode: *mut fmi3Boolean,
-            terminate_simulation: *mut fmi3Boolean,
-        ) -> fmi3Status {
-            unsafe { shell::completed_integrator_step::<$core>(c, enter_event_mode, terminate_simulation) }
-        }
-
-        $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)]
-        pub unsafe extern "C" fn fmi3SetTime(c: fmi3Instance, time: fmi3Float64) -> fmi3Status {
-            unsafe { shell::set_time::<$core>(c, time) }
-        }
-
-        $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)]
-        pub unsafe extern "C" fn fmi3SetContinuousStates(
-            c: fmi3Instance,
-            x: *const fmi3Float64,
-            nx: usize,
-        ) -> fmi3Status {
-            unsafe { shell::set_continuous_states::<$core>(c, x, nx) }
-        }
-
-        $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)]
-        pub unsafe extern "C" fn fmi3GetContinuousStateDerivatives(
-            c: fmi3Instance,
-            dx: *mut fmi3Float64,
-            nx: usize,
-        ) -> fmi3Status {
-            let f = "fmi3GetContinuousStateDerivatives";
-            unsafe { shell::state_vector::<$core>(c, f, dx, nx, |m, out| m.derivatives(out)) }
-        }
-
-        $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)]
-        pub unsafe extern "C" fn fmi3GetEventIndicators(
-            c: fmi3Instance,
-            z: *mut fmi3Float64,
-            nz: usize,
-        ) -> fmi3Status {
-            unsafe { shell::get_event_indicators::<$core>(c, z, nz) }
-        }
-
-        $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)]
-        pub unsafe extern "C" fn fmi3GetContinuousStates(
-            c: fmi3Instance,
-            x: *mut fmi3Float64,
-            nx: usize,
-        ) -> fmi3Status {
-            let f = "fmi3GetContinuousStates";
-            unsafe { shell::state_vector::<$core>(c, f, x, nx, |m, out| m.continuous_states(out)) }
-        }
-
-        $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)]
-        pub unsafe extern "C" fn fmi3GetNominalsOfContinuousStates(
-            c: fmi3Instance,
-            nominals: *mut fmi3Float64,
-            nx: usize,
-        ) -> fmi3Status {
-            let f = "fmi3GetNominalsOfContinuousStates";
-            unsafe { shell::state_vector::<$core>(c, f, nominals, nx, |m, out| m.nominals(out)) }
-        }
+        $crate::__fmi_model_exchange_functions!([$($attr)*] $core, Fmi3, fmi3Instance, fmi3Status, fmi3Boolean,
+            [fmi3EnterContinuousTimeMode, fmi3CompletedIntegratorStep, fmi3SetTime, fmi3SetContinuousStates,
+             fmi3GetEventIndicators],
+            [(fmi3GetContinuousStateDerivatives, "the output array", get_derivatives),
+             (fmi3GetContinuousStates, "the output array", get_continuous_states),
+             (fmi3GetNominalsOfContinuousStates, "the output array", get_nominals)]);
 
         $($attr)* #[allow(non_snake_case, clippy::missing_safety_doc)]
         pub unsafe extern "C" fn fmi3GetNumberOfEventIndicators(

@@ -2,10 +2,11 @@
 //! [`Instance`](crate::fmi_common::instance::Instance) of [`fmi_common`](crate::fmi_common)
 //! with what FMI 3.0 brings to it ([`Fmi3`]: its status, state table, logger, names, messages
 //! and FMU-state format) and its own calls: `fmi3Instantiate…`, `fmi3EnterInitializationMode`
-//! with the experiment, Event and Step Mode, the step, the Model Exchange calls and
-//! directional derivatives. Which call is allowed in which state is the table of
-//! [`super::state_machine`]. The `extern "C"` layer in [`super::exports`] only converts
-//! pointers and catches panics.
+//! with the experiment, Event and Step Mode, the step, the Model Exchange calls that check the
+//! state vector FMI 3.0's way and directional derivatives (`fmi3SetTime`, the event indicators
+//! and `fmi3CompletedIntegratorStep` are the generic instance's). Which call is allowed in which
+//! state is the table of [`super::state_machine`]. The `extern "C"` layer
+//! ([`super::functions`]) only converts pointers and catches panics.
 //!
 //! Error policy: that of the generic instance; core failures of `fmi3DoStep` are
 //! `fmi3Discard` (state Step Discarded). A panic puts the instance into the error state, where
@@ -18,7 +19,7 @@ use super::Fmi3;
 use super::logging::{Callback, Logger};
 use super::model_description::{Model, instantiation_token, with_time};
 use super::state_machine::{Experiment, Phase, allowed};
-use super::types::{Fmi3Status, InstanceKind};
+use super::types::{Fmi3Status, InstanceKind, fmi3Boolean};
 use crate::fmi_common::instance::{self, Masks, Names, Version, Wording, optional};
 use crate::fmi_common::logging::Status;
 use crate::fmi_common::model_api::{FmuCore, ModelStructure};
@@ -37,6 +38,7 @@ pub struct EventModeUsed(pub bool);
 
 impl Version for Fmi3 {
     type Status = Fmi3Status;
+    type Boolean = fmi3Boolean;
     type Sink = Callback;
     type Options = EventModeUsed;
 
@@ -56,17 +58,31 @@ impl Version for Fmi3 {
         values: "values",
         fmu_state: "FMUState",
         value_type: "Float64",
+        set_time: "fmi3SetTime",
+        set_continuous_states: "fmi3SetContinuousStates",
+        get_event_indicators: "fmi3GetEventIndicators",
+        completed_integrator_step: "fmi3CompletedIntegratorStep",
+        get_directional_derivative: "fmi3GetDirectionalDerivative",
+        continuous_states: "continuousStates",
+        unknowns: "unknowns or knowns",
+        knowns: "unknowns or knowns",
+        seed: "seed",
+        sensitivity: "sensitivity",
     };
     const MASKS: Masks = Masks {
         terminate: allowed::TERMINATE,
         get_values: allowed::GET_VALUES,
         set_values: allowed::SET_VALUES,
+        set_time: allowed::SET_TIME,
+        get_event_indicators: allowed::GET_MODEL_EQUATIONS,
+        completed_integrator_step: allowed::COMPLETED_INTEGRATOR_STEP,
     };
     const WORDING: Wording = Wording {
         wrong_interface: "a function of {}, but this instance was created for {}",
         token_mismatch: "instantiationToken {} given by the importer does not match the FMU's {}",
         token_changed: "the instantiationToken is now {} instead of {}",
         foreign_state: "the state belongs to instantiationToken {}, this instance has {}",
+        no_event_indicators: "nEventIndicators = {}, but the FMU has none",
     };
 
     /// The core's table with the independent variable `time`, and the instantiationToken of
@@ -274,33 +290,6 @@ impl<M: FmuCore> Instance<M> {
         )
     }
 
-    /// `fmi3CompletedIntegratorStep` (section 3.2.2): no step events, no termination.
-    pub fn completed_integrator_step(&mut self) -> Status {
-        const F: &str = "fmi3CompletedIntegratorStep";
-        self.require_of(
-            F,
-            InstanceKind::ModelExchange,
-            allowed::COMPLETED_INTEGRATOR_STEP,
-        )
-        .err()
-        .unwrap_or(Status::Ok)
-    }
-
-    /// `fmi3SetTime` (section 3.2.1).
-    pub fn set_time(&mut self, time: f64) -> Status {
-        const F: &str = "fmi3SetTime";
-        if let Err(s) = self.require_of(F, InstanceKind::ModelExchange, allowed::SET_TIME) {
-            return s;
-        }
-        if !time.is_finite() {
-            return self.error(F, format_args!("time = {time:?} is not finite"));
-        }
-        match self.core.set_time(time) {
-            Ok(()) => Status::Ok,
-            Err(msg) => self.error(F, format_args!("time = {time:?}: {msg}")),
-        }
-    }
-
     /// `fmi3SetContinuousStates` (section 3.2.1); a NaN is refused with its state named.
     pub fn set_continuous_states(&mut self, x: &[f64]) -> Status {
         const F: &str = "fmi3SetContinuousStates";
@@ -322,11 +311,28 @@ impl<M: FmuCore> Instance<M> {
         self.core_call(F, |core| core.set_continuous_states(x))
     }
 
+    /// `fmi3GetContinuousStates` (section 3.2.1).
+    pub fn get_continuous_states(&mut self, x: &mut [f64]) -> Status {
+        self.state_vector("fmi3GetContinuousStates", x, M::continuous_states)
+    }
+
+    /// `fmi3GetContinuousStateDerivatives` (section 3.2.1).
+    pub fn get_derivatives(&mut self, dx: &mut [f64]) -> Status {
+        self.state_vector("fmi3GetContinuousStateDerivatives", dx, M::derivatives)
+    }
+
+    /// `fmi3GetNominalsOfContinuousStates` (section 3.2.1).
+    pub fn get_nominals(&mut self, nominals: &mut [f64]) -> Status {
+        self.state_vector("fmi3GetNominalsOfContinuousStates", nominals, |m, out| {
+            m.nominals(out)
+        })
+    }
+
     /// `fmi3GetContinuousStates`, `fmi3GetContinuousStateDerivatives` and
     /// `fmi3GetNominalsOfContinuousStates` (`func`, section 3.2.1): one value per state from
     /// `call`. Where the model cannot be evaluated (a state outside its domain), the
     /// derivatives give `fmi3Discard` (the importer may retry with a smaller step).
-    pub fn state_vector(
+    fn state_vector(
         &mut self,
         func: &str,
         out: &mut [f64],
@@ -350,23 +356,6 @@ impl<M: FmuCore> Instance<M> {
             }
             Err(msg) => self.error(func, msg),
         }
-    }
-
-    /// `fmi3GetEventIndicators` (section 3.2.1): the FMU has none.
-    pub fn event_indicators(&self, n: usize) -> Status {
-        const F: &str = "fmi3GetEventIndicators";
-        if let Err(s) =
-            self.require_of(F, InstanceKind::ModelExchange, allowed::GET_MODEL_EQUATIONS)
-        {
-            return s;
-        }
-        if n != 0 {
-            return self.error(
-                F,
-                format_args!("nEventIndicators = {n}, but the FMU has none"),
-            );
-        }
-        Status::Ok
     }
 
     /// `fmi3GetDirectionalDerivative` (section 2.3.8): ∂unknowns/∂knowns · seed, with state

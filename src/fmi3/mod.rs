@@ -1,4 +1,4 @@
-//! A generic FMI 3.0 shell (Co-Simulation) around one model that implements
+//! A generic FMI 3.0 shell, Co-Simulation and Model Exchange, around one model that implements
 //! [`FmuCore`](crate::fmi_common::model_api::FmuCore), beside the FMI 2.0 one
 //! ([`crate::fmi2`]) and over the same core: [`export_fmi3!`](crate::export_fmi3) generates
 //! the C functions of the FMU, [`instance`] checks every call against [`state_machine`] and

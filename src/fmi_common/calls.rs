@@ -1,8 +1,10 @@
 //! The bodies of the C functions that FMI 2.0 and 3.0 define alike, generic over the version
 //! `V` and the core `M` of an [`Instance`]: running a call on an instance behind its C pointer
-//! with panics caught, freeing it, and the six FMU-state functions (get, set, free, size, serialize, deserialize:
-//! FMI 2.0 section 2.1.8, FMI 3.0 section 2.3.6). Each version's `extern "C"` functions pass
-//! their own name, pointers and status type.
+//! with panics caught, freeing it, values, the six FMU-state functions (get, set, free, size,
+//! serialize, deserialize: FMI 2.0 section 2.1.8, FMI 3.0 section 2.3.6), and the Model
+//! Exchange calls with the directional derivative (FMI 2.0 sections 2.1.9 and 3.2, FMI 3.0
+//! sections 2.3.8 and 3.2). Each version's `extern "C"` functions pass their own pointers, and
+//! where a version checks its own way, its instance's method.
 //!
 //! Safety of all functions here: the caller is an importer of the version and keeps the
 //! standard's pointer and calling-sequence rules: `c` is NULL or an `Instance<V, M>` made
@@ -312,6 +314,120 @@ pub unsafe fn deserialize_fmu_state<V: Version, M: FmuCore>(
                     Status::Ok
                 }
                 Err(status) => status,
+            }
+        })
+    }
+}
+
+/// `fmi2SetTime` / `fmi3SetTime`.
+pub unsafe fn set_time<V: Version, M: FmuCore>(c: *mut c_void, time: f64) -> V::Status {
+    unsafe { with_instance::<V, M>(c, V::NAMES.set_time, |inst| inst.set_time(time)) }
+}
+
+/// `fmi2SetContinuousStates` / `fmi3SetContinuousStates` with the `nx` states `x`; `call` is
+/// the version's, which checks the states its own way.
+pub unsafe fn set_continuous_states<V: Version, M: FmuCore>(
+    c: *mut c_void,
+    (x, nx): (*const f64, usize),
+    call: fn(&mut Instance<V, M>, &[f64]) -> Status,
+) -> V::Status {
+    let func = V::NAMES.set_continuous_states;
+    unsafe {
+        with_instance::<V, M>(c, func, |inst| match in_slice(x, nx) {
+            Some(x) => call(inst, x),
+            None => inst.null_argument(func, V::NAMES.continuous_states),
+        })
+    }
+}
+
+/// The functions that fill an array of the `n` continuous states (`func`, its array argument
+/// named `argument` in NULL messages): states, derivatives, nominals; `get` fills it.
+pub unsafe fn get_state_vector<V: Version, M: FmuCore>(
+    c: *mut c_void,
+    (func, argument): (&str, &str),
+    (out, n): (*mut f64, usize),
+    get: impl FnOnce(&mut Instance<V, M>, &mut [f64]) -> Status,
+) -> V::Status {
+    unsafe {
+        with_instance::<V, M>(c, func, |inst| match out_slice(out, n) {
+            Some(out) => get(inst, out),
+            None => inst.null_argument(func, argument),
+        })
+    }
+}
+
+/// `fmi2GetEventIndicators` / `fmi3GetEventIndicators` into `n` values.
+pub unsafe fn get_event_indicators<V: Version, M: FmuCore>(
+    c: *mut c_void,
+    (indicators, n): (*mut f64, usize),
+) -> V::Status {
+    let func = V::NAMES.get_event_indicators;
+    unsafe {
+        with_instance::<V, M>(c, func, |inst| match out_slice(indicators, n) {
+            Some(_) => inst.event_indicators(n),
+            None => inst.null_argument(func, "eventIndicators"),
+        })
+    }
+}
+
+/// `fmi2CompletedIntegratorStep` / `fmi3CompletedIntegratorStep`: the two flags are written
+/// only when the call succeeds.
+pub unsafe fn completed_integrator_step<V: Version, M: FmuCore>(
+    c: *mut c_void,
+    enter_event_mode: *mut V::Boolean,
+    terminate_simulation: *mut V::Boolean,
+) -> V::Status {
+    let func = V::NAMES.completed_integrator_step;
+    unsafe {
+        with_instance::<V, M>(c, func, |inst| {
+            match (enter_event_mode.as_mut(), terminate_simulation.as_mut()) {
+                (Some(event), Some(terminate)) => match inst.completed_integrator_step() {
+                    Ok((e, t)) => {
+                        (*event, *terminate) = (e.into(), t.into());
+                        Status::Ok
+                    }
+                    Err(status) => status,
+                },
+                (None, _) => inst.null_argument(func, "enterEventMode"),
+                (_, None) => inst.null_argument(func, "terminateSimulation"),
+            }
+        })
+    }
+}
+
+/// The references and values of a directional derivative: `unknowns`, `knowns`, `seed` (one
+/// per known) and `sensitivity` (one per unknown), each a C array and its length.
+pub struct DerivativeArrays {
+    pub unknowns: (*const u32, usize),
+    pub knowns: (*const u32, usize),
+    pub seed: (*const f64, usize),
+    pub sensitivity: (*mut f64, usize),
+}
+
+/// A version's directional derivative on its instance: unknowns, knowns, seed, sensitivity.
+type DerivativeCall<V, M> = fn(&mut Instance<V, M>, &[u32], &[u32], &[f64], &mut [f64]) -> Status;
+
+/// `fmi2GetDirectionalDerivative` / `fmi3GetDirectionalDerivative`: `call` is the version's,
+/// which checks the references and lengths its own way.
+pub unsafe fn get_directional_derivative<V: Version, M: FmuCore>(
+    c: *mut c_void,
+    d: DerivativeArrays,
+    call: DerivativeCall<V, M>,
+) -> V::Status {
+    let (func, n) = (V::NAMES.get_directional_derivative, &V::NAMES);
+    unsafe {
+        with_instance::<V, M>(c, func, |inst| {
+            match (
+                in_slice(d.unknowns.0, d.unknowns.1),
+                in_slice(d.knowns.0, d.knowns.1),
+                in_slice(d.seed.0, d.seed.1),
+                out_slice(d.sensitivity.0, d.sensitivity.1),
+            ) {
+                (Some(u), Some(k), Some(s), Some(out)) => call(inst, u, k, s, out),
+                (None, ..) => inst.null_argument(func, n.unknowns),
+                (_, None, ..) => inst.null_argument(func, n.knowns),
+                (_, _, None, _) => inst.null_argument(func, n.seed),
+                (.., None) => inst.null_argument(func, n.sensitivity),
             }
         })
     }

@@ -45,6 +45,19 @@ pub struct Names {
     pub fmu_state: &'static str,
     /// The type of this FMU's variables in the version ("" where there is one real type).
     pub value_type: &'static str,
+    /// The Model Exchange functions and the directional derivative.
+    pub set_time: &'static str,
+    pub set_continuous_states: &'static str,
+    pub get_event_indicators: &'static str,
+    pub completed_integrator_step: &'static str,
+    pub get_directional_derivative: &'static str,
+    /// The name of the states argument of the set-continuous-states function.
+    pub continuous_states: &'static str,
+    /// The names of the directional derivative's arguments, as its NULL messages say them.
+    pub unknowns: &'static str,
+    pub knowns: &'static str,
+    pub seed: &'static str,
+    pub sensitivity: &'static str,
 }
 
 /// The messages a version words its own way; each `{}` takes the next value.
@@ -57,10 +70,12 @@ pub struct Wording {
     pub token_changed: &'static str,
     /// An FMU state of the instance with the token `{}` given to the one with `{}`.
     pub foreign_state: &'static str,
+    /// The importer asks for `{}` event indicators of an FMU that has none.
+    pub no_event_indicators: &'static str,
 }
 
 /// `template` with each `{}` replaced by the next of `values`.
-fn fill(template: &str, values: [&str; 2]) -> String {
+pub(super) fn fill(template: &str, values: [&str; 2]) -> String {
     let mut parts = template.split("{}");
     let mut out = parts.next().unwrap_or_default().to_string();
     for (value, part) in values.into_iter().zip(parts) {
@@ -76,12 +91,17 @@ pub struct Masks {
     pub terminate: Mask,
     pub get_values: Mask,
     pub set_values: Mask,
+    pub set_time: Mask,
+    pub get_event_indicators: Mask,
+    pub completed_integrator_step: Mask,
 }
 
 /// What a version brings to the generic instance, beyond how it writes its description.
 pub trait Version: Dialect + Format<Phase: States> + Sized + 'static {
     /// The version's C status enumeration.
     type Status: Copy + From<Status>;
+    /// The version's C boolean.
+    type Boolean: Copy + From<bool>;
     /// The importer's logging callback.
     type Sink: LogSink;
     /// What an instance holds beyond the shared state (FMI 3.0: `eventModeUsed`).

@@ -3,8 +3,10 @@
 //! causality, variability, initial and start ([`variables`]), the unit table
 //! ([`units`]); and the generic shell both versions are made of: the instance with its state
 //! handling, argument checks, values and FMU states ([`instance`], over a version's
-//! [`instance::Version`]), the statuses and the logger ([`logging`]), the bodies of the C
-//! functions both define alike ([`calls`]), what both write alike in `modelDescription.xml`
+//! [`instance::Version`]) and the Model Exchange calls both versions word alike
+//! (`model_exchange`), the statuses and the logger ([`logging`]), the bodies of the C
+//! functions both define alike ([`calls`]) and the macros that declare those of them both
+//! versions declare alike (`functions`), what both write alike in `modelDescription.xml`
 //! and its document order ([`xml`], over a version's [`xml::Dialect`]), the state machines'
 //! mask mechanism and set rule ([`state_machine`]), value access by value reference
 //! ([`values`]), FMU states and their serialized frame ([`fmu_state`]) and the version-free
@@ -14,9 +16,11 @@
 
 pub mod calls;
 pub mod fmu_state;
+mod functions;
 pub mod instance;
 pub mod logging;
 pub mod model_api;
+mod model_exchange;
 pub mod shell;
 pub mod state_machine;
 pub mod units;

@@ -1,8 +1,9 @@
-//! The interface between a generic FMI wrapper (the FMI 2.0 one: [`crate::fmi2`]) and one
+//! The interface between a generic FMI wrapper ([`crate::fmi2`] or [`crate::fmi3`]) and one
 //! model ("core"). The core knows nothing of FMI: no C types, no state machine, no logging.
 //! Errors are plain messages that the wrapper logs together with the function name. The FMI
-//! functions named below are the FMI 2.0 ones the wrapper maps onto each method; the methods
-//! themselves are the same for any FMI version, Co-Simulation and Model Exchange.
+//! functions named below are the FMI 2.0 ones the wrapper maps onto each method (FMI 3.0 has
+//! their counterparts); the methods are the same for both versions, Co-Simulation and Model
+//! Exchange.
 
 use std::path::Path;
 

@@ -61,7 +61,8 @@ pub struct PlatformCore<K: FmuModel> {
     kind: InstanceKind,
     params: Params,
     rtol: f64,
-    /// Tolerance from fmi2SetupExperiment, which takes precedence over `rtol`.
+    /// The importer's tolerance for the experiment (`fmi2SetupExperiment`,
+    /// `fmi3EnterInitializationMode`), which takes precedence over `rtol`.
     tolerance: Option<f64>,
     u: [f64; 3],
     t_start: f64,
