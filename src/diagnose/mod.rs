@@ -1076,10 +1076,10 @@ fn revisit(
             .filter_map(|c| c.refit.as_ref().filter(|r| r.passes()).map(|r| (c.form, r)))
             .min_by(|a, b| a.1.delta_bic.total_cmp(&b.1.delta_bic));
         let replaced = forms[pos].effect;
-        // the runner-up's refit, with the other effects' parameters as the model has them; the
-        // model without the effect, its parameters neutral (off)
-        // the drop first: when the later effects explain all the earlier one stood in for, a
-        // runner-up swapped in would be a spurious second effect that happens to fit
+        // first the model without the effect, its parameters neutral (off): when the later
+        // effects explain all it stood in for, a runner-up swapped in would be a spurious second
+        // effect that happens to fit; then the runner-up's refit, with the other effects'
+        // parameters as the model has them
         let mut without = current.params.clone();
         let neutral = Params::default();
         for name in form_parameters(forms[pos]) {
