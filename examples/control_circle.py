@@ -2,12 +2,12 @@
 """The tip circle of examples/fmpy_controller.py under three controllers, side by side.
 
     python examples/control_circle.py --fmu fmu/HaselPlatform.fmu --hasel target/release/hasel \
-        --t-end 7 --out examples/figures/control_circle.png
+        --t-end 7 --out book/src/figures/control_circle.png
 
 - PI: the hand-tuned PI on U^2 of examples/fmpy_controller.py, the baseline;
 - LQI: designed with python-control from `hasel linearize`'s reduced model (examples/control_lqi.py);
 - passivity-based: energy shaping and damping injection on the port-Hamiltonian linearization
-  (examples/control_passivity.py; its stability argument in examples/control_passivity.md).
+  (examples/control_passivity.py; its stability argument in book/src/control_passivity.md).
 
 The two designs start from the equilibrium where all three heights are H0, found with
 `hasel linearize` (examples/linear_design.py). Each runs against the FMU through fmpy on the same

@@ -1,4 +1,4 @@
-//! The accuracy contract (src/model/model.md, "Accuracy contract"): at the default rtol 1e-6
+//! The accuracy contract (book/src/model.md, "Accuracy contract"): at the default rtol 1e-6
 //! every documented kind of input up to 100 V and 100 rad/s stays within 0.01 µm (h) and 0.02 µm
 //! (tip) of a converged solution.
 

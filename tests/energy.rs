@@ -1,4 +1,4 @@
-//! The energy balance dH/dt = y·U − dissipation along a trajectory (src/model/model.md, "Energy
+//! The energy balance dH/dt = y·U − dissipation along a trajectory (book/src/model.md, "Energy
 //! balance"), the first check of any implementation. The stored power is integrated as an extra
 //! state by the same solver; the balance is measured against the energy supplied through the
 //! ports, since the circuit's port power (~1e5 W peak) dwarfs the mechanical power (mW). The

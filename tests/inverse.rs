@@ -1,4 +1,4 @@
-//! The inverse path (src/model/model.md, "Inverse kinematics" and "Statics"): the voltages of a
+//! The inverse path (book/src/model.md, "Inverse kinematics" and "Statics"): the voltages of a
 //! tip path hold its heights in a simulation, the holding voltages invert the equilibrium of
 //! `hasel linearize`, and heights without one are named. `hasel inverse` itself: tests/cli.rs.
 

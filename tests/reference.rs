@@ -64,7 +64,7 @@ fn sine_at_11_matches_the_reference() {
 
 #[test]
 fn default_tolerance_keeps_the_accuracy_contract() {
-    // src/model/model.md, "Accuracy contract": at rtol 1e-6, within 0.01 µm on h and 0.02 µm on
+    // book/src/model.md, "Accuracy contract": at rtol 1e-6, within 0.01 µm on h and 0.02 µm on
     // the tip
     let (dh, dtip) = deviation(
         &reference("sine60_w3pi.csv"),

@@ -24,7 +24,7 @@ pub enum Error {
     #[error("no two-mechanism case {0}")]
     NoPair(usize),
     /// A candidate's refit ended above the model it contains, the effect neutral: a failed
-    /// fit, not evidence against the family (src/diagnose/diagnose.md, "Nested refits").
+    /// fit, not evidence against the family (book/src/diagnose.md, "Nested refits").
     #[error(
         "failed fit: it ended at a residual sum of squares of {rss:.6e}, above the {nested:.6e} of the model without the effect ({why})"
     )]

@@ -41,7 +41,7 @@ pub enum Truth {
 }
 
 /// The two-mechanism cases: physically independent causes that leave different marks
-/// (src/diagnose/diagnose.md, "Two mechanisms at once"), each in a form that differs from the
+/// (book/src/diagnose.md, "Two mechanisms at once"), each in a form that differs from the
 /// library's term, each at the magnitude of its own case.
 pub const PAIRS: [(&str, [Truth; 2]); 3] = [
     // the platform's tilt spring and the film's creep: one couples the heights elastically,

@@ -1,9 +1,9 @@
-//! The missing-effect workflow (src/diagnose/diagnose.md, "What `hasel diagnose` answers"):
+//! The missing-effect workflow (book/src/diagnose.md, "What `hasel diagnose` answers"):
 //! re-identify the paper's model, find where it disagrees with the data, rank the effects of the
 //! library that could explain it, add the best, re-identify and decide by evidence on held-out
 //! data.
 //!
-//! Verdicts, decision rule and outputs: [src/diagnose/diagnose.md](diagnose.md).
+//! Verdicts, decision rule and outputs: [book/src/diagnose.md](diagnose.md).
 //!
 //! The first experiment estimates, the others are held out (with one experiment it does both
 //! and says so). A candidate effect passes when, over the model without it:
@@ -60,16 +60,16 @@ pub const FIT_TOLERANCE: f64 = 1.0;
 /// provisionally when none closes [`GAP_CLOSED`]: the larger of two causes of equal size closes
 /// 1 − 1/√2 ≈ 0.29 of the gap in fit points (fits fall with the residual's RMS, which adds in
 /// squares), a little less when the first is fitted beside the unexplained second
-/// (src/diagnose/diagnose.md, "Two mechanisms at once").
+/// (book/src/diagnose.md, "Two mechanisms at once").
 pub const PARTIAL_GAP: f64 = 0.25;
 
 /// A family's other forms are refitted beside its best when the screening gives them at least
-/// this share of the best form's worth (src/diagnose/diagnose.md, "Families of forms").
+/// this share of the best form's worth (book/src/diagnose.md, "Families of forms").
 pub const FORM_RUNNER_UP: f64 = 0.8;
 
 /// Levenberg–Marquardt iterations a refit may take in all (`identify::Options::
 /// iteration_budget`): a bound on the competition, not on the effect taken on, which is fitted
-/// on to convergence (src/diagnose/diagnose.md, "The workflow"). On the hidden-mechanism suite
+/// on to convergence (book/src/diagnose.md, "The workflow"). On the hidden-mechanism suite
 /// the right form converged within 45 beside right effects and needed more than 60 beside a
 /// stand-in (a delay for an amplifier lag).
 pub const REFIT_ITERATIONS: usize = 100;
@@ -192,13 +192,13 @@ pub struct Round {
     /// A first effect added provisionally, closing only part of the held-out gap.
     pub provisional: Option<Provisional>,
     /// The evidence weight of each model the round compared: the one it started from (`None`)
-    /// and each refitted candidate, highest first (src/diagnose/diagnose.md, "Evidence weights").
+    /// and each refitted candidate, highest first (book/src/diagnose.md, "Evidence weights").
     pub evidence: Vec<(Option<Effect>, f64)>,
 }
 
 /// A first effect added although it closes only [`PARTIAL_GAP`] of the held-out gap, not
 /// [`GAP_CLOSED`]: kept only if the effects added after it bring every held-out fit to within
-/// [`FIT_TOLERANCE`] of its noise floor (src/diagnose/diagnose.md, "Two mechanisms at once").
+/// [`FIT_TOLERANCE`] of its noise floor (book/src/diagnose.md, "Two mechanisms at once").
 #[derive(Clone, Copy, Debug)]
 pub struct Provisional {
     pub form: &'static Form,
@@ -207,7 +207,7 @@ pub struct Provisional {
 }
 
 /// An earlier effect tried against the best other candidate that passed in its round, once a
-/// later effect explains its share (src/diagnose/diagnose.md, "Two mechanisms at once").
+/// later effect explains its share (book/src/diagnose.md, "Two mechanisms at once").
 #[derive(Clone, Debug)]
 pub struct Revisit {
     pub replaced: Effect,
@@ -228,7 +228,7 @@ pub struct Diagnosis {
     /// The form of each named effect, in the same order.
     pub forms: Vec<&'static Form>,
     /// The fitted law of each named effect whose family has a flexible one, in the same order
-    /// (src/diagnose/diagnose.md, "The fitted law").
+    /// (book/src/diagnose.md, "The fitted law").
     pub laws: Vec<Option<FittedLaw>>,
     pub ambiguous_between: Vec<Effect>,
     /// For `ambiguous`: the experiment that would tell the candidates apart…
@@ -266,7 +266,7 @@ pub struct Fits {
     /// The same on the held-out experiments, averaged over them [%].
     pub held_out_floor: BTreeMap<String, f64>,
     /// The held-out outputs the final model leaves more than [`AT_FLOOR`] below the noise
-    /// floor (src/diagnose/diagnose.md, "What remains").
+    /// floor (book/src/diagnose.md, "What remains").
     pub remaining: Vec<Remaining>,
 }
 
@@ -354,7 +354,7 @@ fn rss(exp: &Experiment, sim: &[crate::simulation::Sample]) -> f64 {
 }
 
 /// A candidate's refit in `form` from the screening's values `start` over the current model
-/// `here` (src/diagnose/diagnose.md, "Nested refits"). Where it ends above the current model
+/// `here` (book/src/diagnose.md, "Nested refits"). Where it ends above the current model
 /// (residual sum of squares `nested`), the refit starts again from the current model's optimum
 /// with the form's magnitudes neutral, where it starts at `nested` and keeps the best point it
 /// sees; a fit that ends above `nested` from there too has failed as a fit, and says why.
@@ -449,7 +449,7 @@ fn unknowns(id: &Identification, free: usize) -> usize {
 }
 
 /// How many of the fitted parameters `free` a BIC counts at `params`: every one but a weight of
-/// a series that ended at its bound 0 (src/diagnose/diagnose.md, "The decision rule"): a
+/// a series that ended at its bound 0 (book/src/diagnose.md, "The decision rule"): a
 /// flexible law is charged for the weights it uses, not for the length of its grid.
 fn degrees(free: &[String], params: &Params) -> usize {
     free.iter()
@@ -472,7 +472,7 @@ fn bic(exp: &Experiment, sim: &[crate::simulation::Sample], k: usize) -> f64 {
     total + k as f64 * (n_all as f64).ln()
 }
 
-/// What a refit gained on held-out data over the model before it (src/diagnose/diagnose.md,
+/// What a refit gained on held-out data over the model before it (book/src/diagnose.md,
 /// "The decision rule").
 struct HeldOutGain {
     /// Mean fit gain [points].
@@ -536,12 +536,12 @@ fn held_out_gain(
     }
 }
 
-/// The share of a single record held out at its end (src/diagnose/diagnose.md, "A single
+/// The share of a single record held out at its end (book/src/diagnose.md, "A single
 /// record").
 const HELD_TAIL: f64 = 1.0 / 3.0;
 
 /// The records a diagnosis works on: as given where there are several. A single record is
-/// split in time (src/diagnose/diagnose.md, "A single record"): its first part estimates, and
+/// split in time (book/src/diagnose.md, "A single record"): its first part estimates, and
 /// the whole record is held out with that part as its lead-in, judged on the rest, so that a
 /// candidate predicts the record's end from where its fit left the device rather than fitting
 /// the record it is judged on.
@@ -588,7 +588,7 @@ pub struct Remaining {
 
 /// The held-out outputs the final model `last` leaves more than [`AT_FLOOR`] below the noise
 /// floor (`floor`, per experiment), with the disagreement `after` found there
-/// (src/diagnose/diagnose.md, "What remains").
+/// (book/src/diagnose.md, "What remains").
 fn remaining(
     experiments: &[Experiment],
     floor: &[BTreeMap<String, f64>],
@@ -652,7 +652,7 @@ fn free_list(forms: &[&Form]) -> Vec<String> {
     free
 }
 
-/// The records' conditions in a refit with `forms` (src/diagnose/diagnose.md, "Records'
+/// The records' conditions in a refit with `forms` (book/src/diagnose.md, "Records'
 /// conditions"): the paper's model's, but a start mid-run estimated again with the effects'
 /// states (a creep or a charge that the record's past left unsettled), and where a form delays
 /// the command the sensor's lag held at 0. A lag of the outputs and a delay of the input are
@@ -753,7 +753,7 @@ pub fn diagnose(
         rtol: opts.rtol,
         iteration_budget: Some(REFIT_ITERATIONS),
         // a refit starts from the screening's guess: held there, a direction would give back
-        // what the fit had gained along it (src/identify/identify.md)
+        // what the fit had gained along it (book/src/identify.md)
         hold: Hold::Reached,
         conditions: Some(refit_conditions(forms)),
         ..IdOptions::default()
@@ -879,7 +879,7 @@ pub fn diagnose(
         }
         // a later candidate that passes all but closing the rest of the gap may be held back by
         // a stand-in chosen earlier for its share: it is tried with the earlier effects revisited
-        // beside it, and kept only when a revisit swaps one (src/diagnose/diagnose.md, "Two
+        // beside it, and kept only when a revisit swaps one (book/src/diagnose.md, "Two
         // mechanisms at once")
         let mut tentative = None;
         if decision == Decision::Nothing
@@ -1052,7 +1052,7 @@ fn converged(
 /// later effects beside it. The replacement is taken when it lowers the BIC on the
 /// estimation data by [`BIC_MARGIN`] and keeps every held-out fit within [`FIT_TOLERANCE`] of its
 /// noise floor; the model without the effect, when it lowers the BIC so and leaves no held-out
-/// fit farther from its floor than the model with it (src/diagnose/diagnose.md, "Two mechanisms
+/// fit farther from its floor than the model with it (book/src/diagnose.md, "Two mechanisms
 /// at once"). The earlier choice was made while the later effect's share of the data was still
 /// unexplained.
 fn revisit(
@@ -1231,7 +1231,7 @@ fn screen(
         }
     }
     // …scored again on a record that starts mid-run beside its states at the start, which its
-    // refit estimates (src/diagnose/diagnose.md, "Screening"): only the best, each state costs
+    // refit estimates (book/src/diagnose.md, "Screening"): only the best, each state costs
     // a simulation
     let best: Vec<screen::Score> = if point.mid_run() {
         score_all(best.values().map(|(_, p)| *p).collect(), true)?
@@ -1315,7 +1315,7 @@ fn judge(
         failed.push("the 95 % interval of its magnitude includes the neutral value".into());
     }
     // one cause at a time: a further effect must close what the first left on the held-out
-    // data, not only shave the estimation's BIC (src/diagnose/diagnose.md, "The decision rule")
+    // data, not only shave the estimation's BIC (book/src/diagnose.md, "The decision rule")
     let left = worst_gap_to_floor(held, &id);
     let short_of_floor = !forms.is_empty() && left > FIT_TOLERANCE;
     if short_of_floor {
@@ -1392,7 +1392,7 @@ fn magnitude_interval(
     }
 }
 
-/// Schwarz weights of the models a round compared (src/diagnose/diagnose.md, "Evidence
+/// Schwarz weights of the models a round compared (book/src/diagnose.md, "Evidence
 /// weights"): the model it started from, ΔBIC 0, and each refitted candidate in its best form,
 /// exp(−ΔBIC/2) normalized to sum 1, highest first. The BIC charges each form its parameters
 /// (a spectrum the weights its fit used), so a flexible law weighs no more for its knobs alone.
@@ -1524,7 +1524,7 @@ mod tests {
 
     /// Twins of one refit (issue: lab protocols): started from a bad guess, which ends above the
     /// model without the effect within its budget, and through `nested_refit`, which ends no
-    /// worse than that model (src/diagnose/diagnose.md, "Nested refits").
+    /// worse than that model (book/src/diagnose.md, "Nested refits").
     #[test]
     fn a_nested_refit_never_ends_above_its_base() {
         use crate::identify::synth::Columns;

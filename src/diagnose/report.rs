@@ -117,7 +117,7 @@ fn where_it_remains(r: &Remaining) -> String {
     )
 }
 
-/// The JSON of src/diagnose/diagnose.md ("diagnosis.json"), and the evidence behind it.
+/// The JSON of book/src/diagnose.md ("diagnosis.json"), and the evidence behind it.
 pub fn to_json(d: &Diagnosis) -> Value {
     let effect_params: Map<String, Value> = d
         .forms

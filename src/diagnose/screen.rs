@@ -3,7 +3,7 @@
 //! of what the base parameters can already do (their sensitivities); the share of the
 //! residual that the rest explains is the effect's score, and the projection's coefficient
 //! scales the probe into a starting value for the refit. Every form of an effect's family has
-//! its own probes, which the family's module writes (src/diagnose/diagnose.md, "Families of
+//! its own probes, which the family's module writes (book/src/diagnose.md, "Families of
 //! forms"); a form is worth its explained share less the price of its dimensions, in the units
 //! of the BIC (for a series of non-negative weights, the weights it uses).
 
@@ -18,7 +18,7 @@ use crate::model::{Effect, Params, Platform};
 use crate::simulation::{SimError, Start};
 
 /// Probes of every form of every family not yet in `params`, at values that change the response
-/// by a few percent of its range at the paper's excitation (src/diagnose/diagnose.md,
+/// by a few percent of its range at the paper's excitation (book/src/diagnose.md,
 /// "Screening"): each family's own.
 pub fn probes(params: &Params, u_peak: f64) -> Vec<Probe> {
     Effect::ALL
@@ -56,7 +56,7 @@ pub struct Score {
     /// Share of the weighted residual the probe explains beyond the base parameters [0, 1].
     pub score: f64,
     /// What the form is worth: the weighted residual sum of squares it explains less ln N per
-    /// parameter it frees, the drop of the BIC it predicts (src/diagnose/diagnose.md,
+    /// parameter it frees, the drop of the BIC it predicts (book/src/diagnose.md,
     /// "Families of forms").
     pub worth: f64,
     pub start: Vec<(&'static str, f64)>,
@@ -137,7 +137,7 @@ impl<'a> Point<'a> {
         })
     }
 
-    /// On a record that starts mid-run (src/diagnose/diagnose.md, "Screening"), the directions
+    /// On a record that starts mid-run (book/src/diagnose.md, "Screening"), the directions
     /// in which the effects' states at the start move the outputs of the model with each of
     /// `probe`'s columns on: one per state, a step of START_STATE_STEP of its scale from where
     /// the states settle at the start's angles and first command. None from rest, or where the

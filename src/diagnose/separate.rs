@@ -1,4 +1,4 @@
-//! The experiment that tells two tied effects apart (src/diagnose/diagnose.md, "The decision
+//! The experiment that tells two tied effects apart (book/src/diagnose.md, "The decision
 //! rule"): for each effect, the experiment that exposes it, as an input, and both refitted models
 //! driven by it, to show that it would separate them.
 

@@ -1,4 +1,4 @@
-//! Measured experiments (src/identify/identify.md, "Measured data files"): CSV with `t`,
+//! Measured experiments (book/src/identify.md, "Measured data files"): CSV with `t`,
 //! `U1..U3` (the voltages as commanded) and any of `h1..h3`, `tip_x`, `tip_y`, `tip_z`. One file
 //! is one experiment; a bad file gets an error naming the file, the line and the column.
 
@@ -62,12 +62,12 @@ pub struct Experiment {
     /// none as read, estimated by `identify::conditions`.
     pub conditions: Conditions,
     /// Samples before this one are a lead-in: the record's conditions are estimated on them
-    /// alone, and they are not judged (src/diagnose/diagnose.md, "A single record"). 0: every
+    /// alone, and they are not judged (book/src/diagnose.md, "A single record"). 0: every
     /// sample is judged, and the conditions are estimated on all of them.
     pub lead_in: usize,
 }
 
-/// How a record was taken beyond its samples (src/identify/identify.md, "Records that start
+/// How a record was taken beyond its samples (book/src/identify.md, "Records that start
 /// mid-run" and "Sensor lag").
 #[derive(Clone, Debug, PartialEq)]
 pub struct Conditions {

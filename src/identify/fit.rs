@@ -1,4 +1,4 @@
-//! NRMSE fit in percent, as MATLAB's `compare` reports it (src/identify/identify.md, "Fit metric"),
+//! NRMSE fit in percent, as MATLAB's `compare` reports it (book/src/identify.md, "Fit metric"),
 //! and the measurement noise a record shows, which bounds it.
 
 /// fit = 100 (1 − ‖y − ŷ‖ / ‖y − mean(y)‖).

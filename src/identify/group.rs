@@ -69,7 +69,7 @@ struct Problem<'a> {
 }
 
 /// Step in the coordinates of the differences of f, the rest state and the outputs that the
-/// sensitivities carry (src/identify/identify.md, "How `hasel identify` estimates").
+/// sensitivities carry (book/src/identify.md, "How `hasel identify` estimates").
 const SENSITIVITY_STEP: f64 = 1e-6;
 
 impl Problem<'_> {
@@ -574,7 +574,7 @@ pub(super) fn fit_group(
         // the worst-determined direction, if its 95 % interval is wider than ×/÷ 1.5. Weights
         // of a series are not held for a wide interval: neighbours of a spectrum share what the
         // data tell of them, the sum is what is judged, and 0 is a value a weight may take
-        // (src/identify/identify.md, "Parameters the data do not determine"); the other
+        // (book/src/identify.md, "Parameters the data do not determine"); the other
         // parameters are judged on their marginal covariance
         let worst = match &cov_z {
             None => {

@@ -3,7 +3,7 @@
 //! validation data, standard errors and 95 % intervals from the covariance, and an honest list
 //! of the parameters the data cannot determine (held at their prior).
 //!
-//! Data files, fit metric and outputs: [src/identify/identify.md](identify.md).
+//! Data files, fit metric and outputs: [book/src/identify.md](identify.md).
 
 pub mod conditions;
 mod error;
@@ -26,7 +26,7 @@ pub use error::Error;
 pub use experiment::{Channel, Conditions, Experiment};
 use group::{fit_group, groups};
 
-/// The parameters practically identifiable from h or tip data (src/model/model.md, "Facts that
+/// The parameters practically identifiable from h or tip data (book/src/model.md, "Facts that
 /// shape the implementation").
 pub fn default_free() -> Vec<String> {
     ["Kb", "b", "gamma1", "gamma2"]
@@ -62,7 +62,7 @@ pub struct Options {
 }
 
 /// Where a group's fit holds a direction of parameter space the data do not determine
-/// (src/identify/identify.md, "How `hasel identify` estimates").
+/// (book/src/identify.md, "How `hasel identify` estimates").
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Hold {
     /// At the start value: the prior, which the data cannot improve on along it.
@@ -219,7 +219,7 @@ pub fn fits(exp: &Experiment, sim: &[Sample]) -> ExperimentFit {
     }
 }
 
-/// Rounds of conditions and fit at most (src/identify/identify.md, "The order of estimation").
+/// Rounds of conditions and fit at most (book/src/identify.md, "The order of estimation").
 const CONDITION_ROUNDS: usize = 4;
 
 /// The fits of `params` on `exps`.
@@ -231,7 +231,7 @@ fn fits_at(params: &Params, exps: &[Experiment], rtol: f64) -> Result<Vec<Experi
 
 /// Identifies the free parameters on `estimation` from `start`, and reports fits on
 /// `estimation` and `validation`. Where `opts.conditions` asks, each record's conditions are
-/// estimated beside the parameters (src/identify/identify.md, "Records that start mid-run"):
+/// estimated beside the parameters (book/src/identify.md, "Records that start mid-run"):
 /// at the start parameters, and again at the fitted ones, with a second fit from there when
 /// they moved.
 pub fn identify(

@@ -83,7 +83,7 @@ pub fn to_json(id: &Identification) -> Value {
     })
 }
 
-/// Each record's conditions (src/identify/identify.md, "Records that start mid-run"): how its
+/// Each record's conditions (book/src/identify.md, "Records that start mid-run"): how its
 /// start was set, the heights there [µm], the sensor's lag and its standard error [ms].
 pub(crate) fn conditions_json(found: &[Found]) -> Value {
     Value::Array(

@@ -1,4 +1,4 @@
-//! One HASEL actuator as a port-Hamiltonian system (src/model/model.md, "State and energy" and
+//! One HASEL actuator as a port-Hamiltonian system (book/src/model.md, "State and energy" and
 //! "Dynamics").
 //!
 //! State x = (θ, l_p, p, Q1, Q2):
@@ -67,7 +67,7 @@ pub const STATES: [StateInfo; N] = [
 #[derive(Clone, Debug)]
 pub struct Actuator {
     pub par: ActuatorParams,
-    /// I = Lv m / 24, as written in the paper (src/model/model.md, "Open choices and pinned
+    /// I = Lv m / 24, as written in the paper (book/src/model.md, "Open choices and pinned
     /// defaults").
     pub inertia: f64,
     pub g0: f64,
@@ -255,7 +255,7 @@ impl Actuator {
         })
     }
 
-    /// The loop current [A] of the DC circuit at the port voltage u (src/model/model.md,
+    /// The loop current [A] of the DC circuit at the port voltage u (book/src/model.md,
     /// "Statics"): with Q̇1 = Q̇2 = 0 the capacitors carry no current, so one current
     /// i = ga(θ) u / (R0 + R1 + R2) runs through the three resistors.
     pub fn dc_current(&self, theta: f64, u: f64) -> f64 {
@@ -488,7 +488,7 @@ impl Actuator {
     }
 
     /// The U = 0 equilibrium under gravity on the curve through (0, Lp), with p = Q1 = Q2 = 0
-    /// (src/model/model.md, "Initial state"): ṗ = 0 ⇔ ∂H/∂θ + d ∂H/∂l_p = 0, solved by the
+    /// (book/src/model.md, "Initial state"): ṗ = 0 ⇔ ∂H/∂θ + d ∂H/∂l_p = 0, solved by the
     /// secant method on θ.
     pub fn rest_state(&self) -> Result<[f64; N], DomainError> {
         self.rest_state_with(|_| 0.0)

@@ -1,4 +1,4 @@
-//! Kinematics of the 3PS platform (src/model/model.md, "Kinematics"): forward kinematics from the
+//! Kinematics of the 3PS platform (book/src/model.md, "Kinematics"): forward kinematics from the
 //! three actuator heights to the antenna tip, the paper's closed-form inverse, an exact inverse,
 //! and the inverse from tip X, Y alone given the mean height.
 
@@ -27,7 +27,7 @@ impl std::fmt::Display for IkmError {
 
 impl std::error::Error for IkmError {}
 
-/// Which inverse of the kinematics (src/model/model.md, "Inverse kinematics").
+/// Which inverse of the kinematics (book/src/model.md, "Inverse kinematics").
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Inverse {
     /// The paper's closed form, approximate: [`Kinematics::heights_closed_form`].
@@ -232,7 +232,7 @@ mod tests {
                 worst_closed = worst_closed.max((closed[i] - h[i]).abs());
             }
         }
-        // src/model/model.md, "Inverse kinematics": the closed form is off by up to about
+        // book/src/model.md, "Inverse kinematics": the closed form is off by up to about
         // 0.35 µm on [−5, 200] µm
         assert!(
             worst_closed > 1e-8 && worst_closed < 0.4e-6,

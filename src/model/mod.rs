@@ -2,7 +2,7 @@
 //! port-Hamiltonian actuators, the platform's right-hand side and Jacobian, and kinematics.
 //! It knows no solver and no FMI.
 //!
-//! Equations, parameters and defaults: [src/model/model.md](model.md).
+//! Equations, parameters and defaults: [book/src/model.md](model.md).
 
 pub mod actuator;
 pub mod effects;

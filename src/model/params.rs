@@ -8,7 +8,7 @@ use std::fmt;
 
 use super::effects::{Effect, EffectParams};
 
-/// Parameters of one HASEL actuator (the paper's identified table: src/model/model.md,
+/// Parameters of one HASEL actuator (the paper's identified table: book/src/model.md,
 /// "Parameters").
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ActuatorParams {
@@ -33,7 +33,7 @@ pub struct ActuatorParams {
 }
 
 /// All parameters of the platform: the three actuators, the common shell values, the pinned
-/// open choices (src/model/model.md, "Open choices and pinned defaults") and the kinematics.
+/// open choices (book/src/model.md, "Open choices and pinned defaults") and the kinematics.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Params {
     pub act: [ActuatorParams; 3],
@@ -70,7 +70,7 @@ pub struct Params {
 }
 
 impl Default for Params {
-    /// The paper's identified table and the pinned defaults (src/model/model.md, "Parameters").
+    /// The paper's identified table and the pinned defaults (book/src/model.md, "Parameters").
     fn default() -> Self {
         let a = |k, kb, b, r1, r2, c1, gamma1, gamma2| ActuatorParams {
             k,
@@ -118,7 +118,7 @@ pub enum Rule {
     /// infinite start value as an error).
     Limit,
     NonNegative,
-    /// A weight of a non-negative series (src/model/effects/effects.md, "creep"): ≥ 0, and
+    /// A weight of a non-negative series (book/src/effects.md, "creep"): ≥ 0, and
     /// fitted in its own units, not its logarithm, so that a fit can set it to 0.
     Weight,
     Finite,
@@ -146,7 +146,7 @@ impl Rule {
     }
 
     /// Whether a fit moves a parameter of this rule, starting at `prior`, in ln p (it must stay
-    /// positive) rather than in p (src/identify/identify.md, "How `hasel identify` estimates").
+    /// positive) rather than in p (book/src/identify.md, "How `hasel identify` estimates").
     pub fn fitted_in_log(self, prior: f64) -> bool {
         !matches!(self, Rule::Finite | Rule::Weight) && prior > 0.0
     }
@@ -214,7 +214,7 @@ macro_rules! actuator_rows {
 }
 
 /// After the rows, `grid PREFIX, UNIT, DESCRIPTION, MODULE;` adds the six weights of a Prony
-/// series' grid (src/model/effects/effects.md, "Prony series"; `effects::prony::GRID`),
+/// series' grid (book/src/effects.md, "Prony series"; `effects::prony::GRID`),
 /// `PREFIX_30ms` … `PREFIX_10s`, of rule `Weight`: `effects.MODULE.grid[0]` … `[5]`.
 macro_rules! common_rows {
     ($($name:literal, $unit:literal, $rule:ident, $desc:literal, $($field:ident).+ $([$idx:literal])?;)*) => {
@@ -294,7 +294,7 @@ const COMMON_ROWS: [ParamDef; 16] = common_rows! {
 };
 
 /// Every parameter, per-actuator ones first (`K_1, K_2, K_3, Kb_1, …`), then the common ones,
-/// then each family's (src/model/effects/effects.md, "Parameters"), then the families' choices
+/// then each family's (book/src/effects.md, "Parameters"), then the families' choices
 /// among forms.
 pub fn parameters() -> impl Iterator<Item = &'static ParamDef> {
     ACTUATOR_ROWS
@@ -351,7 +351,7 @@ impl Params {
     }
 
     /// A_s(θ = 0, l_p = Lp) + Xh·Le: the liquid area for which the electrode is unzipped
-    /// (le = 0) at θ = 0, the pinned default of A_T (src/model/model.md, "Open choices and
+    /// (le = 0) at θ = 0, the pinned default of A_T (book/src/model.md, "Open choices and
     /// pinned defaults").
     pub fn unzipped_liquid_area(&self) -> f64 {
         let geometry = crate::model::shell::Shell::new(0.0, self.lp, self.lv)
@@ -401,7 +401,7 @@ mod tests {
 
     #[test]
     fn default_liquid_area_matches_the_spec() {
-        // src/model/model.md, "Parameters": A_T = 61.63 mm²
+        // book/src/model.md, "Parameters": A_T = 61.63 mm²
         let a_t = Params::default().a_t;
         assert!((a_t * 1e6 - 61.63).abs() < 0.005, "A_T = {} mm²", a_t * 1e6);
     }

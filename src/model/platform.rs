@@ -442,7 +442,7 @@ impl Platform {
         }
     }
 
-    /// The initial state (src/model/model.md, "Initial state"): each actuator at its U = 0
+    /// The initial state (book/src/model.md, "Initial state"): each actuator at its U = 0
     /// equilibrium under gravity (and the static loads of the effects), solved actuator by
     /// actuator until the coupling settles.
     pub fn rest_state(&self) -> Result<Vec<f64>, ModelError> {
@@ -481,7 +481,7 @@ impl Platform {
         Ok(self.with_effects_at_rest(&rest))
     }
 
-    /// A state on the slow manifold (src/model/model.md, "A start mid-run"): the actuators at
+    /// A state on the slow manifold (book/src/model.md, "A start mid-run"): the actuators at
     /// angles `theta`, (θ, l_p) on the invariant curve, p = 0, the effects' states at `slow`
     /// (each actuator's extra states in block order, actuator after actuator) or, where `slow`
     /// does not give them all, settled with the rest: every other state (the charges, the
@@ -808,7 +808,7 @@ pub(crate) mod tests {
         let p = platform();
         let x = p.rest_state().unwrap();
         let h = p.heights(&x);
-        // src/model/model.md, "Initial state": θ ≈ −2.2e-4 rad, h ≈ −1.31 / −1.33 / −1.33 µm,
+        // book/src/model.md, "Initial state": θ ≈ −2.2e-4 rad, h ≈ −1.31 / −1.33 / −1.33 µm,
         // l_p − Lp ≈ −0.68 µm
         for (hi, want) in h.iter().zip([-1.31e-6, -1.33e-6, -1.33e-6]) {
             assert!((hi - want).abs() < 0.006e-6, "h = {h:?}");

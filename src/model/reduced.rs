@@ -1,7 +1,7 @@
 //! Reduced models of the platform by singular perturbation (Tikhonov), from the same parameters
 //! and effects as the full one.
 //!
-//! The full model (src/model/model.md, "Dynamics") has three time scales: the charges relax with
+//! The full model (book/src/model.md, "Dynamics") has three time scales: the charges relax with
 //! the circuit's RC constants (3–23 ns), the momentum with I/b (4–57 µs), the motion one sees
 //! takes 0.03–0.4 s. With ε the ratio of a fast to the slow time scale, Tikhonov's theorem
 //! replaces the fast states by their quasi-steady values, the root of their rows of ẋ = f(x)
@@ -200,7 +200,7 @@ impl Platform {
 
     /// Whether ∂ż_r/∂z_c can be nonzero: within an actuator's block, or across through the
     /// angle θ_c when the effects link the actuators (the coupling's energy depends on the
-    /// heights alone; src/model/effects/effects.md, "Jacobian").
+    /// heights alone; book/src/effects.md, "Jacobian").
     fn linked(&self, r: usize, c: usize) -> bool {
         let rb = self.rb();
         r / rb == c / rb || (self.terms.links_actuators() && c % rb == THETA)

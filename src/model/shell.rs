@@ -1,5 +1,5 @@
 //! Shell geometry of one actuator as a function of (θ, l_p), with first and second partial
-//! derivatives (src/model/model.md, "Shell geometry and C2"):
+//! derivatives (book/src/model.md, "Shell geometry and C2"):
 //!
 //! ```text
 //! δ1  = (π + θ)/2 − asin( (Lv/l_p) sin((π − θ)/2) )
@@ -170,7 +170,7 @@ mod tests {
             let mt = Shell::new(th - ht, l, LV).unwrap();
             let pl = Shell::new(th, l + hl, LV).unwrap();
             let ml = Shell::new(th, l - hl, LV).unwrap();
-            // δ1 as src/model/model.md writes it ("Shell geometry and C2")
+            // δ1 as book/src/model.md writes it ("Shell geometry and C2")
             let delta1 = 0.5 * (std::f64::consts::PI + th)
                 - (LV / l * (0.5 * (std::f64::consts::PI - th)).sin()).asin();
             assert!((s.delta1() - delta1).abs() < 1e-14);

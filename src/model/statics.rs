@@ -1,4 +1,4 @@
-//! The statics of the platform (src/model/model.md, "Statics"): the constant voltages that hold
+//! The statics of the platform (book/src/model.md, "Statics"): the constant voltages that hold
 //! the actuators at given heights, the inverse of the equilibrium map that `hasel linearize`
 //! solves forwards (voltages to equilibrium). Per actuator it is closed-form: the height fixes θ,
 //! the invariant curve l_p, and the torque balance ṗ = 0 is affine in V2², with V2 from the DC

@@ -27,7 +27,7 @@ pub enum Interpolation {
     /// Natural cubic spline: continuous second derivative, so the integrator steps across the
     /// samples; the cheapest way to replay a densely sampled smooth signal.
     Spline,
-    /// A measured command (src/identify/identify.md, "How an experiment is simulated"): the
+    /// A measured command (book/src/identify.md, "How an experiment is simulated"): the
     /// natural spline through each smooth run of samples, and the command held across a step
     /// (a change from one sample to the next larger than [`STEP_MIN`], at a rate [`STEP_RATIO`]
     /// times both neighbouring intervals' rates: a gap of dropped rows is no step), where the integrator stops exactly, as with zero-order hold.

@@ -12,7 +12,7 @@ use crate::solver::{Bs23, OdeSystem, Radau5, RhsError, SolverError, Stats, Toler
 pub use input::{Input, InputError, Interpolation, Piece, Tone};
 
 /// Relative tolerance of every way of running the model unless the user picks another
-/// (src/model/model.md, "Accuracy contract"; the FMU's DefaultExperiment declares the same).
+/// (book/src/model.md, "Accuracy contract"; the FMU's DefaultExperiment declares the same).
 pub const DEFAULT_RTOL: f64 = 1e-6;
 
 /// The tolerance rule, written once for every way of running the model: a relative tolerance
@@ -312,7 +312,7 @@ const PRE_RUN: f64 = 0.05;
 /// The held steps it is continued in [s].
 const PRE_RUN_STEP: f64 = 1e-3;
 
-/// Where a run starts (src/identify/identify.md, "Records that start mid-run").
+/// Where a run starts (book/src/identify.md, "Records that start mid-run").
 #[derive(Clone, Debug, PartialEq)]
 pub enum Start {
     /// The rest state at U = 0, the command 0 before the run.

@@ -53,7 +53,7 @@ pub fn read_all(paths: &[PathBuf]) -> Result<Vec<Experiment>, Error> {
     paths.iter().map(|p| Ok(Experiment::read(p)?)).collect()
 }
 
-/// How the records were taken, shared by `identify` and `diagnose` (src/identify/identify.md,
+/// How the records were taken, shared by `identify` and `diagnose` (book/src/identify.md,
 /// "Records that start mid-run" and "Sensor lag").
 #[derive(clap::Args)]
 pub struct ConditionArgs {

@@ -1,5 +1,5 @@
 //! `hasel inverse`: the heights that put the antenna tip on a path and the constant voltages
-//! that hold each of them at equilibrium (src/model/model.md, "Inverse kinematics" and
+//! that hold each of them at equilibrium (book/src/model.md, "Inverse kinematics" and
 //! "Statics"), the feedforward of a tip path.
 
 use std::path::PathBuf;

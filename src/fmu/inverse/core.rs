@@ -1,6 +1,6 @@
 //! The inverse FMU's core: stateless apart from what it holds between calls. Its outputs map
 //! the current inputs, the tip's X and Y and the mean height, to the heights (inverse
-//! kinematics from X and Y, src/model/model.md "Inverse kinematics") and the voltages that hold
+//! kinematics from X and Y, book/src/model.md "Inverse kinematics") and the voltages that hold
 //! them ("Statics"): direct feedthrough, declared in `modelDescription.xml`, so a master that
 //! sets the inputs reads their feedforward at once, not a step late. A step checks that its
 //! inputs can be reached (and fails otherwise, the core as it was).

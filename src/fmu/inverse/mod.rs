@@ -1,6 +1,6 @@
 //! The HaselInverse FMU: a small stateless FMU beside the platform's, for feedforward. Inputs
 //! tip_x, tip_y and the mean height; outputs the heights h1..h3 that put the tip there and the
-//! voltages U1..U3 that hold them at equilibrium (src/model/model.md, "Inverse kinematics" and
+//! voltages U1..U3 that hold them at equilibrium (book/src/model.md, "Inverse kinematics" and
 //! "Statics"). The same generic FMI 2.0 shell serves it; the library exports its FMI functions
 //! when built with the cargo feature `inverse-fmu` (a cdylib exports `fmi2*` once).
 

@@ -1,4 +1,4 @@
-//! `amplifier_lag` (src/model/effects/effects.md, "amplifier_lag"): the high-voltage
+//! `amplifier_lag` (book/src/effects.md, "amplifier_lag"): the high-voltage
 //! amplifier's dynamics between the command and the port, a rate law dU_amp/dt = r(U − U_amp)
 //! with r monotone (linear: a first-order lag; saturating: a slew-rate limit), and a second
 //! linear stage in cascade.
@@ -127,7 +127,7 @@ pub const FAMILY: Family = Family {
 /// One stage, and two of half the time, at a fast and a slow time; a slewing stage at a fast
 /// and a slow time, slewing at 4, 6 or 8 times the peak command per second (the paper's 60 V
 /// sines change by up to 11 times it), kept as they are: a slew's change does not scale
-/// (src/diagnose/diagnose.md, "Screening"). A lag and a slew both delay the response: the
+/// (book/src/diagnose.md, "Screening"). A lag and a slew both delay the response: the
 /// screening's linear projection ranks them alike, and the refits of every form it cannot tell
 /// apart decide.
 fn probes(_: &Params, u_peak: f64) -> Vec<Probe> {
@@ -193,7 +193,7 @@ fn slewing(params: &mut Params, between: &mut dyn FnMut(f64, f64) -> f64) -> Pla
 }
 
 /// The first stage's fitted rate law over errors up to the peak command, beside the textbook
-/// forms fitted to it (src/diagnose/diagnose.md, "The fitted law"): the linear lag e/τ, and the
+/// forms fitted to it (book/src/diagnose.md, "The fitted law"): the linear lag e/τ, and the
 /// hard rate limit clamp(e/τ_a, ±S) at the law's small-signal time.
 fn law(params: &Params, u_peak: f64) -> FittedLaw {
     let a = params.effects.amplifier_lag;

@@ -1,4 +1,4 @@
-//! `charge_drift` (src/model/effects/effects.md, "charge_drift"): a slow charge-retention
+//! `charge_drift` (book/src/effects.md, "charge_drift"): a slow charge-retention
 //! element, in series with the circuit or as an absorption branch across part of the film; and
 //! dielectric absorption as a Prony series of R–C branches across the film (Debye relaxations)
 //! with non-negative capacitances on a fixed logarithmic grid of times (the spectrum).
@@ -201,7 +201,7 @@ fn is_on(cd: &ChargeDrift) -> bool {
 }
 
 /// Each site at three time constants; the spectrum, one column per capacitance
-/// (src/diagnose/diagnose.md, "Screening").
+/// (book/src/diagnose.md, "Screening").
 fn probes(params: &Params, _: f64) -> Vec<Probe> {
     // the film's voltage is held by the source through R0 + R1: a branch across it shows
     // when its R3 = tau3 / C3 is a few times R0 + R1

@@ -1,4 +1,4 @@
-//! Convex added energies of one variable (src/model/effects/effects.md, "Convex series"), shared
+//! Convex added energies of one variable (book/src/effects.md, "Convex series"), shared
 //! by `stiffening` (of θ) and `coupling` (of a pair's height difference): a non-negative series
 //! of even powers on a fixed grid, and the hardening laws synthetic data hide beyond it.
 
@@ -21,7 +21,7 @@ pub fn series(powers: &[i32], weights: &[f64], x_ref: f64, x: f64) -> (f64, f64,
 
 /// The force of a power law of exponent n, secant stiffness 1 at x_ref: x_ref |x/x_ref|ⁿ⁻¹
 /// signed as x, the textbook power law a series' fitted law is compared with
-/// (src/diagnose/diagnose.md, "The fitted law").
+/// (book/src/diagnose.md, "The fitted law").
 pub fn power_force(x_ref: f64, n: f64) -> impl Fn(f64) -> f64 {
     move |x: f64| (x_ref * (x.abs() / x_ref).powf(n - 1.0)).copysign(x)
 }

@@ -1,4 +1,4 @@
-//! `coupling` (src/model/effects/effects.md, "coupling"): elastic coupling of the actuators'
+//! `coupling` (book/src/effects.md, "coupling"): elastic coupling of the actuators'
 //! heights through the shared platform, a convex energy of the pairs' height differences: the
 //! linear spring (the library form, of equal or of any three pair stiffnesses) and a
 //! non-negative series of convex powers, which holds any hardening of the platform's tilt
@@ -167,7 +167,7 @@ pub const FAMILY: Family = Family {
 };
 
 /// The equal pairs at k_c, each pair alone, and the series, one column per power at the same
-/// stiffness at d_ref (src/diagnose/diagnose.md, "Screening").
+/// stiffness at d_ref (book/src/diagnose.md, "Screening").
 fn probes(_: &Params, _: f64) -> Vec<Probe> {
     let pairs = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
     vec![
@@ -270,7 +270,7 @@ fn hardening_tilt(params: &mut Params, between: &mut dyn FnMut(f64, f64) -> f64)
 }
 
 /// The fitted force of a pair of unit weight against its height difference over ±2 d_ref,
-/// beside the textbook springs fitted to it (src/diagnose/diagnose.md, "The fitted law"): the
+/// beside the textbook springs fitted to it (book/src/diagnose.md, "The fitted law"): the
 /// linear spring k d, Duffing's k d (1 + (d/d_s)²), a power law k d_ref |d/d_ref|ⁿ⁻¹ of free
 /// exponent, and exponential hardening k d_s sinh(d/d_s).
 fn law(params: &Params) -> FittedLaw {

@@ -1,4 +1,4 @@
-//! `creep` (src/model/effects/effects.md, "creep"): viscoelastic creep of the shell film, a
+//! `creep` (book/src/effects.md, "creep"): viscoelastic creep of the shell film, a
 //! Prony series of spring–dashpot branches on θ: one branch at a free relaxation time (the
 //! library form) and non-negative weights on a fixed logarithmic grid of times (the spectrum).
 
@@ -124,7 +124,7 @@ pub const FAMILY: Family = Family {
     law: |p, _| Some(spectrum_law(&p.effects.creep)),
 };
 
-/// One branch at three times; the spectrum, one column per weight (src/diagnose/diagnose.md,
+/// One branch at three times; the spectrum, one column per weight (book/src/diagnose.md,
 /// "Screening").
 fn probes(params: &Params, _: f64) -> Vec<Probe> {
     let kb = mean_kb(params);

@@ -1,4 +1,4 @@
-//! `delay` (src/model/effects/effects.md, "delay"): a transport delay between the command and
+//! `delay` (book/src/effects.md, "delay"): a transport delay between the command and
 //! the actuator. It has no terms here: the simulation, which holds the input history, applies it.
 
 use super::family::no_law;

@@ -1,4 +1,4 @@
-//! What a family of the effect library is (src/model/effects/effects.md, "The effect library"):
+//! What a family of the effect library is (book/src/effects.md, "The effect library"):
 //! the one description each family's module gives of itself, which the registry
 //! ([`super::Effect::family`]) hands to everything else: the parameter table, the FMU, the
 //! screening and separation of `hasel diagnose`, the hidden-mechanism generator, the CLI and the
@@ -16,11 +16,11 @@ use crate::model::params::ParamDef;
 /// One family: a place in the model where a missing mechanism enters, with its forms.
 pub struct Family {
     pub effect: Effect,
-    /// The name in src/model/effects/effects.md, the CLI and the reports.
+    /// The name in book/src/effects.md, the CLI and the reports.
     pub name: &'static str,
     /// The physical mechanism, in words.
     pub mechanism: &'static str,
-    /// The library's term, as written in src/model/effects/effects.md.
+    /// The library's term, as written in book/src/effects.md.
     pub form: &'static str,
     /// The forms of the family, the library form first (effects.md, each family's "Forms").
     pub forms: &'static [Form],
@@ -47,16 +47,16 @@ pub struct Family {
     /// What the neutral value of the family's magnitude is, for its confidence interval.
     pub magnitude: Magnitude,
     /// The screening probes of every form, at the model `params` and the peak command [V]
-    /// (src/diagnose/diagnose.md, "Screening").
+    /// (book/src/diagnose.md, "Screening").
     pub probes: fn(&Params, f64) -> Vec<Probe>,
-    /// The experiment that exposes the family (src/diagnose/diagnose.md, "The decision rule").
+    /// The experiment that exposes the family (book/src/diagnose.md, "The decision rule").
     pub exposing: Exposing,
     /// The family hidden in a form unlike its library term, for synthetic data.
     pub hidden: Plant,
     /// Further hidden forms, by name (their names are hidden cases of the CLI).
     pub variants: &'static [(&'static str, Plant)],
     /// The family's fitted law at the model `params`, drawn over commands up to the peak
-    /// command [V] where its variable is the command (src/diagnose/diagnose.md, "The fitted
+    /// command [V] where its variable is the command (book/src/diagnose.md, "The fitted
     /// law"); `None` for a family whose forms are its textbook terms ([`no_law`]) and for a
     /// form of the family the law does not describe (charge_drift's series stage).
     pub law: fn(&Params, f64) -> Option<FittedLaw>,
@@ -97,7 +97,7 @@ pub struct Textbook {
 }
 
 /// One form of a family: the parameters it frees (its magnitude first) and the settings that
-/// select it (src/model/effects/effects.md, each family's "Forms").
+/// select it (book/src/effects.md, each family's "Forms").
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Form {
     pub effect: Effect,

@@ -1,4 +1,4 @@
-//! `hysteresis` (src/model/effects/effects.md, "hysteresis"): hysteresis of zipping, hysteretic
+//! `hysteresis` (book/src/effects.md, "hysteresis"): hysteresis of zipping, hysteretic
 //! elements on θ, each a state z saturating at its angle θ_j with the torque −k_j z: one at a free
 //! angle (the library form), and a Prandtl–Ishlinskii superposition with non-negative weights on
 //! a fixed logarithmic grid of angles (the plays).
@@ -195,7 +195,7 @@ pub const FAMILY: Family = Family {
 };
 
 /// Two saturation angles, without and with relaxation; the plays, one column per angle of the
-/// grid, without and with relaxation (src/diagnose/diagnose.md, "Screening").
+/// grid, without and with relaxation (book/src/diagnose.md, "Screening").
 fn probes(params: &Params, _: f64) -> Vec<Probe> {
     let kb = mean_kb(params);
     let mut out = Vec::new();
@@ -285,7 +285,7 @@ fn random_plays(params: &mut Params, between: &mut dyn FnMut(f64, f64) -> f64) -
 
 /// The virgin loading curve Σ_j k_j θ_j (1 − exp(−θ/θ_j)): the hysteretic torque from rest as θ
 /// grows (each element's state z_j' = θ' (1 − z_j/θ_j) from 0), over 0 to 20 mrad, beside the
-/// textbook forms fitted to it (src/diagnose/diagnose.md, "The fitted law"): one element, and
+/// textbook forms fitted to it (book/src/diagnose.md, "The fitted law"): one element, and
 /// the elastic–perfectly plastic k min(θ, θ_y).
 fn loading_law(params: &Params, _: f64) -> FittedLaw {
     let h = params.effects.hysteresis;

@@ -1,4 +1,4 @@
-//! The missing-effect library (src/model/effects/effects.md, "The effect library"): mechanisms
+//! The missing-effect library (book/src/effects.md, "The effect library"): mechanisms
 //! the paper's model leaves out, each an optional extension with its own parameters and, where it
 //! needs them, its own states. Every family is neutral at its default parameters, so the default
 //! model is the paper's, state for state.
@@ -9,7 +9,7 @@
 //! experiment that exposes it, and its hidden forms for synthetic data (its [`Family`]). The
 //! registry below lists the modules once; everything else reads the families from it.
 //!
-//! Terms, parameters and energy of each family: [src/model/effects/effects.md](effects.md).
+//! Terms, parameters and energy of each family: [book/src/effects.md](effects.md).
 
 mod family;
 pub mod terms;
@@ -38,13 +38,13 @@ use crate::model::actuator::Actuator;
 use crate::model::shell::DomainError;
 
 /// The registry: one line per family, `Variant => module(ParamsStruct)`, in the order of
-/// src/model/effects/effects.md. It makes the [`Effect`] names, the [`EffectParams`] (one field
+/// book/src/effects.md. It makes the [`Effect`] names, the [`EffectParams`] (one field
 /// per family, named by its module) and the [`Laws`] that evaluate every family's terms in this
 /// order, each statically. The module provides `FAMILY` (its [`Family`]), the params struct
 /// (its `Default` neutral) and `Terms` (its [`Law`]).
 macro_rules! registry {
     ($($variant:ident => $module:ident($params:ident),)*) => {
-        /// The families of the library, in the order of src/model/effects/effects.md.
+        /// The families of the library, in the order of book/src/effects.md.
         #[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
         pub enum Effect {
             $($variant,)*
@@ -167,7 +167,7 @@ registry! {
 }
 
 impl Effect {
-    /// The family's name in src/model/effects/effects.md, the CLI and the reports.
+    /// The family's name in book/src/effects.md, the CLI and the reports.
     pub fn name(self) -> &'static str {
         self.family().name
     }
@@ -188,7 +188,7 @@ impl Effect {
         self.family().delays_the_command
     }
 
-    /// The library's term, as written in src/model/effects/effects.md ("The effect library").
+    /// The library's term, as written in book/src/effects.md ("The effect library").
     pub fn form(self) -> &'static str {
         self.family().form
     }
@@ -199,7 +199,7 @@ impl Effect {
         Form::library(self).free
     }
 
-    /// The forms of the family (src/model/effects/effects.md, each family's "Forms"), the
+    /// The forms of the family (book/src/effects.md, each family's "Forms"), the
     /// library form first; its parameters are [`Effect::parameters`].
     pub fn forms(self) -> &'static [Form] {
         self.family().forms

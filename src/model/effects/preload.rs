@@ -1,4 +1,4 @@
-//! `preload` (src/model/effects/effects.md, "preload"): a constant load on each actuator.
+//! `preload` (book/src/effects.md, "preload"): a constant load on each actuator.
 
 use super::family::{mean_kb, no_law};
 use super::terms::{Law, States, Torque};

@@ -1,4 +1,4 @@
-//! Prony series (src/model/effects/effects.md, "Prony series"): a law that is a sum of
+//! Prony series (book/src/effects.md, "Prony series"): a law that is a sum of
 //! relaxations w_b exp(−t/τ_b) with non-negative weights, on a fixed logarithmic grid of times
 //! (a family's flexible form) or at any times (synthetic data). What the families whose law is
 //! one share: the grid, the random kernels of their hidden forms, and the fitted law with its

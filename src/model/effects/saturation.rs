@@ -1,4 +1,4 @@
-//! `saturation` (src/model/effects/effects.md, "saturation"): the amplifier's static output
+//! `saturation` (book/src/effects.md, "saturation"): the amplifier's static output
 //! map, a monotone map of the command: unequal limits up and down, a knee of any softness (the
 //! hard clamp its limit), a dead zone.
 
@@ -249,7 +249,7 @@ fn unequal(params: &mut Params, between: &mut dyn FnMut(f64, f64) -> f64) -> Pla
 }
 
 /// The fitted map over the commands ±U_peak, beside the textbook forms fitted to it
-/// (src/diagnose/diagnose.md, "The fitted law"): the symmetric clamp, the unequal clamp, the
+/// (book/src/diagnose.md, "The fitted law"): the symmetric clamp, the unequal clamp, the
 /// symmetric tanh L tanh(U/L).
 fn law(params: &Params, u_peak: f64) -> FittedLaw {
     let s = params.effects.saturation;

@@ -1,4 +1,4 @@
-//! `stiffening` (src/model/effects/effects.md, "stiffening"): nonlinear stiffness of the film,
+//! `stiffening` (book/src/effects.md, "stiffening"): nonlinear stiffness of the film,
 //! a convex energy added to the bending spring: the quartic (the library form) and a
 //! non-negative series of convex powers, which holds any hardening from gentle to a strain
 //! limit's.
@@ -113,7 +113,7 @@ pub const FAMILY: Family = Family {
 };
 
 /// A fifth of Kb θ at 15 mrad for the quartic; the series, one column per power, each adding a
-/// fifth of Kb at θ_ref (src/diagnose/diagnose.md, "Screening").
+/// fifth of Kb at θ_ref (book/src/diagnose.md, "Screening").
 fn probes(params: &Params, _: f64) -> Vec<Probe> {
     let kb = mean_kb(params);
     vec![
@@ -160,7 +160,7 @@ fn random_hardening(params: &mut Params, between: &mut dyn FnMut(f64, f64) -> f6
 }
 
 /// The fitted torque dH/dθ over ±2.5 θ_ref, beside the textbook forms fitted to it
-/// (src/diagnose/diagnose.md, "The fitted law"): the quartic k3 θ³, a power k θ_ref |θ/θ_ref|ⁿ⁻¹
+/// (book/src/diagnose.md, "The fitted law"): the quartic k3 θ³, a power k θ_ref |θ/θ_ref|ⁿ⁻¹
 /// of free exponent, and exponential hardening.
 fn law(params: &Params, _: f64) -> FittedLaw {
     let st = params.effects.stiffening;

@@ -1,4 +1,4 @@
-//! The families' terms around the actuator equations (src/model/effects/effects.md, "How effects
+//! The families' terms around the actuator equations (book/src/effects.md, "How effects
 //! enter the model"): the extra states of each actuator, the voltage the actuator's port
 //! receives, the torques on θ, the extra circuit branch, and their energy, dissipation and
 //! Jacobian entries. Each family writes its own terms as a [`Law`]; the registry's laws, one

@@ -391,7 +391,7 @@ fn state_positions_agree_with_the_names() {
 /// A family added to the registry and forgotten somewhere is named here.
 #[test]
 fn each_family_describes_itself_whole() {
-    let doc = include_str!("effects.md");
+    let doc = include_str!("../../../book/src/effects.md");
     let rows_of = |e: Effect| {
         let f = e.family();
         f.rows.iter().chain(f.choices).map(|d| d.name)

@@ -1,7 +1,7 @@
 //! SUNDIALS CVODE (the system's libsundials 6.x through `sundials-sys`), called natively on the
 //! two runs of the table: variable-order BDF with Newton iterations on the analytic Jacobian,
 //! through SUNDIALS' dense LU or its band LU. The Jacobian of the paper's model is
-//! block-diagonal (one 5 × 5 block per actuator, src/model/model.md), so a band of half-width
+//! block-diagonal (one 5 × 5 block per actuator, book/src/model.md), so a band of half-width
 //! 4 holds it exactly and the band LU is CVODE's block-diagonal solver here; with a coupling
 //! effect the blocks join and only the dense solver applies.
 //!
