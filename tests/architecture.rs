@@ -1,7 +1,9 @@
 //! The house keeps its arrows one-way: each room of `src/` may use only the rooms below it
-//! (README, "Architecture"), and no two files import each other round a circle. Read from the
+//! (book/src/architecture.md, "The house"), and no two files import each other round a circle. Read from the
 //! code's own `crate::` and `super::` paths (comments left out), so a new import that runs back up
 //! fails here as it would in a workspace of crates.
+
+mod common;
 
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};
@@ -370,4 +372,112 @@ fn a_circle_of_two_files_is_seen() {
         (b.clone(), BTreeSet::from([a.clone()])),
     ]);
     assert_eq!(circles(&graph), vec![vec![a, b]]);
+}
+
+/// The rooms each room uses, as the imports of its files have them: the library's rooms by their
+/// `crate::` and `super::` paths, the command `hasel` (`src/bin/hasel`) by its `hasel_fmu::` ones.
+fn house() -> BTreeMap<String, BTreeSet<String>> {
+    let mut files = Vec::new();
+    sources(&src(), &mut files);
+    let (bin, lib): (Vec<_>, Vec<_>) = files
+        .into_iter()
+        .partition(|f| f.starts_with(src().join("bin")));
+    let mut uses: BTreeMap<String, BTreeSet<String>> = ROOMS
+        .iter()
+        .map(|(r, _)| (r.to_string(), BTreeSet::new()))
+        .collect();
+    for (from, to) in arrows(&src(), &lib) {
+        let from_room = room(&from);
+        if from_room.is_empty() {
+            continue; // lib.rs declares the rooms
+        }
+        let used = uses.entry(from_room.clone()).or_default();
+        used.extend(to.iter().map(|t| room(t)).filter(|r| *r != from_room));
+    }
+    let cli = uses.entry(CLI.to_string()).or_default();
+    for file in bin {
+        let text = std::fs::read_to_string(&file).unwrap();
+        cli.extend(
+            paths_after(&text, "hasel_fmu")
+                .into_iter()
+                .filter_map(|p| p.first().cloned())
+                .filter(|r| ROOMS.iter().any(|(room, _)| room == r)),
+        );
+    }
+    uses
+}
+
+const CLI: &str = "bin/hasel";
+
+/// A room's floor: one above the highest room it uses, 0 for a room that uses none.
+fn floor(room: &str, uses: &BTreeMap<String, BTreeSet<String>>) -> usize {
+    uses[room]
+        .iter()
+        .map(|r| floor(r, uses) + 1)
+        .max()
+        .unwrap_or(0)
+}
+
+/// The first sentence of a room's module documentation, its links reduced to their text.
+fn purpose(room: &str) -> String {
+    let file = [
+        src().join(room).join("main.rs"),
+        src().join(room).join("mod.rs"),
+        src().join(format!("{room}.rs")),
+    ]
+    .into_iter()
+    .find(|f| f.is_file())
+    .unwrap_or_else(|| panic!("room {room}: no main.rs, mod.rs or {room}.rs"));
+    let text = std::fs::read_to_string(&file).unwrap();
+    let doc: Vec<&str> = text
+        .lines()
+        .map_while(|l| l.strip_prefix("//!"))
+        .map(str::trim)
+        .take_while(|l| !l.is_empty())
+        .collect();
+    let doc = doc.join(" ");
+    let mut plain = String::new();
+    let mut rest = doc.as_str();
+    while let Some(at) = rest.find("](") {
+        plain.push_str(&rest[..at]);
+        rest = rest[at + 2..].split_once(')').map_or("", |(_, after)| after);
+    }
+    plain.push_str(rest);
+    let plain = plain.replace(['[', ']'], "");
+    match plain.find(". ") {
+        Some(end) => plain[..=end].to_string(),
+        None => plain,
+    }
+}
+
+/// The house drawn from the code: each room's floor, the rooms it uses and what it is for, top
+/// floor first; the README and book/src/architecture.md show it.
+fn drawing() -> String {
+    let uses = house();
+    let mut rooms: Vec<(usize, &String)> = uses.keys().map(|r| (floor(r, &uses), r)).collect();
+    rooms.sort_by(|a, b| b.0.cmp(&a.0).then(a.1.cmp(b.1)));
+    let arrows: usize = uses.values().map(BTreeSet::len).sum();
+    let mut md = format!(
+        "{} rooms on {} floors, {arrows} arrows between rooms, every one pointing down:\n\n\
+         | floor | room | uses | what it is |\n|---|---|---|---|\n",
+        rooms.len(),
+        rooms[0].0 + 1,
+    );
+    for (floor, room) in rooms {
+        let used: Vec<&str> = uses[room].iter().map(String::as_str).collect();
+        md.push_str(&format!(
+            "| {floor} | `src/{room}` | {} | {} |\n",
+            used.join(", "),
+            purpose(room)
+        ));
+    }
+    md
+}
+
+#[test]
+fn the_readme_and_the_book_draw_the_house_as_the_code_has_it() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let drawing = drawing();
+    common::generated_section(&root.join("README.md"), "house", &drawing);
+    common::generated_section(&root.join("book/src/architecture.md"), "house", &drawing);
 }

@@ -3,7 +3,7 @@
 //! θ and l_p of an actuator are tied by l̇_p = d θ̇ (model.md, "Dynamics"): c(θ, l_p) with
 //! ∂c/∂θ + d ∂c/∂l_p = 0 is a Casimir of J, so each trajectory stays on one invariant curve and
 //! the equilibria form a one-parameter family per actuator. The equilibrium wanted is the one on
-//! the curve through the rest state (model.md, "open choices": (θ, l_p) on the curve
+//! the curve through the rest state (model.md, "Open choices and pinned defaults": (θ, l_p) on the curve
 //! dl_p/dθ = d through (0, Lp)), found by Newton on the reduced equations:
 //!
 //! - per actuator the unknown is θ; l_p = ℓ(θ) on the curve ([`Actuator::l_p_on_curve`]),

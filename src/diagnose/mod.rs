@@ -1,4 +1,6 @@
-//! The missing-effect workflow (book/src/diagnose.md, "What `hasel diagnose` answers"):
+//! The missing-effect workflow: find, name and add the physics the model misses.
+//!
+//! As book/src/diagnose.md, "What `hasel diagnose` answers", says:
 //! re-identify the paper's model, find where it disagrees with the data, rank the effects of the
 //! library that could explain it, add the best, re-identify and decide by evidence on held-out
 //! data.
@@ -266,7 +268,7 @@ pub struct Fits {
     /// The same on the held-out experiments, averaged over them [%].
     pub held_out_floor: BTreeMap<String, f64>,
     /// The held-out outputs the final model leaves more than [`AT_FLOOR`] below the noise
-    /// floor (book/src/diagnose.md, "What remains").
+    /// floor (book/src/diagnose.md, "diagnosis.json").
     pub remaining: Vec<Remaining>,
 }
 
@@ -588,7 +590,7 @@ pub struct Remaining {
 
 /// The held-out outputs the final model `last` leaves more than [`AT_FLOOR`] below the noise
 /// floor (`floor`, per experiment), with the disagreement `after` found there
-/// (book/src/diagnose.md, "What remains").
+/// (book/src/diagnose.md, "diagnosis.json").
 fn remaining(
     experiments: &[Experiment],
     floor: &[BTreeMap<String, f64>],

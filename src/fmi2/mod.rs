@@ -1,3 +1,5 @@
+//! The FMI 2.0 C boundary, Co-Simulation and Model Exchange, generic over the model.
+//!
 //! A generic FMI 2.0 shell, Co-Simulation and Model Exchange, around one model that implements
 //! [`FmuCore`](crate::fmi_common::model_api::FmuCore) (physics only):
 //! [`export_fmi2!`](crate::export_fmi2) generates the C functions of the FMU,

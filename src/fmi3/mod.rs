@@ -1,3 +1,5 @@
+//! The FMI 3.0 C boundary, Co-Simulation and Model Exchange, generic over the model.
+//!
 //! A generic FMI 3.0 shell, Co-Simulation and Model Exchange, around one model that implements
 //! [`FmuCore`](crate::fmi_common::model_api::FmuCore), beside the FMI 2.0 one
 //! ([`crate::fmi2`]) and over the same core: [`export_fmi3!`](crate::export_fmi3) generates

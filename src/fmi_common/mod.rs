@@ -1,3 +1,5 @@
+//! What the FMI 2.0 and 3.0 shells share with each other and with the model behind them.
+//!
 //! What an FMI shell and the model behind it share, whatever the FMI version: the model's
 //! side of the interface ([`model_api::FmuCore`]), its variable table with the rules on
 //! causality, variability, initial and start ([`variables`]), the unit table

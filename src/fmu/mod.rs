@@ -1,3 +1,5 @@
+//! The FMUs: the platform's, the slow model's and the inverse's cores, variables and archives.
+//!
 //! The HaselPlatform FMU: its variable table ([`variables`]), the model core that maps FMI
 //! calls onto a simulation ([`hasel_core`]), and the archive with its documentation
 //! ([`pack`]). The generic FMI 2.0 shell of [`crate::fmi2`] does every check of the standard

@@ -203,24 +203,63 @@ pub fn documentation(spec: &Spec, version: FmiVersion) -> String {
         step = info.default_experiment.step_size,
         tol = info.default_experiment.tolerance,
     );
-    for title in ["Inputs", "Outputs", "Parameters", "Diagnostic variables"] {
+    for (title, rows) in variable_groups(spec) {
         html.push_str(&format!(
             "<h2>{title}</h2>\n<table><tr><th>name</th><th>value reference</th><th>unit</th><th>start</th><th>description</th></tr>\n"
         ));
-        for v in spec.variables.iter().filter(|v| group(v) == title) {
+        for [name, vr, unit, start, description] in rows {
             html.push_str(&format!(
-                "<tr><td><code>{}</code></td><td>{}</td><td>{}</td><td>{}</td><td>{}</td></tr>\n",
-                v.name,
-                v.value_reference,
-                v.unit.as_deref().unwrap_or(""),
-                v.start.map(|s| format!("{s:?}")).unwrap_or_default(),
-                escape(&v.description)
+                "<tr><td><code>{name}</code></td><td>{vr}</td><td>{unit}</td><td>{start}</td><td>{}</td></tr>\n",
+                escape(&description)
             ));
         }
         html.push_str("</table>\n");
     }
     html.push_str("</body></html>\n");
     html
+}
+
+/// The same tables as [`documentation`] in Markdown, for the book's chapter "Parameters"
+/// (tests/docs.rs holds the chapter to it).
+pub fn variables_markdown(spec: &Spec) -> String {
+    let mut md = String::new();
+    for (title, rows) in variable_groups(spec) {
+        md.push_str(&format!(
+            "\n### {title}\n\n| name | value reference | unit | start | description |\n|---|---|---|---|---|\n"
+        ));
+        for [name, vr, unit, start, description] in rows {
+            md.push_str(&format!(
+                "| `{name}` | {vr} | {unit} | {start} | {} |\n",
+                description.replace('|', "\\|")
+            ));
+        }
+    }
+    md
+}
+
+/// The variables in the documentation's groups, each as name, value reference, unit, start value
+/// and description.
+fn variable_groups(spec: &Spec) -> Vec<(&'static str, Vec<[String; 5]>)> {
+    ["Inputs", "Outputs", "Parameters", "Diagnostic variables"]
+        .into_iter()
+        .map(|title| {
+            let rows = spec
+                .variables
+                .iter()
+                .filter(|v| group(v) == title)
+                .map(|v| {
+                    [
+                        v.name.clone(),
+                        v.value_reference.to_string(),
+                        v.unit.clone().unwrap_or_default(),
+                        v.start.map(|s| format!("{s:?}")).unwrap_or_default(),
+                        v.description.clone(),
+                    ]
+                })
+                .collect();
+            (title, rows)
+        })
+        .collect()
 }
 
 /// Whether `bytes` contain `text`.

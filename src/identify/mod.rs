@@ -1,3 +1,5 @@
+//! Nonlinear grey-box identification as in the paper.
+//!
 //! Nonlinear grey-box identification as in the paper: Levenberg–Marquardt on the simulation
 //! (output) error over all estimation experiments at once, NRMSE fits on estimation and
 //! validation data, standard errors and 95 % intervals from the covariance, and an honest list

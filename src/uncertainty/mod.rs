@@ -1,3 +1,5 @@
+//! Prediction uncertainty from an identification: drawn parameter sets and quantile bands.
+//!
 //! Prediction uncertainty from an identification: parameter sets drawn from the covariance that
 //! `hasel identify` reports ([`Posterior`]), many simulations of them on all cores, and the
 //! median and 2.5/97.5 % bands of every output over time ([`bands`]).

@@ -34,3 +34,30 @@ pub fn stderr(o: &Output) -> String {
 pub fn s(p: &Path) -> &str {
     p.to_str().unwrap()
 }
+
+/// Holds the part of the document `path` between `<!-- generated: NAME -->` and
+/// `<!-- /generated: NAME -->` to `text`, what the code generates; with `HASEL_BLESS=1` in the
+/// environment it writes `text` there instead.
+pub fn generated_section(path: &Path, name: &str, text: &str) {
+    let doc = std::fs::read_to_string(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    let (open, close) = (
+        format!("<!-- generated: {name} -->\n"),
+        format!("<!-- /generated: {name} -->"),
+    );
+    let (Some(start), Some(end)) = (doc.find(&open), doc.find(&close)) else {
+        panic!("{}: no `{open}` … `{close}`", path.display());
+    };
+    let start = start + open.len();
+    if std::env::var_os("HASEL_BLESS").is_some() {
+        let new = format!("{}{text}{}", &doc[..start], &doc[end..]);
+        std::fs::write(path, new).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    } else {
+        assert!(
+            doc[start..end] == *text,
+            "{}: the part `{name}` is not what the code generates; `HASEL_BLESS=1 cargo test` rewrites it\n\
+             --- in the file:\n{}\n--- generated:\n{text}",
+            path.display(),
+            &doc[start..end]
+        );
+    }
+}

@@ -1,4 +1,4 @@
-//! `hasel`: simulate the HASEL platform, pack it as an FMI 2.0 FMU, benchmark it.
+//! The command line `hasel`: simulate, pack the FMUs, identify, diagnose, linearize, benchmark.
 
 /// `println!` that ends quietly when standard output is closed (`hasel simulate | head`)
 /// instead of panicking.
