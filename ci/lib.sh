@@ -90,7 +90,8 @@ seed_target_dir() {
 # One shared library of the FMUs, against glibc 2.17 (so it loads on older hosts), at opt-level
 # 2 rather than the release profile's 3: a co-simulation step runs about 40 KB of code, more than
 # the 32 KB first-level instruction cache, and the smaller code of opt-level 2 made the step
-# through the C API 2-5 % faster here in both FMI versions (README, "The solver").
+# through the C API 2-5 % faster here in both FMI versions
+# (book/src/solver.md, "The FMU library at opt-level 2").
 zigbuild_fmu_lib() {
     CARGO_PROFILE_RELEASE_OPT_LEVEL=2 cargo zigbuild --release --lib --target "$FMU_TARGET.2.17" "$@"
 }

@@ -1,6 +1,7 @@
 //! The reduced models (src/model/reduced.rs) against the full one within their documented
-//! bounds (README, "Reduced models"): on a step from rest, where the slow model's error is that
-//! of its missing inertia right after the jump. Their energy balance is in tests/energy.rs.
+//! bounds (book/src/reduced.md, "Error against the full model"): on a step from rest, where the
+//! slow model's error is that of its missing inertia right after the jump. Their energy balance
+//! is in tests/energy.rs.
 
 use hasel_fmu::model::{Params, Platform, Reduction};
 use hasel_fmu::simulation::{Input, Sample, Simulator, largest_difference};
@@ -23,7 +24,7 @@ fn step_response(reduction: Reduction) -> Vec<Sample> {
 #[test]
 fn reduced_models_follow_the_full_one_within_their_bounds() {
     let full = step_response(Reduction::Full);
-    // the bounds [µm] on |Δh| and |Δtip| the README documents
+    // the bounds [µm] on |Δh| and |Δtip| book/src/reduced.md documents
     for (reduction, bound_h, bound_tip) in [
         (Reduction::QuasiStatic, 0.01, 0.02),
         (Reduction::Slow, 0.2, 0.2),

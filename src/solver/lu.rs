@@ -7,7 +7,7 @@
 //! factored and solved by code compiled for their size (loops unrolled, no bounds checks), with
 //! the pivots' reciprocals kept so that solving only multiplies: the block solves of a 1 ms
 //! co-simulation step of the platform take a tenth of the instructions of generic code over
-//! runtime sizes (README, "The solver").
+//! runtime sizes (book/src/solver.md, "Block LU").
 
 use std::ops::{Add, Mul, Sub};
 

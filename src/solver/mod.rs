@@ -1,12 +1,12 @@
 //! ODE integration over a small trait (f and its Jacobian). Knows no physics and no FMI.
 //!
 //! The method is the 3-stage Radau IIA collocation method of order 5 (Hairer & Wanner,
-//! "Solving Ordinary Differential Equations II", IV.8), chosen with evidence (README,
-//! "Solver"): L-stable for the platform's 2.7 ns electrical modes, order 5 at rtol 1e-6, and a
-//! one-step method that loses nothing when a co-simulation restarts it every millisecond, where
-//! multistep BDF drops back to order 1. A system that is not stiff at the step is integrated
-//! more cheaply by the explicit Bogacki–Shampine 3(2) pair (`bs23`), which estimates the
-//! stiffness each step meets so that its user can tell when it is not.
+//! "Solving Ordinary Differential Equations II", IV.8), chosen with evidence
+//! (book/src/solver.md, "Why Radau IIA"): L-stable for the platform's 2.7 ns electrical modes,
+//! order 5 at rtol 1e-6, and a one-step method that loses nothing when a co-simulation restarts
+//! it every millisecond, where multistep BDF drops back to order 1. A system that is not stiff at
+//! the step is integrated more cheaply by the explicit Bogacki–Shampine 3(2) pair (`bs23`), which
+//! estimates the stiffness each step meets so that its user can tell when it is not.
 
 pub mod bs23;
 pub mod lu;

@@ -87,9 +87,9 @@ const THET: f64 = 1e-3;
 /// The same after a step that began at an input jump: with the jump predicted, such a step
 /// contracts by about 1.2e-3 with a fresh Jacobian, so THET would refactor at almost every held
 /// co-simulation step; 1e-2 keeps Newton at 2 iterations a step with a new Jacobian every 4
-/// steps at an unchanged error (README, "The solver, and why"). Smooth runs keep THET: there
-/// the larger bound saved nothing (517 Jacobians instead of 521 on the 10 s sine) and moved a
-/// fitted optimum of the identification.
+/// steps at an unchanged error (book/src/solver.md, "Keeping the Jacobian after a jump").
+/// Smooth runs keep THET: there the larger bound saved nothing (517 Jacobians instead of 521 on
+/// the 10 s sine) and moved a fitted optimum of the identification.
 const THET_AFTER_JUMP: f64 = 1e-2;
 /// Keep h (and the LU factors) when the proposed ratio lies in [QUOT1, QUOT2].
 const QUOT1: f64 = 1.0;
@@ -577,10 +577,10 @@ impl Radau5 {
     /// Adds the stages' linear response to the jump of f at the current point to the
     /// starting values: with F → F + Δf at every stage, the simplified Newton system
     /// (Λ/h ⊗ I − I ⊗ J) ΔW = (T⁻¹ ⊗ I)(1 ⊗ Δf) gives ΔW with one pair of the solves
-    /// already factored and no evaluation of f (README, "The solver, and why"). The
-    /// extrapolated polynomial knows nothing of the jump; without this the first Newton
-    /// iteration spends three evaluations of f to learn it, and the contraction it measures
-    /// then forces a new Jacobian.
+    /// already factored and no evaluation of f (book/src/solver.md, "The input jump
+    /// predicted"). The extrapolated polynomial knows nothing of the jump; without this the
+    /// first Newton iteration spends three evaluations of f to learn it, and the contraction it
+    /// measures then forces a new Jacobian.
     fn predict_jump(&mut self) {
         let n = self.n;
         let s = TI.map(|r| r[0] + r[1] + r[2]);

@@ -132,10 +132,10 @@ def test_model_exchange_with_cvode_reproduces_the_zoh_reference(fmu_path, refere
 def test_model_exchange_needs_each_input_step_as_an_event(fmu_path, reference_dir):
     """fmpy's Model Exchange with the input table a user writes, one row per sample, moves the
     input between rows without stopping CVode: every change starts a transient of the
-    nanosecond electrical modes inside a step, and CVode gives up about 1 ms in (issue 26; the
-    README, "The FMU", says why and how). Written as input events (each change two rows at one
-    time, `held_input`), the same run goes through. The day fmpy copes with the plain table, the
-    first half of this test says so."""
+    nanosecond electrical modes inside a step, and CVode gives up about 1 ms in (issue 26;
+    book/src/fmus.md, "Model Exchange in fmpy: inputs as events", says why and how). Written as
+    input events (each change two rows at one time, `held_input`), the same run goes through.
+    The day fmpy copes with the plain table, the first half of this test says so."""
     ref = load_reference(reference_dir, "zoh1ms_sine60_w3pi.csv")[:501]
     run = dict(fmi_type="ModelExchange", solver="CVode", relative_tolerance=1e-6, stop_time=0.5,
                output_interval=1e-3, output=["h1", "h2", "h3"])

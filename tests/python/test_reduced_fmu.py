@@ -119,7 +119,8 @@ def test_fmi_sim_model_exchange_runs_at_1_ms(which, co_simulation, request, tmp_
 
 # The FMU Compliance Checker's Model Exchange test: explicit Euler at a fixed step over the default
 # experiment (10 s), by default 500 steps (0.02 s). It is on no registry this project installs from
-# (README, "The slow model's FMU"), so its algorithm runs here through fmpy's Euler.
+# (book/src/fmus.md, "The FMU Compliance Checker's test"), so its algorithm runs here through
+# fmpy's Euler.
 CHECKER_STOP = 10.0
 CHECKER_STEP = 0.02
 
