@@ -2,8 +2,8 @@
 
 Designed on the port-Hamiltonian linearization of `hasel linearize` at the operating point where
 all three heights are H0, from the source voltages w_i = ga(theta_i) U_i, where it is exactly
-port-Hamiltonian (A = (J - R) Q, B = g_w; README, "Control design"). Why the closed loop is stable:
-book/src/control_passivity.md. Per actuator:
+port-Hamiltonian (A = (J - R) Q, B = g_w; book/src/control.md, "Port-Hamiltonian structure").
+Why the closed loop is stable: book/src/control_passivity.md. Per actuator:
 
 1. the charges are 1e5 times faster than the slow mechanics, so they are taken at their
    quasi-static value (singular perturbation), which leaves the mechanical PH system

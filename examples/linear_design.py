@@ -1,9 +1,10 @@
 """The linear model the designed controllers of examples/control_circle.py start from.
 
 `hasel linearize --u U1,U2,U3 --out DIR` writes the equilibrium under constant voltages and the
-linearization there (DIR/linearization.json, DIR/reduced.json; README, "Control design"). The
-circle is centred on the operating point where all three heights are H0, so the voltages that hold
-it are found here by Newton on U with the reduced model's DC gain, one `hasel linearize` per step.
+linearization there (DIR/linearization.json, DIR/reduced.json;
+book/src/control.md, "Designed controllers in closed loop"). The circle is centred on the
+operating point where all three heights are H0, so the voltages that hold it are found here by
+Newton on U with the reduced model's DC gain, one `hasel linearize` per step.
 """
 import json
 import pathlib

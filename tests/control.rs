@@ -1,7 +1,7 @@
-//! Control design from the model (README, "Control design"): the model's input and output
-//! Jacobians against central differences, the equilibrium, the linearization against the
-//! nonlinear simulation, the port-Hamiltonian decomposition and passivity, the reduced model,
-//! and `hasel linearize`.
+//! Control design from the model (book/src/control.md, "Control design: `hasel linearize`"): the
+//! model's input and output Jacobians against central differences, the equilibrium, the
+//! linearization against the nonlinear simulation, the port-Hamiltonian decomposition and
+//! passivity, the reduced model, and `hasel linearize`.
 
 mod common;
 
@@ -175,7 +175,8 @@ fn eigenvalues_at_rest_are_the_readmes_time_scales() {
     for r in &rates[..3] {
         assert!(r.abs() < 1e-12, "zero eigenvalue {r:e}");
     }
-    // README: slow −2.4 to −30, mechanical −1.8e4 to −2.3e5, electrical −4.4e7 and −3.65e8
+    // book/src/control.md, "Time scales and accuracy": slow −2.4 to −30, mechanical −1.8e4 to
+    // −2.3e5, electrical −4.4e7 and −3.65e8
     let near = |got: f64, want: f64, tol: f64| (got / want - 1.0).abs() <= tol;
     assert!(
         near(rates[3], 2.4, 0.02) && near(rates[5], 30.0, 0.01),

@@ -177,8 +177,8 @@ struct Floor {
 }
 
 /// The floors of the call-sequence targets: about half of what the committed corpora reach
-/// (README, Fuzzing), so a minimization or a change of the interpreter that loses the deep
-/// sequences fails, and one that merely reshuffles them does not.
+/// (book/src/tests.md, "Fuzzing"), so a minimization or a change of the interpreter that loses the
+/// deep sequences fails, and one that merely reshuffles them does not.
 mod floor {
     use super::Floor;
     const fn floor(

@@ -302,9 +302,9 @@ fn a_direction_held_where_the_fit_reached_keeps_what_it_gained() {
 
 /// The weights of a series (the creep's spectrum, rule `Weight`) are fitted in their own units,
 /// so that a weight the data would have negative ends at its bound 0, where the BIC of a
-/// diagnosis stops counting it (book/src/identify.md, "Coordinates"); in log coordinates
-/// no weight could reach 0. Data of one branch at 0.3 s with 1 % noise, every weight started
-/// at a sixth of it.
+/// diagnosis stops counting it (book/src/identify.md, "How `hasel identify` estimates"); in log
+/// coordinates no weight could reach 0. Data of one branch at 0.3 s with 1 % noise, every weight
+/// started at a sixth of it.
 #[test]
 fn a_spectrum_s_weights_reach_zero_where_the_data_want_none() {
     use hasel_fmu::model::effects::creep::GRID_NAMES;

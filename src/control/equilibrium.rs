@@ -1,4 +1,4 @@
-//! The equilibrium under constant voltages U (README, "Control design").
+//! The equilibrium under constant voltages U (book/src/control.md, "Equilibrium").
 //!
 //! θ and l_p of an actuator are tied by l̇_p = d θ̇ (model.md, "Dynamics"): c(θ, l_p) with
 //! ∂c/∂θ + d ∂c/∂l_p = 0 is a Casimir of J, so each trajectory stays on one invariant curve and

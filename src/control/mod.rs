@@ -1,7 +1,7 @@
-//! Control design from the model (README, "Control design"): the equilibrium under constant
-//! voltages, the linearization with the model's analytic Jacobians, its port-Hamiltonian
-//! structure and passivity, frequency and step responses, and a reduced model for controller
-//! design.
+//! Control design from the model (book/src/control.md, "Control design: `hasel linearize`"): the
+//! equilibrium under constant voltages, the linearization with the model's analytic Jacobians, its
+//! port-Hamiltonian structure and passivity, frequency and step responses, and a reduced model for
+//! controller design.
 //!
 //! Uses `model` (f, ∂f/∂x, ∂f/∂U, ∂y/∂x, the energy's Hessian and the PH structure),
 //! `simulation` (the nonlinear runs the linear model is compared with), `solver` (the Radau

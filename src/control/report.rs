@@ -19,7 +19,8 @@ use crate::io::file::{FileError, write_text_atomic};
 use crate::plot::{self, Panel, Series};
 
 /// |λ| above which a mode counts as electrical, and above which as mechanical [1/s]
-/// (between them the slow film modes; the README's time scales at rest are 2.4–30,
+/// (between them the slow film modes; the time scales at rest in book/src/control.md,
+/// "Time scales and accuracy": 2.4–30,
 /// 1.8e4–2.3e5 and 4.4e7–3.65e8 s⁻¹).
 pub const ELECTRICAL: f64 = 1e6;
 pub const MECHANICAL: f64 = 1e3;

@@ -20,7 +20,8 @@
  * entry point runs the model inside catch_unwind (src/fmi_common/calls.rs, src/fmi2/exports.rs,
  * src/fmi3/exports.rs), what can still panic behind it are invariants of the code (an expect
  * naming why it holds), not arguments, and the sequence fuzzers of ci/fuzz.sh, whose panic hook
- * aborts on any panic, caught or not, found none (README, "Fuzzing"). The catching is tested with
+ * aborts on any panic, caught or not, found none (book/src/tests.md, "Fuzzing"). The catching is
+ * tested with
  * a test core that panics on request (src/fmi2/tests/lifecycle.rs, the same code for FMI 3.0); it
  * is the same on Windows, where the release profile's panic = "unwind" keeps it working.
  *

@@ -1,6 +1,7 @@
-//! `hasel linearize`: the equilibrium under constant voltages (or the state a simulation
-//! reaches), the linearization, its port-Hamiltonian structure and passivity, the Bode and step
-//! figures, and a reduced model for controller design (README, "Control design").
+//! `hasel linearize`: the equilibrium under constant voltages (or the state a simulation reaches),
+//! the linearization, its port-Hamiltonian structure and passivity, the Bode and step figures, and
+//! a reduced model for controller design
+//! (book/src/control.md, "Control design: `hasel linearize`").
 
 use std::path::PathBuf;
 
