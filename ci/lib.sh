@@ -69,6 +69,16 @@ ensure_fmi_sim() {
     fi
 }
 
+# mdBook, the Rust project's own tool for books: builds book/ (ci/test.sh). Without its default
+# features (the live server and file watcher, which a build does not use) it compiles in about
+# two minutes on one core.
+ensure_mdbook() {
+    if [[ "$(mdbook --version 2>/dev/null || true)" != "mdbook v0.5.4" ]]; then
+        step "cargo install mdbook 0.5.4"
+        cargo install -q --locked mdbook@0.5.4 --no-default-features --features search
+    fi
+}
+
 # A cdylib built with other features needs a target folder of its own (its file name would
 # clash); seeded once from the main build's, so that only this crate compiles again, not its
 # dependencies (a cold build of them takes minutes on two cores).

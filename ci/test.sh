@@ -1,5 +1,6 @@
 #!/usr/bin/env bash
-# Every test: self-containment, formatting and lints, the Rust suite, then the packed FMUs
+# Every test: self-containment, formatting and lints, the Rust suite, the book and the API
+# documentation, then the packed FMUs
 # through fmpy, fmutool, libcosimpy, ecospy, fmi-sim (installed by ci/lib.sh) and ctypes, and the
 # other platforms' binaries: the FMUs' libraries (the platform's and the slow model's, FMI 2.0 and
 # 3.0, and the inverse's) and the hasel command cross-built for Windows and macOS at the cheap
@@ -22,6 +23,11 @@ ensure_wine
 # second; only the sanitizer's findings need a campaign (ci/fuzz.sh)
 step "Rust tests (tests/fuzz_replay.rs replays every fuzz target's committed corpus)"
 cargo test --release --all-targets
+step "the book (mdbook build book; tests/docs.rs above checked its links and the code's citations), the API documentation without a warning, its examples"
+ensure_mdbook
+mdbook build book
+RUSTDOCFLAGS="-D warnings" cargo doc -q --no-deps --lib
+cargo test -q --release --doc
 ensure_fmi_sim
 step "Python tests of the packed FMUs, the other platforms' among them"
 HASEL_PLATFORMS=required python -m pytest tests/python -q -p no:cacheprovider

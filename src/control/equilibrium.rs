@@ -33,7 +33,7 @@ use crate::model::{ModelError, Platform};
 /// An equilibrium on the branch through the rest state.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Equilibrium {
-    /// The constant voltages [V].
+    /// The constant voltages \[V\].
     pub u: [f64; 3],
     /// The state x0 with f(x0, U) = 0.
     pub x: Vec<f64>,

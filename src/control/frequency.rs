@@ -111,7 +111,7 @@ impl Evaluator {
     }
 }
 
-/// `per_decade` logarithmically spaced frequencies from `f_lo` to `f_hi` [Hz], both included.
+/// `per_decade` logarithmically spaced frequencies from `f_lo` to `f_hi` \[Hz\], both included.
 pub fn log_grid(f_lo: f64, f_hi: f64, per_decade: usize) -> Vec<f64> {
     let decades = (f_hi / f_lo).log10();
     let n = ((decades * per_decade as f64).round() as usize).max(1);
@@ -120,7 +120,7 @@ pub fn log_grid(f_lo: f64, f_hi: f64, per_decade: usize) -> Vec<f64> {
         .collect()
 }
 
-/// G(j 2π f) on a grid of frequencies f [Hz].
+/// G(j 2π f) on a grid of frequencies f \[Hz\].
 pub fn response(
     sys: &StateSpace,
     freqs: &[f64],
@@ -136,7 +136,7 @@ pub fn response(
 /// linearization's prediction, for one output at one frequency.
 #[derive(Clone, Debug, PartialEq)]
 pub struct SineCheck {
-    /// [Hz]
+    /// \[Hz\]
     pub frequency: f64,
     /// Index into the outputs (h1..h3, tip_x, tip_y, tip_z).
     pub output: usize,
@@ -150,7 +150,7 @@ impl SineCheck {
     pub fn gain_error(&self) -> f64 {
         self.nonlinear.norm() / self.linear.norm() - 1.0
     }
-    /// arg(nonlinear) − arg(linear) [rad], in (−π, π].
+    /// arg(nonlinear) − arg(linear) \[rad\], in (−π, π].
     pub fn phase_error(&self) -> f64 {
         (self.nonlinear / self.linear).arg()
     }
@@ -279,10 +279,10 @@ impl OdeSystem for LinearOde<'_> {
 pub struct StepComparison {
     pub du: [f64; 3],
     pub t: Vec<f64>,
-    /// δy(t) of the linear model [m] (the integration fails only if the linearization is
+    /// δy(t) of the linear model \[m\] (the integration fails only if the linearization is
     /// unstable enough to overflow).
     pub linear: Result<Vec<[f64; 6]>, SimError>,
-    /// δy(t) of the nonlinear model: the run with the step minus the run without it [m]; or
+    /// δy(t) of the nonlinear model: the run with the step minus the run without it \[m\]; or
     /// why the simulation failed (the linear model is reported all the same).
     pub nonlinear: Result<Vec<[f64; 6]>, SimError>,
 }

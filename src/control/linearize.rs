@@ -101,7 +101,7 @@ pub struct Linearization {
     pub point: Point,
     pub casimirs: Casimirs,
     pub notes: Vec<EffectNote>,
-    /// Transport delay of the `delay` effect [s]: the model's inputs are U(t − τ_d), so the
+    /// Transport delay of the `delay` effect \[s\]: the model's inputs are U(t − τ_d), so the
     /// transfer matrix is G(s) e^{−s τ_d}; 0 without the effect.
     pub input_delay: f64,
 }

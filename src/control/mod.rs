@@ -1,4 +1,6 @@
-//! Control design from the model (book/src/control.md, "Control design: `hasel linearize`"): the
+//! Control design from the model: equilibrium, linearization, passivity, reduced models.
+//!
+//! As book/src/control.md, "Control design: `hasel linearize`", describes: the
 //! equilibrium under constant voltages, the linearization with the model's analytic Jacobians, its
 //! port-Hamiltonian structure and passivity, frequency and step responses, and a reduced model for
 //! controller design.
@@ -7,7 +9,7 @@
 //! `simulation` (the nonlinear runs the linear model is compared with), `solver` (the Radau
 //! integrator for the linear step response), `io` and `plot`; never the FMI layers.
 //!
-//! - [`equilibrium`]: Newton on the reduced equations along the invariant curve through the
+//! - [`equilibrium`](mod@equilibrium): Newton on the reduced equations along the invariant curve through the
 //!   rest state, continued in U from 0 V;
 //! - [`linearize`]: A, B, C, D at a point, the eigenvalues (scaled), the zero eigenvalue of
 //!   each actuator's Casimir and the minimal model without it, effects that are not smooth;
@@ -61,9 +63,9 @@ pub enum ControlError {
     NoEquilibrium {
         /// 1-based actuator that limits the branch.
         actuator: usize,
-        /// The requested voltages [V].
+        /// The requested voltages \[V\].
         requested: [f64; 3],
-        /// The voltages at which the branch was last found [V].
+        /// The voltages at which the branch was last found \[V\].
         reached: [f64; 3],
         cause: NoEquilibrium,
     },

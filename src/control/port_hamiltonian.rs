@@ -73,7 +73,7 @@ pub struct PortHamiltonian {
     pub source_gain: [f64; 3],
     /// K_x (3 × n): ga'(θ0_i) U0_i on θ_i.
     pub source_feedback: DMatrix<f64>,
-    /// The voltage port's collocated output δy = C_port δx (y = gᵀ∇H [A]; D_port = 0).
+    /// The voltage port's collocated output δy = C_port δx (y = gᵀ∇H \[A\]; D_port = 0).
     pub port_c: DMatrix<f64>,
     pub checks: Checks,
     pub passivity: Passivity,
@@ -120,22 +120,22 @@ pub struct Checks {
 /// dense grid: the smallest eigenvalue of its Hermitian part.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Passivity {
-    /// The grid [Hz]: ω = 0 and `points` frequencies from `f_min` to `f_max`.
+    /// The grid \[Hz\]: ω = 0 and `points` frequencies from `f_min` to `f_max`.
     pub f_min: f64,
     pub f_max: f64,
     pub points: usize,
-    /// min over the grid of λ_min(G + Gᴴ)/2 [S].
+    /// min over the grid of λ_min(G + Gᴴ)/2 \[S\].
     pub min_hermitian: f64,
-    /// Where it is reached [Hz].
+    /// Where it is reached \[Hz\].
     pub worst_frequency: f64,
-    /// max over the grid of ‖G_port‖ [S], the scale of the check.
+    /// max over the grid of ‖G_port‖ \[S\], the scale of the check.
     pub scale: f64,
     /// Are all eigenvalues of the minimal model in the open left half-plane? (Without that
     /// the frequency-domain test says nothing.)
     pub stable: bool,
     /// stable and min_hermitian ≥ −[`PASSIVITY_TOLERANCE`] · scale.
     pub passive: bool,
-    /// The port's DC conductance G_port(0) per actuator (diagonal) [S].
+    /// The port's DC conductance G_port(0) per actuator (diagonal) \[S\].
     pub dc: Vec<f64>,
 }
 

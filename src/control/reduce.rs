@@ -26,19 +26,19 @@ use super::{ControlError, linalg};
 /// accurately. Their share of the bound, 2 Σ σ_k, is counted all the same.
 const NUMERICAL_ZERO: f64 = 1e-7;
 
-/// The highest frequency of the reported error [Hz].
+/// The highest frequency of the reported error \[Hz\].
 pub const ERROR_BAND: f64 = 100.0;
 
 /// How far the reduced model's frequency response is from the full one.
 #[derive(Clone, Debug, PartialEq)]
 pub struct ResponseError {
-    /// Up to this frequency [Hz] (from ω = 0).
+    /// Up to this frequency \[Hz\] (from ω = 0).
     pub f_max: f64,
     /// max over the band of ‖G(jω) − G_r(jω)‖₂ [m/V].
     pub max_abs: f64,
     /// max_abs / ‖G‖∞.
     pub relative: f64,
-    /// Where it is reached [Hz].
+    /// Where it is reached \[Hz\].
     pub at_frequency: f64,
     /// Per output: max over the band and the inputs of |G_ij − G_r,ij| over max |G_ij|.
     pub per_output: Vec<f64>,

@@ -18,20 +18,20 @@ const WINDOWS: usize = 12;
 pub struct Disagreement {
     pub experiment: String,
     pub channel: Channel,
-    /// Residual (measured − simulated) RMS [m].
+    /// Residual (measured − simulated) RMS \[m\].
     pub rms: f64,
-    /// Measurement noise estimated from the samples' departures from their neighbours [m].
+    /// Measurement noise estimated from the samples' departures from their neighbours \[m\].
     pub noise: f64,
     /// Residual variance beyond the noise, as a fraction of the noise variance (0 at the
     /// noise floor).
     pub excess: f64,
     /// Drive frequency found in U1 [rad/s].
     pub omega: f64,
-    /// Residual amplitude at k·ω, k = 0 (mean) … HARMONICS [m].
+    /// Residual amplitude at k·ω, k = 0 (mean) … HARMONICS \[m\].
     pub harmonics: Vec<f64>,
-    /// Mean residual over the last quarter minus the first quarter [m].
+    /// Mean residual over the last quarter minus the first quarter \[m\].
     pub drift: f64,
-    /// The window of the record where the residual RMS is largest: (start, end) [s], RMS [m].
+    /// The window of the record where the residual RMS is largest: (start, end) \[s\], RMS \[m\].
     pub worst_window: ((f64, f64), f64),
     /// Correlation of the residual with: the other outputs' simulated values, the simulated
     /// velocity, its sign, U² of the own actuator (for heights) or of the sum (tip); and of its
@@ -73,7 +73,7 @@ pub fn outliers(t: &[f64], y: &[f64]) -> Vec<usize> {
 pub struct Outliers {
     pub experiment: String,
     pub channel: Channel,
-    /// When they occurred [s].
+    /// When they occurred \[s\].
     pub times: Vec<f64>,
 }
 
@@ -124,7 +124,7 @@ pub fn drive_frequency(exp: &Experiment) -> f64 {
     std::f64::consts::PI * (crossings.len() - 1) as f64 / span
 }
 
-/// The largest |U_i| commanded in an experiment [V].
+/// The largest |U_i| commanded in an experiment \[V\].
 pub fn peak_command(exp: &Experiment) -> f64 {
     exp.t
         .iter()

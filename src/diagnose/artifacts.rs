@@ -19,7 +19,7 @@ pub struct Artifacts {
     pub outlier_sigmas: (f64, f64),
     /// Share of the rows dropped at random.
     pub dropout_rate: f64,
-    /// Length of one gap in the record [s].
+    /// Length of one gap in the record \[s\].
     pub gap: f64,
     seed: u64,
 }

@@ -137,18 +137,18 @@ pub struct Hidden {
     pub params: Params,
     /// Measurement noise as a fraction of each output's range.
     pub noise: f64,
-    /// A transport delay between command and amplifier that wanders around its mean [s]
+    /// A transport delay between command and amplifier that wanders around its mean \[s\]
     /// (mean, phase of the wander), if any.
     pub wandering_delay: Option<(f64, f64)>,
-    /// Floor vibration: amplitude (fraction of range), frequency [Hz], phase [rad].
+    /// Floor vibration: amplitude (fraction of range), frequency \[Hz\], phase \[rad\].
     pub vibration: Option<(f64, f64, f64)>,
-    /// Supply ripple: relative depth of the gain's modulation, frequency [Hz], phase [rad].
+    /// Supply ripple: relative depth of the gain's modulation, frequency \[Hz\], phase \[rad\].
     pub ripple: Option<(f64, f64, f64)>,
     /// What lab data add on top (`src/diagnose/artifacts.rs`), if any.
     pub artifacts: Option<Artifacts>,
-    /// When the logger starts after the drive [s] (0: the records start at rest).
+    /// When the logger starts after the drive \[s\] (0: the records start at rest).
     pub record_from: f64,
-    /// The sensor's first-order lag [s], where it is set apart from the artifacts' (0: theirs).
+    /// The sensor's first-order lag \[s\], where it is set apart from the artifacts' (0: theirs).
     pub sensor_lag: f64,
     /// The experiments' protocol (the paper's two sines unless drawn).
     pub protocol: Protocol,
@@ -251,7 +251,7 @@ fn planted(
 }
 
 /// Length of the records the generator's cases are drawn for (the benchmark's and the tests'
-/// experiments) [s]: their frequency resolution is 1 / RECORD_S [Hz].
+/// experiments) \[s\]: their frequency resolution is 1 / RECORD_S \[Hz\].
 pub const RECORD_S: f64 = 6.0;
 
 /// Clearance of the floor vibration from every harmonic of either drive frequency, in units of
@@ -453,9 +453,9 @@ pub enum Drive {
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Protocol {
     pub drive: Drive,
-    /// Sample interval [s].
+    /// Sample interval \[s\].
     pub dt: f64,
-    /// Length of each record [s].
+    /// Length of each record \[s\].
     pub length: f64,
     /// Number of records: the estimation one, then the held-out ones.
     pub records: usize,

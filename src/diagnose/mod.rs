@@ -18,7 +18,7 @@
 //!
 //! Among the candidates that pass, the one with the lower BIC is added when it beats the
 //! runner-up by [`BIC_MARGIN`]; within that margin the one with [`MIN_GAIN`] points more of
-//! held-out fit is added ([`decide`]). Effects are added one after another while the next one
+//! held-out fit is added (`decide`). Effects are added one after another while the next one
 //! passes. The verdict is `none` when the re-identified model is at the noise floor,
 //! `ambiguous` when two candidates pass and neither wins by BIC nor by held-out fit,
 //! `unexplained` when the residual is structured but no candidate passes.
@@ -158,7 +158,7 @@ pub struct Refit {
     pub id: Identification,
     /// BIC with the effect minus BIC without it, on the estimation data.
     pub delta_bic: f64,
-    /// Mean gain of fit on held-out data [points].
+    /// Mean gain of fit on held-out data \[points\].
     pub fit_gain: f64,
     /// Share of the held-out gap to the noise floor closed.
     pub gap_closed: f64,
@@ -245,7 +245,7 @@ pub struct Diagnosis {
     pub before: Vec<Disagreement>,
     pub after: Vec<Disagreement>,
     pub rounds: Vec<Round>,
-    /// Wall time per stage [s].
+    /// Wall time per stage \[s\].
     pub timing: Vec<(String, f64)>,
     /// The experiments as diagnosed: without the rows trimmed as outliers, a single record split
     /// in time (its first part, then the whole with that part as its lead-in).
@@ -583,7 +583,7 @@ fn worst_gap_to_floor(held: &[Experiment], id: &Identification) -> f64 {
 /// harmonic and drift).
 #[derive(Clone, Debug)]
 pub struct Remaining {
-    /// Noise-floor fit minus the fit [points].
+    /// Noise-floor fit minus the fit \[points\].
     pub gap: f64,
     pub disagreement: Disagreement,
 }

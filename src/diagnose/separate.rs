@@ -20,7 +20,7 @@ pub const SEPARATES: f64 = 1.0;
 pub struct Exposing {
     /// What to do and why it exposes the effect, in words.
     pub text: &'static str,
-    /// The commanded voltages and the record's length [s].
+    /// The commanded voltages and the record's length \[s\].
     pub input: Input,
     pub t_end: f64,
 }
@@ -31,7 +31,7 @@ fn corners(points: impl Iterator<Item = (f64, f64)>) -> Input {
     Input::sampled(t, u, Interpolation::Linear).expect("increasing corners of finite values")
 }
 
-/// The experiment exposing `effect` (its family's), at commands up to `u` [V].
+/// The experiment exposing `effect` (its family's), at commands up to `u` \[V\].
 pub fn exposing(effect: Effect, u: f64) -> Exposing {
     let sine = |amplitude: f64, omega: f64, phase: f64| Tone {
         amplitude,
@@ -85,9 +85,9 @@ pub struct Separation {
     pub effect: Effect,
     /// The output where the two models' predictions differ most.
     pub channel: Channel,
-    /// RMS of their difference there [m].
+    /// RMS of their difference there \[m\].
     pub difference: f64,
-    /// The measurement noise of that output in the data [m].
+    /// The measurement noise of that output in the data \[m\].
     pub noise: f64,
 }
 

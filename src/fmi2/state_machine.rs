@@ -113,7 +113,7 @@ pub mod allowed {
         | EVENT_MODE
         | CONTINUOUS_TIME_MODE;
     /// `fmi2Set{Real,Integer,Boolean,String}`; which variables depends on the state
-    /// ([`States::set_rule`]).
+    /// (`States::set_rule`).
     pub const SET_VALUES: Mask =
         INSTANTIATED | INITIALIZATION_MODE | STEP_COMPLETE | EVENT_MODE | CONTINUOUS_TIME_MODE;
     /// `fmi2GetDirectionalDerivative`, both interfaces.

@@ -18,7 +18,7 @@ use crate::fmi_common::xml::{
 };
 
 /// The variables of the FMI 3.0 description: the core's table and, unless the table has one,
-/// the independent variable `time` [s] that FMI 3.0 requires (section 2.4.7.4), with the
+/// the independent variable `time` \[s\] that FMI 3.0 requires (section 2.4.7.4), with the
 /// value reference after the table's last.
 pub fn with_time(mut vars: Vec<Variable>) -> Vec<Variable> {
     if vars.iter().all(|v| v.causality != Causality::Independent) {

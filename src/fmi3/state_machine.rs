@@ -108,7 +108,7 @@ pub mod allowed {
         | STEP_DISCARDED
         | TERMINATED
         | ERROR;
-    /// `fmi3Set{Float64,…}`; which variables depends on the state ([`States::set_rule`]).
+    /// `fmi3Set{Float64,…}`; which variables depends on the state (`States::set_rule`).
     pub const SET_VALUES: Mask =
         INSTANTIATED | INITIALIZATION_MODE | EVENT_MODE | CONTINUOUS_TIME_MODE | STEP_MODE;
     pub const DIRECTIONAL_DERIVATIVE: Mask = INITIALIZATION_MODE

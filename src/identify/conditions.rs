@@ -12,7 +12,7 @@ use super::{Error, lm, simulate};
 use crate::model::{Params, Platform};
 use crate::simulation::{SimError, Start};
 
-/// The longest sensor lag taken as the instrument's [s]: one to two samples at 0.5–1 ms, half
+/// The longest sensor lag taken as the instrument's \[s\]: one to two samples at 0.5–1 ms, half
 /// of one at 2 ms. A longer one is a transport delay of the device's own (the `delay` effect,
 /// 8 ms and more), which the diagnosis names: the lag, fitted to a model without it, takes up
 /// to this much of it.
@@ -34,7 +34,7 @@ pub enum StartChoice {
     Rest,
     /// Estimated, whatever the data.
     Estimate,
-    /// Stated: the heights at the first sample [m].
+    /// Stated: the heights at the first sample \[m\].
     Heights([f64; 3]),
     /// As the record's conditions have it (found before: a first fit keeps its start).
     Kept,
@@ -50,7 +50,7 @@ pub enum StartChoice {
 pub enum LagChoice {
     /// Estimated within [0, LAG_MAX].
     Estimate,
-    /// Stated [s].
+    /// Stated \[s\].
     Stated(f64),
     /// As the record's conditions have it.
     Kept,
@@ -79,9 +79,9 @@ pub struct Found {
     pub conditions: Conditions,
     /// How the start was set: "rest", "detected mid-run, estimated", "estimated", "stated".
     pub start_how: &'static str,
-    /// The heights at the first sample the start gives [m].
+    /// The heights at the first sample the start gives \[m\].
     pub heights: [f64; 3],
-    /// Standard error of the lag [s], where it was estimated.
+    /// Standard error of the lag \[s\], where it was estimated.
     pub lag_se: Option<f64>,
 }
 

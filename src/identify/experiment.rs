@@ -73,7 +73,7 @@ pub struct Experiment {
 pub struct Conditions {
     /// The state at the first sample.
     pub start: Start,
-    /// The sensor's lag [s]: sample k holds the outputs at t_k − lag.
+    /// The sensor's lag \[s\]: sample k holds the outputs at t_k − lag.
     pub lag: f64,
 }
 

@@ -135,7 +135,7 @@ Estimated beside the model, as properties of the experiment (a lag within 0–{}
     }
 }
 
-/// The residual (measured − simulated) of channel `c` over time [µm], as dots.
+/// The residual (measured − simulated) of channel `c` over time \[µm\], as dots.
 pub fn residual_series(
     exp: &Experiment,
     c: Channel,

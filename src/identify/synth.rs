@@ -39,7 +39,7 @@ pub struct Spec {
     /// What the actuators receive when it is not the command (a hidden mechanism upstream).
     pub drive: Option<Input>,
     /// A disturbance added to every recorded output, unexplained by the model: amplitude as a
-    /// fraction of the output's range, frequency [Hz], phase [rad].
+    /// fraction of the output's range, frequency \[Hz\], phase \[rad\].
     pub vibration: Option<(f64, f64, f64)>,
     pub params: Params,
     pub t_end: f64,
@@ -51,7 +51,7 @@ pub struct Spec {
     pub columns: Columns,
     pub seed: u64,
     pub rtol: f64,
-    /// When the recording starts [s]: the device is driven from rest at 0, the logger starts
+    /// When the recording starts \[s\]: the device is driven from rest at 0, the logger starts
     /// here (0: a record from rest), and its time column goes on from there.
     pub record_from: f64,
 }
@@ -60,7 +60,7 @@ pub struct Spec {
 /// resolution (quantization) after it.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Sensor {
-    /// Time constant of the sensor's lag [s] (0: none).
+    /// Time constant of the sensor's lag \[s\] (0: none).
     pub lag: f64,
     /// Resolution as a fraction of each output's range (0: none).
     pub quantum: f64,

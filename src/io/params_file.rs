@@ -100,7 +100,7 @@ fn numbers(path: &Path, text: &str) -> Result<Vec<(String, f64, usize)>, FileErr
         .collect()
 }
 
-/// A start file (`--start FILE.toml`): the heights `h1`, `h2`, `h3` [m] at a record's first
+/// A start file (`--start FILE.toml`): the heights `h1`, `h2`, `h3` \[m\] at a record's first
 /// sample, each given, finite and within ±Lv/2 of the parameters `params`.
 pub fn read_heights(path: &Path, params: &Params) -> Result<[f64; 3], FileError> {
     let text = std::fs::read_to_string(path)

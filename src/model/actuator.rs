@@ -84,7 +84,7 @@ pub struct Actuator {
     c2_unzipped: f64,
 }
 
-/// Capacitor voltages at one state [V] and C2 [F], with ∂V2/∂θ [V/rad] and ∂V2/∂l_p [V/m].
+/// Capacitor voltages at one state \[V\] and C2 \[F\], with ∂V2/∂θ [V/rad] and ∂V2/∂l_p [V/m].
 #[derive(Clone, Copy, Debug)]
 pub struct Voltages {
     pub v1: f64,
@@ -226,7 +226,7 @@ impl Actuator {
         })
     }
 
-    /// Electrode capacitance C2(θ, l_p) [F].
+    /// Electrode capacitance C2(θ, l_p) \[F\].
     pub fn c2(&self, theta: f64, l_p: f64) -> Result<f64, DomainError> {
         Ok(self.c2_0 + self.c2_a * Shell::new(theta, l_p, self.lv)?.a_s)
     }
@@ -255,7 +255,7 @@ impl Actuator {
         })
     }
 
-    /// The loop current [A] of the DC circuit at the port voltage u (book/src/model.md,
+    /// The loop current \[A\] of the DC circuit at the port voltage u (book/src/model.md,
     /// "Statics"): with Q̇1 = Q̇2 = 0 the capacitors carry no current, so one current
     /// i = ga(θ) u / (R0 + R1 + R2) runs through the three resistors.
     pub fn dc_current(&self, theta: f64, u: f64) -> f64 {
@@ -263,7 +263,7 @@ impl Actuator {
     }
 
     /// The state at (θ, l_p) at rest (p = 0) with the DC circuit carrying the loop current
-    /// i [A]: V1 = R1 i, V2 = R2 i, so Q1 = C1 R1 i and Q2 = C2(θ, l_p) R2 i.
+    /// i \[A\]: V1 = R1 i, V2 = R2 i, so Q1 = C1 R1 i and Q2 = C2(θ, l_p) R2 i.
     pub fn dc_state(&self, theta: f64, l_p: f64, i: f64) -> Result<[f64; N], DomainError> {
         let (q1, q2) = (
             self.par.c1 * self.par.r1 * i,
@@ -277,7 +277,7 @@ impl Actuator {
         0.5 * self.lv * theta.cos()
     }
 
-    /// Stored energy H [J].
+    /// Stored energy H \[J\].
     pub fn energy(&self, x: &[f64]) -> Result<f64, DomainError> {
         let e = self.eval(x)?;
         let dl = x[L_P] - self.lp;
@@ -414,13 +414,13 @@ impl Actuator {
         Ok(c)
     }
 
-    /// Port output y = G0 ga(θ) (Q1/C1 + Q2/C2) [A]; y·U is the supplied power.
+    /// Port output y = G0 ga(θ) (Q1/C1 + Q2/C2) \[A\]; y·U is the supplied power.
     pub fn port_output(&self, x: &[f64]) -> Result<f64, DomainError> {
         let e = self.eval(x)?;
         Ok(self.g0 * self.ga(x[THETA]) * (e.v1 + e.v2))
     }
 
-    /// Dissipated power b ω² + G0 (V1+V2)² + G1 V1² + G2 V2² [W].
+    /// Dissipated power b ω² + G0 (V1+V2)² + G1 V1² + G2 V2² \[W\].
     pub fn dissipation(&self, x: &[f64]) -> Result<f64, DomainError> {
         let e = self.eval(x)?;
         let vs = e.v1 + e.v2;
@@ -440,7 +440,7 @@ impl Actuator {
             - self.par.b * e.omega * e.omega)
     }
 
-    /// Actuator height h = ½ Lv sin θ [m] (the prismatic joint).
+    /// Actuator height h = ½ Lv sin θ \[m\] (the prismatic joint).
     pub fn height(&self, theta: f64) -> f64 {
         0.5 * self.lv * theta.sin()
     }

@@ -9,9 +9,9 @@ use super::params::Params;
 /// Anchor points and antenna length of the platform.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Kinematics {
-    /// (X_i, Y_i) of the anchors [m].
+    /// (X_i, Y_i) of the anchors \[m\].
     pub anchors: [[f64; 2]; 3],
-    /// Antenna length L [m].
+    /// Antenna length L \[m\].
     pub length: f64,
 }
 
@@ -34,7 +34,7 @@ pub enum Inverse {
     ClosedForm,
     /// Newton on the FKM: [`Kinematics::heights`].
     Exact,
-    /// From the tip's X and Y and the mean height h̄ [m]: [`Kinematics::heights_from_xy`].
+    /// From the tip's X and Y and the mean height h̄ \[m\]: [`Kinematics::heights_from_xy`].
     Xy { mean_height: f64 },
 }
 
@@ -109,7 +109,7 @@ impl Kinematics {
             .map(|a| c_p.z - (n.x * (a[0] - c_p.x) + n.y * (a[1] - c_p.y)) / n.z)
     }
 
-    /// The heights [m] that put the tip at `tip` [m] by `method` (the XY inverse reads only
+    /// The heights \[m\] that put the tip at `tip` \[m\] by `method` (the XY inverse reads only
     /// the tip's X and Y).
     pub fn inverse(&self, method: Inverse, tip: [f64; 3]) -> Result<[f64; 3], IkmError> {
         match method {

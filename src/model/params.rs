@@ -1,7 +1,7 @@
 //! The model's parameters: one struct, one flat name table, validated in one place.
 //!
 //! Every parameter has a flat name (`Kb_1`, `Lp`, …) shared by the parameter files, the FMU
-//! variables and the identification reports. The table [`PARAMETERS`] is the single source of
+//! variables and the identification reports. The table `PARAMETERS` is the single source of
 //! truth for names, units, descriptions, the validation rule and how to read and write each value.
 
 use std::fmt;
@@ -18,13 +18,13 @@ pub struct ActuatorParams {
     pub kb: f64,
     /// Rotational damping b [N m s/rad, as identified with I = Lv m / 24].
     pub b: f64,
-    /// Source resistance R0 [Ω].
+    /// Source resistance R0 \[Ω\].
     pub r0: f64,
-    /// Leak resistance R1 of the retention capacitor [Ω].
+    /// Leak resistance R1 of the retention capacitor \[Ω\].
     pub r1: f64,
-    /// Leak resistance R2 of the electrode capacitor [Ω].
+    /// Leak resistance R2 of the electrode capacitor \[Ω\].
     pub r2: f64,
-    /// Retention capacitance C1 [F].
+    /// Retention capacitance C1 \[F\].
     pub c1: f64,
     /// Input gain γ1 [–] of ga(θ) = γ1 cos(γ2 θ).
     pub gamma1: f64,
@@ -37,33 +37,33 @@ pub struct ActuatorParams {
 #[derive(Clone, Debug, PartialEq)]
 pub struct Params {
     pub act: [ActuatorParams; 3],
-    /// Rest length of the top film Lp [m].
+    /// Rest length of the top film Lp \[m\].
     pub lp: f64,
-    /// Length of the lateral (shell) film Lv [m].
+    /// Length of the lateral (shell) film Lv \[m\].
     pub lv: f64,
-    /// Electrode length Le [m].
+    /// Electrode length Le \[m\].
     pub le: f64,
-    /// Liquid gap height at the unzipped part Xh [m].
+    /// Liquid gap height at the unzipped part Xh \[m\].
     pub xh: f64,
-    /// Moving mass m [kg].
+    /// Moving mass m \[kg\].
     pub m: f64,
     /// Relative permittivity εr [–].
     pub eps_r: f64,
     /// Vacuum permittivity ε0 [F/m].
     pub eps0: f64,
-    /// Actuator width w [m].
+    /// Actuator width w \[m\].
     pub w: f64,
-    /// Film thickness t [m].
+    /// Film thickness t \[m\].
     pub t_film: f64,
     /// Gravity g [m/s²].
     pub g: f64,
-    /// Constant liquid area A_T [m²].
+    /// Constant liquid area A_T \[m²\].
     pub a_t: f64,
-    /// Radius of the anchor circle [m].
+    /// Radius of the anchor circle \[m\].
     pub anchor_radius: f64,
-    /// Anchor angles of actuators 1, 2, 3 [rad].
+    /// Anchor angles of actuators 1, 2, 3 \[rad\].
     pub anchor_angle: [f64; 3],
-    /// Antenna length L [m].
+    /// Antenna length L \[m\].
     pub antenna_length: f64,
     /// The effect library's parameters (neutral by default).
     pub effects: EffectParams,

@@ -230,7 +230,7 @@ impl Platform {
         }
     }
 
-    /// ẋ = f(x, U) of this model (of the full one: [`Platform::full_rhs`]).
+    /// ẋ = f(x, U) of this model (of the full one: `Platform::full_rhs`).
     pub fn rhs(&self, x: &[f64], u: [f64; 3], dx: &mut [f64]) -> Result<(), ModelError> {
         self.per_model(
             dx,
@@ -369,7 +369,7 @@ impl Platform {
         Ok(())
     }
 
-    /// The outputs y = (h1, h2, h3, tip_x, tip_y, tip_z) [m], as the FMU's.
+    /// The outputs y = (h1, h2, h3, tip_x, tip_y, tip_z) \[m\], as the FMU's.
     pub fn outputs(&self, x: &[f64]) -> [f64; 6] {
         let h = self.heights(x);
         let tip = self.kinematics.tip(h);
@@ -414,7 +414,7 @@ impl Platform {
         [[0.0; 3]; 6]
     }
 
-    /// The voltage each actuator's port receives for the commands `u` at state `x` [V]: U
+    /// The voltage each actuator's port receives for the commands `u` at state `x` \[V\]: U
     /// itself, or after the amplifier's lag and clipping when those effects are on.
     pub fn port_voltages(&self, x: &[f64], u: [f64; 3]) -> [f64; 3] {
         // the port reads the effect states only, which every model keeps after its own
@@ -600,17 +600,17 @@ impl Platform {
             .collect()
     }
 
-    /// Actuator heights h_i = ½ Lv sin θ_i [m].
+    /// Actuator heights h_i = ½ Lv sin θ_i \[m\].
     pub fn heights(&self, x: &[f64]) -> [f64; 3] {
         [0, 1, 2].map(|i| self.actuators[i].height(self.block(x, i)[actuator::THETA]))
     }
 
-    /// Antenna tip from the FKM [m].
+    /// Antenna tip from the FKM \[m\].
     pub fn tip(&self, x: &[f64]) -> [f64; 3] {
         self.kinematics.tip(self.heights(x))
     }
 
-    /// Stored energy H [J] of this model, the effects' terms included.
+    /// Stored energy H \[J\] of this model, the effects' terms included.
     pub fn energy(&self, x: &[f64]) -> Result<f64, ModelError> {
         self.per_model(x, Self::full_energy, Self::reduced_energy)
     }
@@ -624,7 +624,7 @@ impl Platform {
         Ok(own + self.terms.energy(&self.refs(), xs))
     }
 
-    /// Power supplied to this model [W]: of the full one, through the electrical ports at the
+    /// Power supplied to this model \[W\]: of the full one, through the electrical ports at the
     /// voltages they receive.
     pub fn supplied_power(&self, x: &[f64], u: [f64; 3]) -> Result<f64, ModelError> {
         self.per_model(
@@ -647,14 +647,14 @@ impl Platform {
             .sum())
     }
 
-    /// Dissipated power at state `x` with the commands at 0 [W]: of the full model, its
+    /// Dissipated power at state `x` with the commands at 0 \[W\]: of the full model, its
     /// dissipated power at `x` whatever the command (see [`Platform::dissipated_power_at`]).
     pub fn dissipated_power(&self, x: &[f64]) -> Result<f64, ModelError> {
         self.dissipated_power_at(x, [0.0; 3])
     }
 
     /// Dissipated power at state `x` under the commands `u`, the effects' dashpots, resistors
-    /// and hysteretic work included [W]. Only a reduced model's depends on `u`: its
+    /// and hysteretic work included \[W\]. Only a reduced model's depends on `u`: its
     /// quasi-static charges (and momentum) follow the command.
     pub fn dissipated_power_at(&self, x: &[f64], u: [f64; 3]) -> Result<f64, ModelError> {
         self.per_model(x, Self::full_dissipated_power, |m, x| {
@@ -672,7 +672,7 @@ impl Platform {
             .sum())
     }
 
-    /// dH/dt along the flow with the large electrical terms cancelled analytically [W].
+    /// dH/dt along the flow with the large electrical terms cancelled analytically \[W\].
     pub fn stored_power(&self, x: &[f64], u: [f64; 3]) -> Result<f64, ModelError> {
         self.per_model(
             x,

@@ -15,19 +15,19 @@
 //! - **quasi-static** (`z` = θ, l_p, p and the effects' states; F = Q1, Q2): the circuit's rows
 //!   (G0+G1) V1 + G0 V2 = G0 ga U, G0 V1 + (G0+G2) V2 = G0 ga U give the DC circuit of
 //!   model.md, "Statics": V1 = R1 i, V2 = R2 i, i = ga(θ) U / (R0 + R1 + R2)
-//!   ([`Actuator::dc_state`]); the mechanics feel the electrostatic force of that V2.
+//!   (`Actuator::dc_state`); the mechanics feel the electrostatic force of that V2.
 //! - **slow** (`z` = θ and the effects' states; F = p, Q1, Q2; l_p on the invariant curve):
 //!   ṗ = 0 is the force balance ∂H/∂θ + d ∂H/∂l_p + b ω = 0 (model.md, "Dynamics"), so
 //!   θ̇ = ω = −(∂H/∂θ + d ∂H/∂l_p) / b: the energy's gradient along the curve over the damping.
-//!   l̇_p = d θ̇ keeps (θ, l_p) on the curve through (0, Lp) ([`Actuator::l_p_on_curve`],
+//!   l̇_p = d θ̇ keeps (θ, l_p) on the curve through (0, Lp) (`Actuator::l_p_on_curve`,
 //!   model.md, "Initial state"), so l_p = L(θ) is no state.
 //!   Without effects the lift's charges give V2 = R2 i, so θ̇ = a(θ) + b(θ) U² comes from the
-//!   geometry along the curve alone ([`Actuator::slow_rate`]), tabulated with the curve: one
+//!   geometry along the curve alone (`Actuator::slow_rate`), tabulated with the curve: one
 //!   interpolation per actuator, not the lift's three geometries.
 //!
 //! With effects the drift stage and the clipping change the circuit's rows and the effects'
 //! torques the force balance; the fast states are then the root of the same rows of the full
-//! f by Newton ([`Platform::settle`]), from the DC circuit's values. The effects' states relax
+//! f by Newton (`Platform::settle`), from the DC circuit's values. The effects' states relax
 //! on the slow time scale or slower and stay states.
 //!
 //! **Jacobian.** With T = dx/dz (the identity on z, dL/dθ = d(θ, L) for l_p on the curve, and

@@ -111,7 +111,7 @@ impl Shell {
         })
     }
 
-    /// δ1 [rad].
+    /// δ1 \[rad\].
     pub fn delta1(&self) -> f64 {
         self.sin_d.atan2(self.cos_d)
     }

@@ -96,7 +96,7 @@ fn voltage_at(a: &Actuator, theta: f64, height: f64) -> Result<f64, Unreachable>
     Ok(v2_squared.sqrt() * (par.r0 + par.r1 + par.r2) / (par.r2 * a.ga(theta)))
 }
 
-/// The voltage [V] that holds actuator `a` at the height `h` [m] at equilibrium, on a stable
+/// The voltage \[V\] that holds actuator `a` at the height `h` \[m\] at equilibrium, on a stable
 /// branch: h = ½ Lv sin θ (model.md, "Shell geometry and C2") gives θ; the equilibrium is
 /// stable where the stiffness along the curve −∂ṗ/∂θ at fixed U is positive, i.e. where the
 /// holding voltage grows with θ (∂ṗ/∂U > 0), checked over a step of `STABILITY_PROBE` θ*.
@@ -115,7 +115,7 @@ pub fn holding_voltage(a: &Actuator, lv: f64, h: f64) -> Result<f64, Unreachable
     }
 }
 
-/// The voltages that hold the three actuators of `model` at `heights` [m] at equilibrium.
+/// The voltages that hold the three actuators of `model` at `heights` \[m\] at equilibrium.
 pub fn holding_voltages(model: &Platform, heights: [f64; 3]) -> Result<[f64; 3], StaticsError> {
     let active = model.params().effects.active();
     if !active.is_empty() {
@@ -141,7 +141,7 @@ pub enum FeedforwardError {
     Statics(#[from] StaticsError),
 }
 
-/// The heights [m] that put the tip at `tip` [m] by `method`, and the constant voltages [V]
+/// The heights \[m\] that put the tip at `tip` \[m\] by `method`, and the constant voltages \[V\]
 /// that hold them at equilibrium: the feedforward of a tip path.
 pub fn feedforward(
     model: &Platform,

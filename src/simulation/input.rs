@@ -35,7 +35,7 @@ pub enum Interpolation {
     Measured,
 }
 
-/// A change between two samples of a measured command is a step when it exceeds this [V]…
+/// A change between two samples of a measured command is a step when it exceeds this \[V\]…
 pub const STEP_MIN: f64 = 0.5;
 /// …and this many times the changes before and after it.
 pub const STEP_RATIO: f64 = 4.0;
@@ -77,7 +77,7 @@ pub struct Samples {
     steps: Vec<usize>,
 }
 
-/// The three actuator voltages over time [V].
+/// The three actuator voltages over time \[V\].
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub enum Input {
     /// Per actuator: offset + Σ tones (sine, offset sine and multisine are all of this form).

@@ -270,7 +270,7 @@ trait Observer {
     fn sampled(&mut self, sample: &Sample, x: &[f64]);
 }
 
-/// The outputs at one instant: heights h_i and the antenna tip [m].
+/// The outputs at one instant: heights h_i and the antenna tip \[m\].
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Sample {
     pub t: f64,
@@ -293,7 +293,7 @@ impl Sample {
     }
 }
 
-/// The largest differences |Δh| and |Δtip| [m] between two runs' samples from time `from` on,
+/// The largest differences |Δh| and |Δtip| \[m\] between two runs' samples from time `from` on,
 /// sample by sample (the runs sampled at the same times): how far one model is from another.
 pub fn largest_difference(a: &[Sample], b: &[Sample], from: f64) -> (f64, f64) {
     let (mut dh, mut dtip): (f64, f64) = (0.0, 0.0);
@@ -318,7 +318,7 @@ pub enum Start {
     /// The rest state at U = 0, the command 0 before the run.
     Rest,
     /// Mid-run, on the slow manifold at the run's first command, which held before the run
-    /// ([`Platform::settled_state`]): the actuators at angles `theta` [rad], the effects'
+    /// ([`Platform::settled_state`]): the actuators at angles `theta` \[rad\], the effects'
     /// states at `slow` (each actuator's in block order), settled with the charges where
     /// `slow` does not give them all.
     Settled { theta: [f64; 3], slow: Vec<f64> },
@@ -366,8 +366,8 @@ impl Simulator {
 
     /// Starts at `start` at `t0`, where `input` begins: from rest (the command 0 before), or
     /// mid-run, where what a transport delay replays first is the command before `t0`: the
-    /// trend of its first samples continued back over [`PRE_RUN`] in held steps of
-    /// [`PRE_RUN_STEP`], its first value before that.
+    /// trend of its first samples continued back over `PRE_RUN` in held steps of
+    /// `PRE_RUN_STEP`, its first value before that.
     pub fn starting(
         model: Platform,
         start: &Start,

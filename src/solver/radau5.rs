@@ -150,7 +150,7 @@ pub struct Radau5 {
     rtol_int: f64,
     atol_int: Vec<f64>,
     fnewt: f64,
-    /// Largest step size [s].
+    /// Largest step size \[s\].
     pub h_max: f64,
     /// Most steps one call to [`Radau5::advance`] may take.
     pub max_steps: usize,
@@ -312,7 +312,7 @@ impl Radau5 {
     /// Jacobian carry over (the solution is continuous, the simplified Newton iteration
     /// tolerates an approximate Jacobian, and the error control shrinks the step if the jump
     /// needs it); the next step's Newton starting values add the stages' linear response to
-    /// the jump of f ([`Radau5::predict_jump`]).
+    /// the jump of f (`Radau5::predict_jump`).
     pub fn restart<S: OdeSystem>(&mut self, sys: &S) -> Result<(), SolverError> {
         sys.rhs(self.t, &self.y, &mut self.work)
             .map_err(at(self.t))?;

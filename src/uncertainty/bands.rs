@@ -31,7 +31,7 @@ pub struct Settings {
     /// Worker threads (at least 1).
     pub threads: usize,
     pub t_end: f64,
-    /// Output interval [s].
+    /// Output interval \[s\].
     pub dt: f64,
     pub rtol: f64,
 }

@@ -15,9 +15,9 @@ use crate::model::shell::DomainError;
 /// The amplifier's dynamics: a first stage of rate law r, and a second linear stage after it.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct AmplifierLag {
-    /// τ_a [s]: the first stage's time constant for small errors; 0 is an ideal amplifier.
+    /// τ_a \[s\]: the first stage's time constant for small errors; 0 is an ideal amplifier.
     pub tau_a: f64,
-    /// τ_a2 [s] of a second stage after the first; 0 (the default) is none.
+    /// τ_a2 \[s\] of a second stage after the first; 0 (the default) is none.
     pub tau_a2: f64,
     /// The first stage's slew rate S [V/s]: r(e) = S tanh(e / (S τ_a)); 0 is no limit, linear.
     pub slew: f64,

@@ -61,20 +61,20 @@ const SPREAD_STAGE: usize = SECOND_TRAP_STAGE + 1;
 /// for synthetic data, at any times.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ChargeDrift {
-    /// R3 [Ω] of the series stage; 0 switches it off.
+    /// R3 \[Ω\] of the series stage; 0 switches it off.
     pub r3: f64,
-    /// τ3 = R3 C3 [s].
+    /// τ3 = R3 C3 \[s\].
     pub tau3: f64,
-    /// C3 [F] of an absorption branch (sites other than `Series`); 0 switches it off.
+    /// C3 \[F\] of an absorption branch (sites other than `Series`); 0 switches it off.
     pub c3: f64,
     pub site: DriftSite,
     /// Only for synthetic data (series site): true splits the stage into two traps in series,
     /// (R3/2, τ3/3) and (R3/2, 3 τ3): a spread of trapping times.
     pub two_stages: bool,
-    /// The spectrum: the capacitance C_b [F] of the absorption branch across the film at each
+    /// The spectrum: the capacitance C_b \[F\] of the absorption branch across the film at each
     /// time of [`GRID`].
     pub grid: [f64; 6],
-    /// Absorption branches across the film at any times (weight C_b [F]), for synthetic data
+    /// Absorption branches across the film at any times (weight C_b \[F\]), for synthetic data
     /// only (no row of the table reaches them): a kernel the grid does not contain.
     pub spread: [Branch; SPREAD],
 }

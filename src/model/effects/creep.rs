@@ -27,7 +27,7 @@ pub const GRID_NAMES: [&str; 6] = [
 pub struct Creep {
     /// k_v [N m/rad] of the branch at the free time; 0 switches it off.
     pub k_v: f64,
-    /// τ_v = η / k_v [s].
+    /// τ_v = η / k_v \[s\].
     pub tau_v: f64,
     /// The spectrum: the weight k [N m/rad] of the branch at each time of [`GRID`].
     pub grid: [f64; 6],

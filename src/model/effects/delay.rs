@@ -11,11 +11,11 @@ use crate::model::params::common_rows;
 /// holds the input history. Before the first command has arrived the actuator sees U = 0.
 #[derive(Clone, Copy, Debug, PartialEq, Default)]
 pub struct Delay {
-    /// τ_d [s].
+    /// τ_d \[s\].
     pub tau_d: f64,
 }
 
-/// Relative wander of the hidden transport delay, and its frequency [Hz].
+/// Relative wander of the hidden transport delay, and its frequency \[Hz\].
 pub const WANDER: f64 = 0.05;
 pub const WANDER_HZ: f64 = 0.37;
 

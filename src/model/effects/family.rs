@@ -46,7 +46,7 @@ pub struct Family {
     pub delays_the_command: bool,
     /// What the neutral value of the family's magnitude is, for its confidence interval.
     pub magnitude: Magnitude,
-    /// The screening probes of every form, at the model `params` and the peak command [V]
+    /// The screening probes of every form, at the model `params` and the peak command \[V\]
     /// (book/src/diagnose.md, "Screening").
     pub probes: fn(&Params, f64) -> Vec<Probe>,
     /// The experiment that exposes the family (book/src/diagnose.md, "The decision rule").
@@ -56,8 +56,8 @@ pub struct Family {
     /// Further hidden forms, by name (their names are hidden cases of the CLI).
     pub variants: &'static [(&'static str, Plant)],
     /// The family's fitted law at the model `params`, drawn over commands up to the peak
-    /// command [V] where its variable is the command (book/src/diagnose.md, "The fitted
-    /// law"); `None` for a family whose forms are its textbook terms ([`no_law`]) and for a
+    /// command \[V\] where its variable is the command (book/src/diagnose.md, "The fitted
+    /// law"); `None` for a family whose forms are its textbook terms (`no_law`) and for a
     /// form of the family the law does not describe (charge_drift's series stage).
     pub law: fn(&Params, f64) -> Option<FittedLaw>,
 }
@@ -80,7 +80,7 @@ pub struct FittedLaw {
     pub distance: &'static str,
     /// The textbook forms fitted to the law, fewest parameters first.
     pub textbook: Vec<Textbook>,
-    /// The one the law is nearest to: an index into `textbook` (see [`nearest`]).
+    /// The one the law is nearest to: an index into `textbook` (see `nearest`).
     pub nearest: usize,
 }
 
@@ -204,20 +204,20 @@ pub struct Exposing {
     /// What to do and why it exposes the family, in words.
     pub text: &'static str,
     pub drive: Drive,
-    /// The record's length [s].
+    /// The record's length \[s\].
     pub t_end: f64,
 }
 
 /// A command of an exposing experiment, scaled to the peak command U.
 pub enum Drive {
-    /// Piecewise linear through (t [s], share of U) corners, the same on every actuator.
+    /// Piecewise linear through (t \[s\], share of U) corners, the same on every actuator.
     Corners(&'static [(f64, f64)]),
     /// A sine of amplitude U at ω [rad/s] on the first actuator alone.
     Alone { omega: f64 },
     /// On every actuator, tones at these ω [rad/s], each of amplitude U/4, at the paper's
     /// phase of the actuator plus the tone's index.
     Multisine(&'static [f64]),
-    /// A sine at ω [rad/s] on every actuator, of amplitude U/2 before `switch` [s] and U after.
+    /// A sine at ω [rad/s] on every actuator, of amplitude U/2 before `switch` \[s\] and U after.
     Levels { omega: f64, switch: f64 },
 }
 
@@ -229,7 +229,7 @@ pub struct Planted {
     /// The mechanism and its values, in words.
     pub text: String,
     /// A transport delay the data generator applies to the command, wandering around its mean
-    /// as no parameter can: (mean [s], phase of the wander).
+    /// as no parameter can: (mean \[s\], phase of the wander).
     pub wandering_delay: Option<(f64, f64)>,
 }
 

@@ -22,7 +22,7 @@ pub enum HysteresisLaw {
     Dahl,
 }
 
-/// The plays' saturation angles [rad]: from what the paper's strokes (tens of mrad) show as a
+/// The plays' saturation angles \[rad\]: from what the paper's strokes (tens of mrad) show as a
 /// sharp corner to a loop as wide as the stroke, two per factor of four.
 pub const GRID: [f64; 5] = [0.5e-3, 1e-3, 2e-3, 4e-3, 8e-3];
 
@@ -38,7 +38,7 @@ const GRID_NAMES: [&str; 5] = [
 /// Elements at any angle, for synthetic data.
 const SPREAD: usize = 8;
 
-/// One hysteretic element: stiffness k [N m/rad] (0: off), saturation angle θ [rad].
+/// One hysteretic element: stiffness k [N m/rad] (0: off), saturation angle θ \[rad\].
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Element {
     pub k: f64,
@@ -49,7 +49,7 @@ pub struct Element {
 pub struct Hysteresis {
     /// k_h [N m/rad]: the torque −k_h z of the element at the free angle.
     pub k_h: f64,
-    /// θ_h [rad]: the angle where that element's state saturates.
+    /// θ_h \[rad\]: the angle where that element's state saturates.
     pub theta_h: f64,
     /// The plays: the weight k [N m/rad] of the element at each angle of [`GRID`].
     pub grid: [f64; 5],

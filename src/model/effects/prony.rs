@@ -10,14 +10,14 @@ use nalgebra::{DMatrix, DVector};
 use super::family::{self, nonnegative_least_squares};
 use super::{FittedLaw, Textbook, log_between};
 
-/// The spectrum's relaxation times [s]: from what 1 ms samples of a 1–2 Hz drive resolve to
+/// The spectrum's relaxation times \[s\]: from what 1 ms samples of a 1–2 Hz drive resolve to
 /// what a 3–20 s record still sees relax, about two per decade.
 pub const GRID: [f64; 6] = [0.03, 0.1, 0.3, 1.0, 3.0, 10.0];
 
 /// Branches at any time, for synthetic data.
 pub const SPREAD: usize = 16;
 
-/// One branch of a series: weight w ≥ 0 (0: off), relaxation time τ [s].
+/// One branch of a series: weight w ≥ 0 (0: off), relaxation time τ \[s\].
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Branch {
     pub weight: f64,
@@ -127,8 +127,8 @@ const WINDOW: (f64, f64) = (0.01, 20.0);
 
 /// A spectrum `points` (τ_b, w_b) with the textbook kernel it is nearest (effects.md, "Prony
 /// series", "The fitted law"): each kernel fitted to the spectrum's relaxation
-/// G(t) = Σ w_b exp(−t/τ_b) over [`WINDOW`], the distance the RMS difference relative to G at
-/// the window's start; the nearest as [`family::nearest`] names it.
+/// G(t) = Σ w_b exp(−t/τ_b) over `WINDOW`, the distance the RMS difference relative to G at
+/// the window's start; the nearest as `family::nearest` names it.
 pub fn law(mut points: Vec<(f64, f64)>, what: String, weight: &Weight) -> FittedLaw {
     points.sort_by(|a, b| a.0.total_cmp(&b.0));
     let t = log_times(WINDOW.0, WINDOW.1, 60);

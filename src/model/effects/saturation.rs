@@ -13,13 +13,13 @@ use crate::model::params::common_rows;
 /// The amplifier's static output map.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Saturation {
-    /// The limit of the positive side U_max [V]; +∞ is no clipping.
+    /// The limit of the positive side U_max \[V\]; +∞ is no clipping.
     pub u_max: f64,
-    /// The limit of the negative side, −U_max_neg [V]; +∞: −U_max (symmetric).
+    /// The limit of the negative side, −U_max_neg \[V\]; +∞: −U_max (symmetric).
     pub u_max_neg: f64,
-    /// Softness s of the knee [1]: the Rapp curve of exponent 1/s; 0 is the hard clamp.
+    /// Softness s of the knee \[1\]: the Rapp curve of exponent 1/s; 0 is the hard clamp.
     pub knee: f64,
-    /// Dead zone [V]: commands within ±U_dead give 0, beyond it the map starts from 0.
+    /// Dead zone \[V\]: commands within ±U_dead give 0, beyond it the map starts from 0.
     pub u_dead: f64,
     /// For synthetic data only (no row of the table): when > 0, the knee is instead linear up
     /// to (1 − w) of the limit, then a tanh of width w into it (an output stage that
@@ -63,7 +63,7 @@ impl Saturation {
         self.u_max > 0.0 || self.u_max_neg > 0.0 || self.u_dead > 0.0
     }
 
-    /// The limit of the negative side [V] (positive).
+    /// The limit of the negative side \[V\] (positive).
     pub fn negative_limit(&self) -> f64 {
         if self.u_max_neg > 0.0 {
             self.u_max_neg

@@ -86,7 +86,7 @@ impl States {
 /// The voltage at an actuator's port.
 #[derive(Clone, Copy)]
 pub struct Port {
-    /// Voltage at the actuator's port after the input path's stages [V].
+    /// Voltage at the actuator's port after the input path's stages \[V\].
     pub u_eff: f64,
     /// ∂u_eff / ∂(what the port reads: `column`, or the command U).
     pub slope: f64,
@@ -170,17 +170,17 @@ pub trait Law: Sized {
     /// Adds the family's entries of ∂ẋ/∂U beyond the port's.
     fn add_input_jacobian(&self, _at: &At, _add: &mut impl FnMut(usize, f64)) {}
 
-    /// Energy stored in the family's terms [J], all actuators.
+    /// Energy stored in the family's terms \[J\], all actuators.
     fn energy(&self, _a: &[&Actuator; 3], _x: [&[f64]; 3]) -> f64 {
         0.0
     }
 
-    /// Power at actuator i's port beyond the actuator's own y·u_eff [W].
+    /// Power at actuator i's port beyond the actuator's own y·u_eff \[W\].
     fn port_power(&self, _at: &At) -> f64 {
         0.0
     }
 
-    /// Dissipation of actuator i beyond the actuator's own [W].
+    /// Dissipation of actuator i beyond the actuator's own \[W\].
     fn dissipation(&self, _act: &Actuator, _xi: &[f64]) -> Result<f64, DomainError> {
         Ok(0.0)
     }
@@ -336,17 +336,17 @@ impl Terms {
         self.laws.add_input_jacobian(&at, &mut add);
     }
 
-    /// Energy stored in the terms [J].
+    /// Energy stored in the terms \[J\].
     pub fn energy(&self, a: &[&Actuator; 3], x: [&[f64]; 3]) -> f64 {
         self.laws.energy(a, x)
     }
 
-    /// Extra power at actuator i's port beyond the actuator's own y·u_eff [W].
+    /// Extra power at actuator i's port beyond the actuator's own y·u_eff \[W\].
     pub fn port_power(&self, a: &[&Actuator; 3], x: [&[f64]; 3], u: f64, i: usize) -> f64 {
         self.laws.port_power(&self.at(a, x, u, i))
     }
 
-    /// Extra dissipation of actuator i beyond the actuator's own [W].
+    /// Extra dissipation of actuator i beyond the actuator's own \[W\].
     pub fn dissipation(&self, act: &Actuator, xi: &[f64]) -> Result<f64, DomainError> {
         self.laws.dissipation(act, xi)
     }
