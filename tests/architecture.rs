@@ -440,7 +440,9 @@ fn purpose(room: &str) -> String {
     let mut rest = doc.as_str();
     while let Some(at) = rest.find("](") {
         plain.push_str(&rest[..at]);
-        rest = rest[at + 2..].split_once(')').map_or("", |(_, after)| after);
+        rest = rest[at + 2..]
+            .split_once(')')
+            .map_or("", |(_, after)| after);
     }
     plain.push_str(rest);
     let plain = plain.replace(['[', ']'], "");

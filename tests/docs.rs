@@ -81,7 +81,13 @@ fn links(md: &str) -> Vec<String> {
         while let Some(at) = rest.find("](") {
             rest = &rest[at + 2..];
             if let Some(end) = rest.find(')') {
-                out.push(rest[..end].split_whitespace().next().unwrap_or("").to_string());
+                out.push(
+                    rest[..end]
+                        .split_whitespace()
+                        .next()
+                        .unwrap_or("")
+                        .to_string(),
+                );
                 rest = &rest[end..];
             }
         }
@@ -141,7 +147,10 @@ fn every_chapter_is_in_the_summary() {
         .into_keys()
         .filter(|name| name != "SUMMARY.md" && !listed.contains(name))
         .collect();
-    assert!(missing.is_empty(), "chapters not in SUMMARY.md: {missing:?}");
+    assert!(
+        missing.is_empty(),
+        "chapters not in SUMMARY.md: {missing:?}"
+    );
 }
 
 /// The text of a source file with its lines joined and comment marks taken off, so that a
@@ -164,7 +173,10 @@ fn joined(text: &str) -> String {
 /// `[NAME.md](…), "Section"` included), as the cited file name and the section.
 fn citations(text: &str) -> Vec<(String, String)> {
     let mut out = Vec::new();
-    for (at, _) in text.match_indices(".md").chain(text.match_indices("README")) {
+    for (at, _) in text
+        .match_indices(".md")
+        .chain(text.match_indices("README"))
+    {
         let end = if text[at..].starts_with(".md") {
             at + 3
         } else {
@@ -181,10 +193,13 @@ fn citations(text: &str) -> Vec<(String, String)> {
         }
         let rest = rest.strip_prefix(')').unwrap_or(rest);
         let rest = rest.strip_prefix(',').unwrap_or(rest).trim_start();
-        if let Some(quoted) = rest.strip_prefix('"') {
-            if let Some((section, _)) = quoted.split_once('"') {
-                out.push((name, section.split_whitespace().collect::<Vec<_>>().join(" ")));
-            }
+        if let Some(quoted) = rest.strip_prefix('"')
+            && let Some((section, _)) = quoted.split_once('"')
+        {
+            out.push((
+                name,
+                section.split_whitespace().collect::<Vec<_>>().join(" "),
+            ));
         }
     }
     out
@@ -197,7 +212,8 @@ fn citing_files() -> Vec<PathBuf> {
             let path = entry.unwrap().path();
             let name = path.file_name().unwrap().to_string_lossy().to_string();
             if path.is_dir() {
-                if !["target", "corpus", "artifacts", "html", "__pycache__"].contains(&name.as_str())
+                if !["target", "corpus", "artifacts", "html", "__pycache__"]
+                    .contains(&name.as_str())
                 {
                     walk(&path, out);
                 }
@@ -258,8 +274,15 @@ fn every_cited_section_exists() {
             }
         }
     }
-    assert!(count > 100, "only {count} citations found: the reader of them is broken");
-    assert!(wrong.is_empty(), "cited sections that do not exist:\n{}", wrong.join("\n"));
+    assert!(
+        count > 100,
+        "only {count} citations found: the reader of them is broken"
+    );
+    assert!(
+        wrong.is_empty(),
+        "cited sections that do not exist:\n{}",
+        wrong.join("\n")
+    );
 }
 
 #[test]
@@ -276,7 +299,10 @@ fn the_reader_of_citations_finds_each_form() {
             ("README".into(), "The FMU".into()),
         ]
     );
-    assert_eq!(anchor("What `hasel diagnose` answers"), "what-hasel-diagnose-answers");
+    assert_eq!(
+        anchor("What `hasel diagnose` answers"),
+        "what-hasel-diagnose-answers"
+    );
 }
 
 #[test]

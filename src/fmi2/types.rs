@@ -33,32 +33,12 @@ pub const TYPES_PLATFORM: &std::ffi::CStr = c"default";
 /// `fmi2Version` as returned by `fmi2GetVersion` (section 2.1.4).
 pub const VERSION: &std::ffi::CStr = c"2.0";
 
-/// `fmi2Status` (section 2.1.3).
-#[repr(C)]
-#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord)]
-pub enum Fmi2Status {
-    Ok = 0,
-    Warning = 1,
-    Discard = 2,
-    Error = 3,
-    Fatal = 4,
-    Pending = 5,
-}
+/// `fmi2Status` (section 2.1.3): the statuses both versions share, less `fmi2Pending`, which
+/// this FMU never returns.
+pub type Fmi2Status = Status;
 
 /// The C name of the status enumeration.
 pub type fmi2Status = Fmi2Status;
-
-impl From<Status> for Fmi2Status {
-    fn from(status: Status) -> Self {
-        match status {
-            Status::Ok => Fmi2Status::Ok,
-            Status::Warning => Fmi2Status::Warning,
-            Status::Discard => Fmi2Status::Discard,
-            Status::Error => Fmi2Status::Error,
-            Status::Fatal => Fmi2Status::Fatal,
-        }
-    }
-}
 
 /// `fmi2Type` (section 2.1.5): which interface `fmi2Instantiate` is asked for.
 pub type fmi2Type = c_int;

@@ -44,31 +44,11 @@ pub const FMI3_FALSE: fmi3Boolean = 0;
 /// `fmi3Version` as returned by `fmi3GetVersion` (section 2.3.1).
 pub const VERSION: &std::ffi::CStr = c"3.0";
 
-/// `fmi3Status` (section 2.2.3).
-#[repr(C)]
-#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord)]
-pub enum Fmi3Status {
-    Ok = 0,
-    Warning = 1,
-    Discard = 2,
-    Error = 3,
-    Fatal = 4,
-}
+/// `fmi3Status` (section 2.2.3): the statuses both versions share.
+pub type Fmi3Status = Status;
 
 /// The C name of the status enumeration.
 pub type fmi3Status = Fmi3Status;
-
-impl From<Status> for Fmi3Status {
-    fn from(status: Status) -> Self {
-        match status {
-            Status::Ok => Fmi3Status::Ok,
-            Status::Warning => Fmi3Status::Warning,
-            Status::Discard => Fmi3Status::Discard,
-            Status::Error => Fmi3Status::Error,
-            Status::Fatal => Fmi3Status::Fatal,
-        }
-    }
-}
 
 /// `fmi3DependencyKind` (section 2.2.10), for the signature of `fmi3GetVariableDependencies`.
 pub type fmi3DependencyKind = std::ffi::c_int;

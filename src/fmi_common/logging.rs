@@ -11,15 +11,16 @@ use std::ffi::{CStr, CString};
 
 use super::shell::{DebugLogging, c_string};
 
-/// The status of a call, as both versions define it (FMI 2.0's `fmi2Pending` never occurs:
-/// steps are synchronous).
+/// The status of a call, as both versions define it: `fmi2Status` and `fmi3Status` are this C
+/// enumeration (FMI 2.0's `fmi2Pending`, 5, never occurs: steps are synchronous).
+#[repr(C)]
 #[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord)]
 pub enum Status {
-    Ok,
-    Warning,
-    Discard,
-    Error,
-    Fatal,
+    Ok = 0,
+    Warning = 1,
+    Discard = 2,
+    Error = 3,
+    Fatal = 4,
 }
 
 /// The category of call traces (debug logging).
