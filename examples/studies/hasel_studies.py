@@ -592,6 +592,18 @@ def plot_bands(result: StudyResult, path: pathlib.Path, data: dict | None = None
     plt.close(fig)
 
 
+def uniform_value(values: np.ndarray, rtol: float = 1e-6) -> float | None:
+    """The value of `values` (NaN left out) when they all agree within `rtol` of it, the FMU's
+    default relative tolerance: an output the swept parameters do not reach differs between runs
+    only by what the integrator's step sequence leaves (4e-9 of h2's stroke when actuator 1's
+    parameters are swept); None when they vary."""
+    finite = values[np.isfinite(values)]
+    if finite.size == 0:
+        return None
+    middle = float(np.median(finite))
+    return middle if np.ptp(finite) <= rtol * max(abs(middle), np.finfo(float).tiny) else None
+
+
 def plot_grid(result: StudyResult, axes_values: dict[str, list], path: pathlib.Path):
     """The heights of every run, and, for two swept parameters, the steady peak-to-peak stroke
     of each actuator over the grid."""
@@ -617,11 +629,19 @@ def plot_grid(result: StudyResult, axes_values: dict[str, list], path: pathlib.P
                 if result.ok[i]:
                     y = result.outputs[i, half, j]
                     stroke[a.index(p[names[0]]), b.index(p[names[1]])] = np.ptp(y) * um
-            im = axes[1, j].imshow(stroke.T, origin="lower", aspect="auto", cmap="viridis")
-            axes[1, j].set(xticks=range(len(a)), xticklabels=[f"{v:.3g}" for v in a], yticks=range(len(b)),
-                           yticklabels=[f"{v:.3g}" for v in b], xlabel=names[0], ylabel=names[1],
-                           title=f"h{j + 1}: steady stroke [um] (failed runs blank)")
-            fig.colorbar(im, ax=axes[1, j])
+            ax = axes[1, j]
+            ax.set(xticks=range(len(a)), xticklabels=[f"{v:.3g}" for v in a], yticks=range(len(b)),
+                   yticklabels=[f"{v:.3g}" for v in b], xlabel=names[0], ylabel=names[1],
+                   title=f"h{j + 1}: steady stroke [um] (failed runs blank)")
+            same = uniform_value(stroke)
+            if same is None:
+                im = ax.imshow(stroke.T, origin="lower", aspect="auto", cmap="viridis")
+                fig.colorbar(im, ax=ax).ax.ticklabel_format(useOffset=False)
+            else:
+                # a colour scale would draw the integrator's noise on an offset axis
+                ax.set(xlim=(-0.5, len(a) - 0.5), ylim=(-0.5, len(b) - 0.5))
+                ax.text(0.5, 0.5, f"no variation over the grid\n(beyond the solver's tolerance):\n{same:.6g} um everywhere", ha="center",
+                        va="center", transform=ax.transAxes)
     fig.tight_layout()
     fig.savefig(path, dpi=80)
     plt.close(fig)

@@ -151,6 +151,14 @@ def test_the_command_writes_tables_and_figures(fmu_path, identification, tmp_pat
     assert (out / "bands.png").read_bytes().startswith(b"\x89PNG")
 
 
+def test_an_output_the_grid_does_not_move_is_said_to_have_no_variation():
+    # h2 when only actuator 1's parameters are swept: equal up to the integrator's noise
+    still = np.array([[95.5814085, 95.5814081], [95.5814080, np.nan]])
+    assert hs.uniform_value(still) == pytest.approx(95.5814081)
+    assert hs.uniform_value(np.array([[95.5, 96.0], [95.7, 95.9]])) is None
+    assert hs.uniform_value(np.full((2, 2), np.nan)) is None
+
+
 def test_a_bad_identification_file_is_named(tmp_path):
     bad = tmp_path / "identification.json"
     bad.write_text("{")
