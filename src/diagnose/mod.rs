@@ -381,10 +381,10 @@ fn nested_refit(
     // the polish and the covariance run at tighter tolerances: a difference in the last digits
     // is the integration's, not the fit's
     let above = |ended: f64| ended > nested * (1.0 + NESTED_TOLERANCE);
-    let (id, ended) = refit_from(start)?;
-    if !above(ended) {
-        return Ok(id);
-    }
+    let first = match refit_from(start) {
+        Ok((id, ended)) if !above(ended) => return Ok(id),
+        first => first,
+    };
     let neutral = Params::default();
     let at_neutral = start
         .iter()
@@ -398,26 +398,34 @@ fn nested_refit(
             false => Ok((name, v)),
         })
         .collect::<Result<Vec<_>, Error>>()?;
-    let (id, ended) = refit_from(&at_neutral)?;
-    if !above(ended) {
-        return Ok(id);
-    }
-    let why = if id.out_of_budget {
-        format!(
-            "stopped at the iteration budget after {} iterations",
-            id.iterations
-        )
-    } else {
-        format!(
-            "converged after {} iterations to a worse point",
-            id.iterations
-        )
+    // from the neutral values, where the refit starts at the base model itself: also when the
+    // screening's start failed outright (an integration that broke down there)
+    let second = (at_neutral != start).then(|| refit_from(&at_neutral));
+    let ended_above = |(id, ended): (Identification, f64)| {
+        let why = if id.out_of_budget {
+            format!(
+                "stopped at the iteration budget after {} iterations",
+                id.iterations
+            )
+        } else {
+            format!(
+                "converged after {} iterations to a worse point",
+                id.iterations
+            )
+        };
+        Error::AboveNested {
+            rss: ended,
+            nested,
+            why,
+        }
     };
-    Err(Error::AboveNested {
-        rss: ended,
-        nested,
-        why,
-    })
+    match (first, second) {
+        (_, Some(Ok((id, ended)))) if !above(ended) => Ok(id),
+        // both ended above the base: the better of the two says how far
+        (Ok(a), Some(Ok(b))) => Err(ended_above(if a.1 <= b.1 { a } else { b })),
+        (Ok(a), None | Some(Err(_))) | (Err(_), Some(Ok(a))) => Err(ended_above(a)),
+        (Err(e), None | Some(Err(_))) => Err(e),
+    }
 }
 
 /// The residual sum of squares on `exp` of the current model, the refit's with its effect
@@ -1560,6 +1568,22 @@ mod tests {
         let plain_rss = rss(&estimation[0], &plain.simulated[0]);
         assert!(plain_rss > 2.0 * nested, "{plain_rss:e} vs {nested:e}");
         let refit = nested_refit(&base.params, form, &guess, estimation, held, &opts, nested);
+        let ended = rss(&estimation[0], &refit.unwrap().simulated[0]);
+        assert!(
+            ended <= nested * (1.0 + NESTED_TOLERANCE),
+            "{ended:e} vs {nested:e}"
+        );
+        // a start the refit cannot even begin from (a stiffness below 0) is not the family's
+        // failure: the refit starts again at the base, with the coupling neutral
+        let refit = nested_refit(
+            &base.params,
+            form,
+            &[("k_c", -1.0)],
+            estimation,
+            held,
+            &opts,
+            nested,
+        );
         let ended = rss(&estimation[0], &refit.unwrap().simulated[0]);
         assert!(
             ended <= nested * (1.0 + NESTED_TOLERANCE),
