@@ -5,7 +5,8 @@
 //! reached ([`Reached`]) and the writer of inputs ([`Bytes`], [`Encode`]) with which the seeds of
 //! the corpora are made (tests/fuzz_replay.rs, `write_seeds`).
 
-use std::ffi::CString;
+use std::ffi::{CString, c_void};
+use std::ptr::null_mut;
 
 use arbitrary::Arbitrary;
 use hasel_fmu::fmi_common::model_api::FmuCore;
@@ -115,6 +116,181 @@ pub fn damage(bytes: &mut Vec<u8>, flips: &[(u16, u8)], truncate: Option<u16>, f
         let body = bytes.len() - 8;
         let sum = Sha256::digest(&bytes[..body]);
         bytes[body..].copy_from_slice(&sum[..8]);
+    }
+}
+
+/// How many FMU states a sequence holds at once.
+pub const STATE_SLOTS: usize = 4;
+
+/// One FMI version's C functions on instances and FMU states, which the sequences of both
+/// versions call alike ([`Held`]); each returns whether the call returned OK.
+pub trait StateFunctions {
+    unsafe fn get_state(&self, c: *mut c_void, state: *mut *mut c_void) -> bool;
+    unsafe fn set_state(&self, c: *mut c_void, state: *mut c_void) -> bool;
+    unsafe fn free_state(&self, c: *mut c_void, state: *mut *mut c_void);
+    unsafe fn serialized_size(&self, c: *mut c_void, state: *mut c_void, n: &mut usize) -> bool;
+    unsafe fn serialize(&self, c: *mut c_void, state: *mut c_void, bytes: &mut [u8]) -> bool;
+    unsafe fn deserialize(&self, c: *mut c_void, bytes: &[u8], state: *mut *mut c_void) -> bool;
+    unsafe fn free_instance(&self, c: *mut c_void);
+    /// A quiet Co-Simulation instance of the FMU, for freeing states whose owner is gone.
+    unsafe fn cleanup_instance(&self) -> *mut c_void;
+    /// The time of instance `c` after it was set to a state taken at `taken_at`.
+    unsafe fn restored_time(&self, c: *mut c_void, taken_at: f64) -> f64;
+}
+
+/// What a sequence holds between calls, whatever the FMI version: two instances, their
+/// simulated time, and FMU states with the instance that owns (and frees) each.
+pub struct Held {
+    pub instances: [*mut c_void; 2],
+    pub time: [f64; 2],
+    pub states: [*mut c_void; STATE_SLOTS],
+    pub owner: [usize; STATE_SLOTS],
+    /// The time each FMU state was taken at.
+    pub state_time: [f64; STATE_SLOTS],
+}
+
+impl Held {
+    pub fn new() -> Held {
+        Held {
+            instances: [null_mut(); 2],
+            time: [0.0; 2],
+            states: [null_mut(); STATE_SLOTS],
+            owner: [0; STATE_SLOTS],
+            state_time: [0.0; STATE_SLOTS],
+        }
+    }
+
+    pub fn instance(&self, who: Who) -> *mut c_void {
+        Held::index(who).map_or(null_mut(), |i| self.instances[i])
+    }
+
+    pub fn index(who: Who) -> Option<usize> {
+        match who {
+            Who::First => Some(0),
+            Who::Second => Some(1),
+            Who::Null => None,
+        }
+    }
+
+    /// `fmi*GetFMUState` into `slot`: into a free slot a new state; into a taken one the
+    /// standard's update of that state in place (its owner must be the instance asked).
+    pub fn get_state(&mut self, f: &impl StateFunctions, who: Who, slot: u8, null_ptr: bool) {
+        let k = slot as usize % STATE_SLOTS;
+        let c = self.instance(who);
+        if null_ptr {
+            unsafe { f.get_state(c, null_mut()) };
+            return;
+        }
+        if !self.states[k].is_null() && Held::index(who) != Some(self.owner[k]) {
+            return;
+        }
+        let ok = unsafe { f.get_state(c, &mut self.states[k]) };
+        if let (true, Some(i)) = (ok, Held::index(who)) {
+            self.owner[k] = i;
+            self.state_time[k] = self.time[i];
+        }
+    }
+
+    /// `fmi*SetFMUState` from `slot`.
+    pub fn set_state(&mut self, f: &impl StateFunctions, who: Who, slot: u8) {
+        let k = slot as usize % STATE_SLOTS;
+        let ok = unsafe { f.set_state(self.instance(who), self.states[k]) };
+        if let (true, Some(i)) = (ok, Held::index(who)) {
+            self.time[i] = unsafe { f.restored_time(self.instances[i], self.state_time[k]) };
+        }
+    }
+
+    /// `fmi*FreeFMUState` of `slot`; another instance's state only as a NULL handle.
+    pub fn free_state(&mut self, f: &impl StateFunctions, who: Who, slot: u8) {
+        let k = slot as usize % STATE_SLOTS;
+        if Held::index(who) != Some(self.owner[k]) && !self.states[k].is_null() {
+            unsafe { f.free_state(self.instance(who), null_mut()) };
+            return;
+        }
+        unsafe { f.free_state(self.instance(who), &mut self.states[k]) };
+    }
+
+    /// Serializes the state in `slot` (with a buffer of the right size or another), damages
+    /// the bytes as told ([`damage`]) and deserializes them into slot `into`.
+    #[allow(clippy::too_many_arguments)]
+    pub fn serialize(
+        &mut self,
+        f: &impl StateFunctions,
+        who: Who,
+        slot: u8,
+        size: Len,
+        corrupt: &[(u16, u8)],
+        truncate: Option<u16>,
+        fix_checksum: bool,
+        into: u8,
+        serialized: &mut Count,
+    ) {
+        let c = self.instance(who);
+        let from = slot as usize % STATE_SLOTS;
+        let s = self.states[from];
+        let mut n = 0usize;
+        if !unsafe { f.serialized_size(c, s, &mut n) } {
+            return;
+        }
+        let n = match size {
+            Len::Right => n,
+            Len::Other(k) => k as usize,
+        };
+        let mut bytes = vec![0u8; n];
+        let ok = unsafe { f.serialize(c, s, &mut bytes) };
+        serialized.add(ok);
+        if !ok {
+            return;
+        }
+        damage(&mut bytes, corrupt, truncate, fix_checksum);
+        let k = into as usize % STATE_SLOTS;
+        let Some(i) = Held::index(who) else {
+            unsafe { f.deserialize(c, &bytes, null_mut()) };
+            return;
+        };
+        if !self.states[k].is_null() && self.owner[k] != i {
+            return;
+        }
+        if unsafe { f.deserialize(c, &bytes, &mut self.states[k]) } {
+            self.owner[k] = i;
+            self.state_time[k] = self.state_time[from];
+        }
+    }
+
+    /// Frees the FMU states of instance `i` and the instance: what an importer does at the end.
+    pub fn free_instance(&mut self, f: &impl StateFunctions, i: usize) {
+        let c = self.instances[i];
+        if c.is_null() {
+            return;
+        }
+        for k in 0..STATE_SLOTS {
+            if self.owner[k] == i && !self.states[k].is_null() {
+                // a refused free (the instance may be in a state that does not allow it)
+                // leaves the pointer with us: `finish` frees it through a fresh instance
+                unsafe { f.free_state(c, &mut self.states[k]) };
+            }
+        }
+        unsafe { f.free_instance(c) };
+        self.instances[i] = null_mut();
+        self.time[i] = 0.0;
+    }
+
+    /// The end of a sequence: everything still held is freed, so leaks show.
+    pub fn finish(&mut self, f: &impl StateFunctions) {
+        for i in 0..2 {
+            self.free_instance(f, i);
+        }
+        // states whose owner was replaced by a new instance: freed through any instance
+        for k in 0..STATE_SLOTS {
+            if !self.states[k].is_null() {
+                unsafe {
+                    let c = f.cleanup_instance();
+                    f.free_state(c, &mut self.states[k]);
+                    f.free_instance(c);
+                }
+                assert!(self.states[k].is_null(), "fmi*FreeFMUState kept a state");
+            }
+        }
     }
 }
 

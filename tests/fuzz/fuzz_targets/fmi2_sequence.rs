@@ -16,7 +16,9 @@
 use std::ffi::{CStr, c_char, c_void};
 use std::ptr::{null, null_mut};
 
-use crate::common::{Bytes, Encode, Len, Reached, Real, SeedCalls, Vr, Who, damage, pick};
+use crate::common::{
+    Bytes, Encode, Held, Len, Reached, Real, SeedCalls, StateFunctions, Vr, Who, pick,
+};
 use arbitrary::Arbitrary;
 use hasel_fmu::fmi2::types::*;
 use hasel_fmu::fmu::pack::guid;
@@ -682,20 +684,67 @@ impl SeedCalls for Call {
     }
 }
 
-const STATE_SLOTS: usize = 4;
-
 /// What the sequence holds between calls: the instances, their simulated time, FMU states.
 struct World<'a> {
     fmu: &'a Fmu,
     /// The FMU's functions (a copy of `fmu.functions`, for short calls).
     f: Functions,
-    instances: [fmi2Component; 2],
-    time: [f64; 2],
-    states: [fmi2FMUstate; STATE_SLOTS],
-    /// The owner of each FMU state, which is also the instance that frees it.
-    owner: [usize; STATE_SLOTS],
+    held: Held,
     callbacks: fmi2CallbackFunctions,
     reached: Reached,
+}
+
+/// The FMI 2.0 functions on instances and FMU states, with what instantiating one needs.
+struct Shell<'a> {
+    f: &'a Functions,
+    token: &'a CStr,
+    callbacks: &'a fmi2CallbackFunctions,
+}
+
+impl StateFunctions for Shell<'_> {
+    unsafe fn get_state(&self, c: *mut c_void, state: *mut *mut c_void) -> bool {
+        unsafe { (self.f.fmi2GetFMUstate)(c, state) == OK }
+    }
+    unsafe fn set_state(&self, c: *mut c_void, state: *mut c_void) -> bool {
+        unsafe { (self.f.fmi2SetFMUstate)(c, state) == OK }
+    }
+    unsafe fn free_state(&self, c: *mut c_void, state: *mut *mut c_void) {
+        unsafe { (self.f.fmi2FreeFMUstate)(c, state) };
+    }
+    unsafe fn serialized_size(&self, c: *mut c_void, state: *mut c_void, n: &mut usize) -> bool {
+        unsafe { (self.f.fmi2SerializedFMUstateSize)(c, state, n) == OK }
+    }
+    unsafe fn serialize(&self, c: *mut c_void, state: *mut c_void, bytes: &mut [u8]) -> bool {
+        let n = bytes.len();
+        unsafe { (self.f.fmi2SerializeFMUstate)(c, state, bytes.as_mut_ptr().cast(), n) == OK }
+    }
+    unsafe fn deserialize(&self, c: *mut c_void, bytes: &[u8], state: *mut *mut c_void) -> bool {
+        unsafe {
+            (self.f.fmi2DeSerializeFMUstate)(c, bytes.as_ptr().cast(), bytes.len(), state) == OK
+        }
+    }
+    unsafe fn free_instance(&self, c: *mut c_void) {
+        unsafe { (self.f.fmi2FreeInstance)(c) };
+    }
+    unsafe fn cleanup_instance(&self) -> *mut c_void {
+        unsafe {
+            (self.f.fmi2Instantiate)(
+                c"cleanup".as_ptr(),
+                1,
+                self.token.as_ptr(),
+                null(),
+                self.callbacks,
+                0,
+                0,
+            )
+        }
+    }
+    /// The FMU's own: `fmi2GetRealStatus(fmi2LastSuccessfulTime)`.
+    unsafe fn restored_time(&self, c: *mut c_void, _: f64) -> f64 {
+        let mut t = 0.0;
+        unsafe { (self.f.fmi2GetRealStatus)(c, 2, &mut t) };
+        t
+    }
 }
 
 impl World<'_> {
@@ -703,10 +752,7 @@ impl World<'_> {
         World {
             fmu,
             f: fmu.functions,
-            instances: [null_mut(); 2],
-            time: [0.0; 2],
-            states: [null_mut(); STATE_SLOTS],
-            owner: [0; STATE_SLOTS],
+            held: Held::new(),
             callbacks: fmi2CallbackFunctions {
                 logger,
                 allocate_memory: Some(allocate),
@@ -718,20 +764,14 @@ impl World<'_> {
         }
     }
 
-    fn component(&self, who: Who) -> fmi2Component {
-        match who {
-            Who::First => self.instances[0],
-            Who::Second => self.instances[1],
-            Who::Null => null_mut(),
-        }
-    }
-
-    fn index(who: Who) -> Option<usize> {
-        match who {
-            Who::First => Some(0),
-            Who::Second => Some(1),
-            Who::Null => None,
-        }
+    /// The instances and FMU states held, and the functions that act on them.
+    fn held(&mut self) -> (&mut Held, Shell<'_>) {
+        let shell = Shell {
+            f: &self.f,
+            token: &self.fmu.token,
+            callbacks: &self.callbacks,
+        };
+        (&mut self.held, shell)
     }
 
     fn len(&self, len: Len) -> usize {
@@ -741,22 +781,9 @@ impl World<'_> {
         }
     }
 
-    /// Frees the FMU states of instance `i` and the instance: what an importer does at the end.
     fn free_instance(&mut self, i: usize) {
-        let c = self.instances[i];
-        if c.is_null() {
-            return;
-        }
-        for k in 0..STATE_SLOTS {
-            if self.owner[k] == i && !self.states[k].is_null() {
-                // a refused free (the instance may be in a state that does not allow it)
-                // leaves the pointer with us: `finish` frees it through a fresh instance
-                unsafe { (self.f.fmi2FreeFMUstate)(c, &mut self.states[k]) };
-            }
-        }
-        unsafe { (self.f.fmi2FreeInstance)(c) };
-        self.instances[i] = null_mut();
-        self.time[i] = 0.0;
+        let (held, shell) = self.held();
+        held.free_instance(&shell, i);
     }
 
     fn run(&mut self, call: &Call) {
@@ -770,7 +797,7 @@ impl World<'_> {
                 resources,
                 logging_on,
             } => {
-                let Some(i) = World::index(who) else { return };
+                let Some(i) = Held::index(who) else { return };
                 self.free_instance(i);
                 let resources: &CStr = match resources % 4 {
                     0 => c"",
@@ -783,7 +810,7 @@ impl World<'_> {
                 } else {
                     self.fmu.token.as_c_str()
                 };
-                self.instances[i] = unsafe {
+                self.held.instances[i] = unsafe {
                     (self.f.fmi2Instantiate)(
                         if null_name { null() } else { c"fuzz".as_ptr() },
                         i32::from(!model_exchange),
@@ -804,7 +831,7 @@ impl World<'_> {
                 };
             }
             Call::FreeInstance(who) => {
-                if let Some(i) = World::index(who) {
+                if let Some(i) = Held::index(who) {
                     self.free_instance(i);
                 } else {
                     unsafe { (self.f.fmi2FreeInstance)(null_mut()) };
@@ -824,7 +851,7 @@ impl World<'_> {
                 let ptr = if null_ptr { null() } else { names.as_ptr() };
                 unsafe {
                     (self.f.fmi2SetDebugLogging)(
-                        self.component(who),
+                        self.held.instance(who),
                         i32::from(on),
                         names.len(),
                         ptr,
@@ -837,7 +864,7 @@ impl World<'_> {
                 start,
                 stop,
             } => {
-                let c = self.component(who);
+                let c = self.held.instance(who);
                 let t0 = start.get();
                 let status = unsafe {
                     (self.f.fmi2SetupExperiment)(
@@ -849,24 +876,25 @@ impl World<'_> {
                         stop.map_or(0.0, Real::get),
                     )
                 };
-                if let (OK, Some(i)) = (status, World::index(who)) {
-                    self.time[i] = t0;
+                if let (OK, Some(i)) = (status, Held::index(who)) {
+                    self.held.time[i] = t0;
                 }
             }
             Call::EnterInitializationMode(who) => unsafe {
-                (self.f.fmi2EnterInitializationMode)(self.component(who));
+                (self.f.fmi2EnterInitializationMode)(self.held.instance(who));
             },
             Call::ExitInitializationMode(who) => {
-                let status = unsafe { (self.f.fmi2ExitInitializationMode)(self.component(who)) };
+                let status =
+                    unsafe { (self.f.fmi2ExitInitializationMode)(self.held.instance(who)) };
                 self.reached.exit_initialization.add(status == OK);
             }
             Call::Terminate(who) => unsafe {
-                (self.f.fmi2Terminate)(self.component(who));
+                (self.f.fmi2Terminate)(self.held.instance(who));
             },
             Call::Reset(who) => {
-                let status = unsafe { (self.f.fmi2Reset)(self.component(who)) };
-                if let (OK, Some(i)) = (status, World::index(who)) {
-                    self.time[i] = 0.0;
+                let status = unsafe { (self.f.fmi2Reset)(self.held.instance(who)) };
+                if let (OK, Some(i)) = (status, Held::index(who)) {
+                    self.held.time[i] = 0.0;
                 }
             }
             Call::GetReal {
@@ -881,7 +909,9 @@ impl World<'_> {
                 } else {
                     values.as_mut_ptr()
                 };
-                unsafe { (self.f.fmi2GetReal)(self.component(who), vrs.as_ptr(), vrs.len(), out) };
+                unsafe {
+                    (self.f.fmi2GetReal)(self.held.instance(who), vrs.as_ptr(), vrs.len(), out)
+                };
             }
             Call::SetReal {
                 who,
@@ -894,7 +924,9 @@ impl World<'_> {
                     .collect();
                 let xs: Vec<f64> = values.iter().map(|(_, x)| x.get()).collect();
                 let ptr = if null_ptr { null() } else { xs.as_ptr() };
-                unsafe { (self.f.fmi2SetReal)(self.component(who), vrs.as_ptr(), vrs.len(), ptr) };
+                unsafe {
+                    (self.f.fmi2SetReal)(self.held.instance(who), vrs.as_ptr(), vrs.len(), ptr)
+                };
             }
             Call::OtherType {
                 who,
@@ -902,7 +934,7 @@ impl World<'_> {
                 ref vrs,
                 value,
             } => {
-                let c = self.component(who);
+                let c = self.held.instance(who);
                 let vrs: Vec<u32> = vrs.iter().map(|v| v.get(self.fmu.variables)).collect();
                 let (p, n) = (vrs.as_ptr(), vrs.len());
                 let mut ints = vec![value; n];
@@ -925,21 +957,22 @@ impl World<'_> {
                 h,
                 no_prior,
             } => {
-                let i = World::index(who);
+                let i = Held::index(who);
                 let t = match (at_current_time, i) {
-                    (true, Some(i)) => self.time[i],
+                    (true, Some(i)) => self.held.time[i],
                     _ => t.get(),
                 };
                 let h = h.get();
-                let status =
-                    unsafe { (self.f.fmi2DoStep)(self.component(who), t, h, i32::from(no_prior)) };
+                let status = unsafe {
+                    (self.f.fmi2DoStep)(self.held.instance(who), t, h, i32::from(no_prior))
+                };
                 self.reached.do_step.add(status == OK);
                 if let (OK, Some(i)) = (status, i) {
-                    self.time[i] = t + h;
+                    self.held.time[i] = t + h;
                 }
             }
             Call::CancelStep(who) => unsafe {
-                (self.f.fmi2CancelStep)(self.component(who));
+                (self.f.fmi2CancelStep)(self.held.instance(who));
             },
             Call::Status {
                 who,
@@ -947,7 +980,7 @@ impl World<'_> {
                 status_kind,
                 null_ptr,
             } => {
-                let c = self.component(who);
+                let c = self.held.instance(who);
                 let k = fmi2StatusKind::from(status_kind);
                 let mut status = OK;
                 let mut real = 0.0;
@@ -972,7 +1005,7 @@ impl World<'_> {
                 set,
                 ref values,
             } => {
-                let c = self.component(who);
+                let c = self.held.instance(who);
                 let vrs: Vec<u32> = values
                     .iter()
                     .map(|(v, _, _)| v.get(self.fmu.variables))
@@ -1005,39 +1038,16 @@ impl World<'_> {
                 slot,
                 null_ptr,
             } => {
-                let k = slot as usize % STATE_SLOTS;
-                let c = self.component(who);
-                if null_ptr {
-                    unsafe { (self.f.fmi2GetFMUstate)(c, null_mut()) };
-                    return;
-                }
-                // into a free slot a new state; into a taken one the standard's update
-                // of that state in place (its owner must be the instance asked)
-                if !self.states[k].is_null() && World::index(who) != Some(self.owner[k]) {
-                    return;
-                }
-                let status = unsafe { (self.f.fmi2GetFMUstate)(c, &mut self.states[k]) };
-                if let (OK, Some(i)) = (status, World::index(who)) {
-                    self.owner[k] = i;
-                }
+                let (held, shell) = self.held();
+                held.get_state(&shell, who, slot, null_ptr);
             }
             Call::SetFmuState { who, slot } => {
-                let s = self.states[slot as usize % STATE_SLOTS];
-                let status = unsafe { (self.f.fmi2SetFMUstate)(self.component(who), s) };
-                if let (OK, Some(i)) = (status, World::index(who)) {
-                    let mut t = 0.0;
-                    unsafe { (self.f.fmi2GetRealStatus)(self.instances[i], 2, &mut t) };
-                    self.time[i] = t;
-                }
+                let (held, shell) = self.held();
+                held.set_state(&shell, who, slot);
             }
             Call::FreeFmuState { who, slot } => {
-                let k = slot as usize % STATE_SLOTS;
-                if World::index(who) != Some(self.owner[k]) && !self.states[k].is_null() {
-                    // another instance's state: only a NULL handle may go elsewhere
-                    unsafe { (self.f.fmi2FreeFMUstate)(self.component(who), null_mut()) };
-                    return;
-                }
-                unsafe { (self.f.fmi2FreeFMUstate)(self.component(who), &mut self.states[k]) };
+                let (held, shell) = self.held();
+                held.free_state(&shell, who, slot);
             }
             Call::Serialize {
                 who,
@@ -1047,11 +1057,26 @@ impl World<'_> {
                 truncate,
                 fix_checksum,
                 into,
-            } => self.serialize(who, slot, size, corrupt, truncate, fix_checksum, into),
+            } => {
+                let mut serialized = self.reached.serialize;
+                let (held, shell) = self.held();
+                held.serialize(
+                    &shell,
+                    who,
+                    slot,
+                    size,
+                    corrupt,
+                    truncate,
+                    fix_checksum,
+                    into,
+                    &mut serialized,
+                );
+                self.reached.serialize = serialized;
+            }
             Call::SetTime { who, t } => {
-                let status = unsafe { (self.f.fmi2SetTime)(self.component(who), t.get()) };
-                if let (OK, Some(i)) = (status, World::index(who)) {
-                    self.time[i] = t.get();
+                let status = unsafe { (self.f.fmi2SetTime)(self.held.instance(who), t.get()) };
+                if let (OK, Some(i)) = (status, Held::index(who)) {
+                    self.held.time[i] = t.get();
                 }
             }
             Call::SetContinuousStates {
@@ -1060,7 +1085,7 @@ impl World<'_> {
                 ref x,
                 from_get,
             } => {
-                let c = self.component(who);
+                let c = self.held.instance(who);
                 let n = self.len(len);
                 let mut xs: Vec<f64> = (0..n).map(|k| x.get(k).map_or(0.0, |r| r.get())).collect();
                 if from_get {
@@ -1084,7 +1109,7 @@ impl World<'_> {
                 len,
                 null_ptr,
             } => {
-                let c = self.component(who);
+                let c = self.held.instance(who);
                 let n = match (kind % 4, len) {
                     (2, Len::Right) => 0, // no event indicators
                     _ => self.len(len),
@@ -1104,7 +1129,7 @@ impl World<'_> {
                 }
             }
             Call::EnterEventMode(who) => unsafe {
-                (self.f.fmi2EnterEventMode)(self.component(who));
+                (self.f.fmi2EnterEventMode)(self.held.instance(who));
             },
             Call::NewDiscreteStates { who, null_ptr } => {
                 let mut info = fmi2EventInfo {
@@ -1120,10 +1145,10 @@ impl World<'_> {
                 } else {
                     &mut info as *mut fmi2EventInfo
                 };
-                unsafe { (self.f.fmi2NewDiscreteStates)(self.component(who), p) };
+                unsafe { (self.f.fmi2NewDiscreteStates)(self.held.instance(who), p) };
             }
             Call::EnterContinuousTimeMode(who) => unsafe {
-                (self.f.fmi2EnterContinuousTimeMode)(self.component(who));
+                (self.f.fmi2EnterContinuousTimeMode)(self.held.instance(who));
             },
             Call::CompletedIntegratorStep {
                 who,
@@ -1138,7 +1163,7 @@ impl World<'_> {
                 };
                 unsafe {
                     (self.f.fmi2CompletedIntegratorStep)(
-                        self.component(who),
+                        self.held.instance(who),
                         i32::from(no_prior),
                         e,
                         t,
@@ -1160,7 +1185,7 @@ impl World<'_> {
                 let mut out = vec![0.0; unknowns.len()];
                 unsafe {
                     (self.f.fmi2GetDirectionalDerivative)(
-                        self.component(who),
+                        self.held.instance(who),
                         unknowns.as_ptr(),
                         unknowns.len(),
                         known_vrs.as_ptr(),
@@ -1173,85 +1198,10 @@ impl World<'_> {
         }
     }
 
-    /// Serializes the state in `slot` (with a buffer of the right size or another), damages
-    /// the bytes as told and deserializes them into slot `into`.
-    #[allow(clippy::too_many_arguments)]
-    fn serialize(
-        &mut self,
-        who: Who,
-        slot: u8,
-        size: Len,
-        corrupt: &[(u16, u8)],
-        truncate: Option<u16>,
-        fix_checksum: bool,
-        into: u8,
-    ) {
-        let c = self.component(who);
-        let s = self.states[slot as usize % STATE_SLOTS];
-        let mut n = 0usize;
-        if unsafe { (self.f.fmi2SerializedFMUstateSize)(c, s, &mut n) } != OK {
-            return;
-        }
-        let n = match size {
-            Len::Right => n,
-            Len::Other(k) => k as usize,
-        };
-        let mut bytes = vec![0u8; n];
-        let status = unsafe { (self.f.fmi2SerializeFMUstate)(c, s, bytes.as_mut_ptr().cast(), n) };
-        self.reached.serialize.add(status == OK);
-        if status != OK {
-            return;
-        }
-        damage(&mut bytes, corrupt, truncate, fix_checksum);
-        let k = into as usize % STATE_SLOTS;
-        let Some(i) = World::index(who) else {
-            unsafe {
-                (self.f.fmi2DeSerializeFMUstate)(c, bytes.as_ptr().cast(), bytes.len(), null_mut())
-            };
-            return;
-        };
-        if !self.states[k].is_null() && self.owner[k] != i {
-            return;
-        }
-        let status = unsafe {
-            (self.f.fmi2DeSerializeFMUstate)(
-                c,
-                bytes.as_ptr().cast(),
-                bytes.len(),
-                &mut self.states[k],
-            )
-        };
-        if status == OK {
-            self.owner[k] = i;
-        }
-    }
-
     /// The end of a sequence: everything still held is freed, so leaks show.
     fn finish(&mut self) {
-        for i in 0..2 {
-            self.free_instance(i);
-        }
-        // states whose owner was replaced by a new instance: freed through any instance
-        for k in 0..STATE_SLOTS {
-            if !self.states[k].is_null() {
-                let c = unsafe {
-                    (self.f.fmi2Instantiate)(
-                        c"cleanup".as_ptr(),
-                        1,
-                        self.fmu.token.as_ptr(),
-                        null(),
-                        &self.callbacks,
-                        0,
-                        0,
-                    )
-                };
-                unsafe {
-                    (self.f.fmi2FreeFMUstate)(c, &mut self.states[k]);
-                    (self.f.fmi2FreeInstance)(c);
-                }
-                assert!(self.states[k].is_null(), "fmi2FreeFMUstate kept a state");
-            }
-        }
+        let (held, shell) = self.held();
+        held.finish(&shell);
     }
 }
 

@@ -12,10 +12,12 @@
 //! replays the committed corpora in every `cargo test` (tests/fuzz_replay.rs), as in
 //! fmi2_sequence.rs.
 
-use std::ffi::{CStr, c_char};
+use std::ffi::{CStr, c_char, c_void};
 use std::ptr::{null, null_mut};
 
-use crate::common::{Bytes, Encode, Len, Reached, Real, SeedCalls, Vr, Who, damage, pick};
+use crate::common::{
+    Bytes, Encode, Held, Len, Reached, Real, SeedCalls, StateFunctions, Vr, Who, pick,
+};
 use arbitrary::Arbitrary;
 use hasel_fmu::fmi3::types::*;
 use hasel_fmu::fmu::pack::FmiVersion;
@@ -717,81 +719,49 @@ impl SeedCalls for Call {
     }
 }
 
-const STATE_SLOTS: usize = 4;
-
 /// What the sequence holds between calls: the instances, their simulated time, FMU states.
 struct World<'a> {
     fmu: &'a Fmu,
     /// The FMU's functions (a copy of `fmu.functions`, for short calls).
     f: Functions,
-    instances: [fmi3Instance; 2],
-    time: [f64; 2],
-    states: [fmi3FMUState; STATE_SLOTS],
-    owner: [usize; STATE_SLOTS],
-    /// The time of each FMU state (so a step after restoring one starts where it does).
-    state_time: [f64; STATE_SLOTS],
+    held: Held,
     reached: Reached,
 }
 
-impl World<'_> {
-    fn new(fmu: &Fmu) -> World<'_> {
-        World {
-            fmu,
-            f: fmu.functions,
-            instances: [null_mut(); 2],
-            time: [0.0; 2],
-            states: [null_mut(); STATE_SLOTS],
-            owner: [0; STATE_SLOTS],
-            state_time: [0.0; STATE_SLOTS],
-            reached: Reached::default(),
-        }
-    }
+/// The FMI 3.0 functions on instances and FMU states, with what instantiating one needs.
+struct Shell<'a> {
+    f: &'a Functions,
+    token: &'a CStr,
+}
 
-    fn instance(&self, who: Who) -> fmi3Instance {
-        match who {
-            Who::First => self.instances[0],
-            Who::Second => self.instances[1],
-            Who::Null => null_mut(),
-        }
+impl StateFunctions for Shell<'_> {
+    unsafe fn get_state(&self, c: *mut c_void, state: *mut *mut c_void) -> bool {
+        unsafe { (self.f.fmi3GetFMUState)(c, state) == OK }
     }
-
-    fn index(who: Who) -> Option<usize> {
-        match who {
-            Who::First => Some(0),
-            Who::Second => Some(1),
-            Who::Null => None,
-        }
+    unsafe fn set_state(&self, c: *mut c_void, state: *mut c_void) -> bool {
+        unsafe { (self.f.fmi3SetFMUState)(c, state) == OK }
     }
-
-    fn len(&self, len: Len, right: usize) -> usize {
-        match len {
-            Len::Right => right,
-            Len::Other(n) => n as usize,
-        }
+    unsafe fn free_state(&self, c: *mut c_void, state: *mut *mut c_void) {
+        unsafe { (self.f.fmi3FreeFMUState)(c, state) };
     }
-
-    fn free_instance(&mut self, i: usize) {
-        let c = self.instances[i];
-        if c.is_null() {
-            return;
-        }
-        for k in 0..STATE_SLOTS {
-            if self.owner[k] == i && !self.states[k].is_null() {
-                // a refused free leaves the pointer with us: `finish` frees it
-                unsafe { (self.f.fmi3FreeFMUState)(c, &mut self.states[k]) };
-            }
-        }
+    unsafe fn serialized_size(&self, c: *mut c_void, state: *mut c_void, n: &mut usize) -> bool {
+        unsafe { (self.f.fmi3SerializedFMUStateSize)(c, state, n) == OK }
+    }
+    unsafe fn serialize(&self, c: *mut c_void, state: *mut c_void, bytes: &mut [u8]) -> bool {
+        let n = bytes.len();
+        unsafe { (self.f.fmi3SerializeFMUState)(c, state, bytes.as_mut_ptr(), n) == OK }
+    }
+    unsafe fn deserialize(&self, c: *mut c_void, bytes: &[u8], state: *mut *mut c_void) -> bool {
+        unsafe { (self.f.fmi3DeserializeFMUState)(c, bytes.as_ptr(), bytes.len(), state) == OK }
+    }
+    unsafe fn free_instance(&self, c: *mut c_void) {
         unsafe { (self.f.fmi3FreeInstance)(c) };
-        self.instances[i] = null_mut();
-        self.time[i] = 0.0;
     }
-
-    /// A Co-Simulation instance of this FMU, quiet: for freeing states whose owner is gone.
-    fn cleanup_instance(&self) -> fmi3Instance {
+    unsafe fn cleanup_instance(&self) -> *mut c_void {
         unsafe {
             (self.f.fmi3InstantiateCoSimulation)(
                 c"cleanup".as_ptr(),
-                self.fmu.token.as_ptr(),
+                self.token.as_ptr(),
                 null(),
                 0,
                 0,
@@ -804,6 +774,42 @@ impl World<'_> {
                 None,
             )
         }
+    }
+    /// The time the state was taken at: FMI 3.0 has no call to ask the FMU.
+    unsafe fn restored_time(&self, _: *mut c_void, taken_at: f64) -> f64 {
+        taken_at
+    }
+}
+
+impl World<'_> {
+    fn new(fmu: &Fmu) -> World<'_> {
+        World {
+            fmu,
+            f: fmu.functions,
+            held: Held::new(),
+            reached: Reached::default(),
+        }
+    }
+
+    /// The instances and FMU states held, and the functions that act on them.
+    fn held(&mut self) -> (&mut Held, Shell<'_>) {
+        let shell = Shell {
+            f: &self.f,
+            token: &self.fmu.token,
+        };
+        (&mut self.held, shell)
+    }
+
+    fn len(&self, len: Len, right: usize) -> usize {
+        match len {
+            Len::Right => right,
+            Len::Other(n) => n as usize,
+        }
+    }
+
+    fn free_instance(&mut self, i: usize) {
+        let (held, shell) = self.held();
+        held.free_instance(&shell, i);
     }
 
     fn run(&mut self, call: &Call) {
@@ -818,7 +824,7 @@ impl World<'_> {
                 logging_on,
                 event_mode_used,
             } => {
-                let Some(i) = World::index(who) else { return };
+                let Some(i) = Held::index(who) else { return };
                 self.free_instance(i);
                 let resources: &CStr = match resources % 4 {
                     0 => c"",
@@ -838,7 +844,7 @@ impl World<'_> {
                 };
                 let name = if null_name { null() } else { c"fuzz".as_ptr() };
                 let log: fmi3LogMessageCallback = if no_logger { None } else { Some(log_message) };
-                self.instances[i] = unsafe {
+                self.held.instances[i] = unsafe {
                     if model_exchange {
                         (self.f.fmi3InstantiateModelExchange)(
                             name,
@@ -867,7 +873,7 @@ impl World<'_> {
                     }
                 };
             }
-            Call::FreeInstance(who) => match World::index(who) {
+            Call::FreeInstance(who) => match Held::index(who) {
                 Some(i) => self.free_instance(i),
                 None => unsafe { (self.f.fmi3FreeInstance)(null_mut()) },
             },
@@ -884,7 +890,12 @@ impl World<'_> {
                     .collect();
                 let p = if null_ptr { null() } else { names.as_ptr() };
                 unsafe {
-                    (self.f.fmi3SetDebugLogging)(self.instance(who), u8::from(on), names.len(), p)
+                    (self.f.fmi3SetDebugLogging)(
+                        self.held.instance(who),
+                        u8::from(on),
+                        names.len(),
+                        p,
+                    )
                 };
             }
             Call::EnterInitializationMode {
@@ -896,7 +907,7 @@ impl World<'_> {
                 let t0 = start.get();
                 let status = unsafe {
                     (self.f.fmi3EnterInitializationMode)(
-                        self.instance(who),
+                        self.held.instance(who),
                         u8::from(tolerance.is_some()),
                         tolerance.map_or(0.0, Real::get),
                         t0,
@@ -904,31 +915,32 @@ impl World<'_> {
                         stop.map_or(0.0, Real::get),
                     )
                 };
-                if let (OK, Some(i)) = (status, World::index(who)) {
-                    self.time[i] = t0;
+                if let (OK, Some(i)) = (status, Held::index(who)) {
+                    self.held.time[i] = t0;
                 }
             }
             Call::ExitInitializationMode(who) => {
-                let status = unsafe { (self.f.fmi3ExitInitializationMode)(self.instance(who)) };
+                let status =
+                    unsafe { (self.f.fmi3ExitInitializationMode)(self.held.instance(who)) };
                 self.reached.exit_initialization.add(status == OK);
             }
             Call::EnterEventMode(who) => unsafe {
-                (self.f.fmi3EnterEventMode)(self.instance(who));
+                (self.f.fmi3EnterEventMode)(self.held.instance(who));
             },
             Call::Terminate(who) => unsafe {
-                (self.f.fmi3Terminate)(self.instance(who));
+                (self.f.fmi3Terminate)(self.held.instance(who));
             },
             Call::Reset(who) => {
-                let status = unsafe { (self.f.fmi3Reset)(self.instance(who)) };
-                if let (OK, Some(i)) = (status, World::index(who)) {
-                    self.time[i] = 0.0;
+                let status = unsafe { (self.f.fmi3Reset)(self.held.instance(who)) };
+                if let (OK, Some(i)) = (status, Held::index(who)) {
+                    self.held.time[i] = 0.0;
                 }
             }
             Call::Configuration { who, enter } => unsafe {
                 if enter {
-                    (self.f.fmi3EnterConfigurationMode)(self.instance(who));
+                    (self.f.fmi3EnterConfigurationMode)(self.held.instance(who));
                 } else {
-                    (self.f.fmi3ExitConfigurationMode)(self.instance(who));
+                    (self.f.fmi3ExitConfigurationMode)(self.held.instance(who));
                 }
             },
             Call::GetFloat64 {
@@ -946,7 +958,7 @@ impl World<'_> {
                     out.as_mut_ptr()
                 };
                 unsafe {
-                    (self.f.fmi3GetFloat64)(self.instance(who), vrs.as_ptr(), vrs.len(), p, n)
+                    (self.f.fmi3GetFloat64)(self.held.instance(who), vrs.as_ptr(), vrs.len(), p, n)
                 };
             }
             Call::SetFloat64 {
@@ -965,7 +977,7 @@ impl World<'_> {
                     .collect();
                 let p = if null_ptr { null() } else { xs.as_ptr() };
                 unsafe {
-                    (self.f.fmi3SetFloat64)(self.instance(who), vrs.as_ptr(), vrs.len(), p, n)
+                    (self.f.fmi3SetFloat64)(self.held.instance(who), vrs.as_ptr(), vrs.len(), p, n)
                 };
             }
             Call::OtherType {
@@ -974,7 +986,7 @@ impl World<'_> {
                 ref vrs,
                 value,
             } => {
-                let c = self.instance(who);
+                let c = self.held.instance(who);
                 let vrs: Vec<u32> = vrs.iter().map(|v| v.get(self.fmu.variables)).collect();
                 let (p, n) = (vrs.as_ptr(), vrs.len());
                 let mut ints = vec![value; n];
@@ -1003,9 +1015,9 @@ impl World<'_> {
                 no_prior,
                 null_outputs,
             } => {
-                let i = World::index(who);
+                let i = Held::index(who);
                 let t = match (at_current_time, i) {
-                    (true, Some(i)) => self.time[i],
+                    (true, Some(i)) => self.held.time[i],
                     _ => t.get(),
                 };
                 let (mut event, mut terminate, mut early) = (0, 0, 0);
@@ -1013,7 +1025,7 @@ impl World<'_> {
                 let status = unsafe {
                     if null_outputs {
                         (self.f.fmi3DoStep)(
-                            self.instance(who),
+                            self.held.instance(who),
                             t,
                             h.get(),
                             u8::from(no_prior),
@@ -1024,7 +1036,7 @@ impl World<'_> {
                         )
                     } else {
                         (self.f.fmi3DoStep)(
-                            self.instance(who),
+                            self.held.instance(who),
                             t,
                             h.get(),
                             u8::from(no_prior),
@@ -1037,11 +1049,11 @@ impl World<'_> {
                 };
                 self.reached.do_step.add(status == OK);
                 if let (OK, Some(i)) = (status, i) {
-                    self.time[i] = t + h.get();
+                    self.held.time[i] = t + h.get();
                 }
             }
             Call::EnterStepMode(who) => unsafe {
-                (self.f.fmi3EnterStepMode)(self.instance(who));
+                (self.f.fmi3EnterStepMode)(self.held.instance(who));
             },
             Call::OutputDerivatives { who, ref values } => {
                 let vrs: Vec<u32> = values
@@ -1052,7 +1064,7 @@ impl World<'_> {
                 let mut out = vec![0.0; vrs.len()];
                 unsafe {
                     (self.f.fmi3GetOutputDerivatives)(
-                        self.instance(who),
+                        self.held.instance(who),
                         vrs.as_ptr(),
                         vrs.len(),
                         orders.as_ptr(),
@@ -1066,37 +1078,16 @@ impl World<'_> {
                 slot,
                 null_ptr,
             } => {
-                let k = slot as usize % STATE_SLOTS;
-                let c = self.instance(who);
-                if null_ptr {
-                    unsafe { (self.f.fmi3GetFMUState)(c, null_mut()) };
-                    return;
-                }
-                if !self.states[k].is_null() && World::index(who) != Some(self.owner[k]) {
-                    return;
-                }
-                let status = unsafe { (self.f.fmi3GetFMUState)(c, &mut self.states[k]) };
-                if let (OK, Some(i)) = (status, World::index(who)) {
-                    self.owner[k] = i;
-                    self.state_time[k] = self.time[i];
-                }
+                let (held, shell) = self.held();
+                held.get_state(&shell, who, slot, null_ptr);
             }
             Call::SetFmuState { who, slot } => {
-                let k = slot as usize % STATE_SLOTS;
-                let status =
-                    unsafe { (self.f.fmi3SetFMUState)(self.instance(who), self.states[k]) };
-                // the time the state was taken at (FMI 3.0 has no call to ask the FMU)
-                if let (OK, Some(i)) = (status, World::index(who)) {
-                    self.time[i] = self.state_time[k];
-                }
+                let (held, shell) = self.held();
+                held.set_state(&shell, who, slot);
             }
             Call::FreeFmuState { who, slot } => {
-                let k = slot as usize % STATE_SLOTS;
-                if World::index(who) != Some(self.owner[k]) && !self.states[k].is_null() {
-                    unsafe { (self.f.fmi3FreeFMUState)(self.instance(who), null_mut()) };
-                    return;
-                }
-                unsafe { (self.f.fmi3FreeFMUState)(self.instance(who), &mut self.states[k]) };
+                let (held, shell) = self.held();
+                held.free_state(&shell, who, slot);
             }
             Call::Serialize {
                 who,
@@ -1107,48 +1098,26 @@ impl World<'_> {
                 fix_checksum,
                 into,
             } => {
-                let c = self.instance(who);
-                let s = self.states[slot as usize % STATE_SLOTS];
-                let mut n = 0usize;
-                if unsafe { (self.f.fmi3SerializedFMUStateSize)(c, s, &mut n) } != OK {
-                    return;
-                }
-                let n = self.len(size, n);
-                let mut bytes = vec![0u8; n];
-                let status = unsafe { (self.f.fmi3SerializeFMUState)(c, s, bytes.as_mut_ptr(), n) };
-                self.reached.serialize.add(status == OK);
-                if status != OK {
-                    return;
-                }
-                damage(&mut bytes, corrupt, truncate, fix_checksum);
-                let k = into as usize % STATE_SLOTS;
-                let Some(i) = World::index(who) else {
-                    unsafe {
-                        (self.f.fmi3DeserializeFMUState)(c, bytes.as_ptr(), bytes.len(), null_mut())
-                    };
-                    return;
-                };
-                if !self.states[k].is_null() && self.owner[k] != i {
-                    return;
-                }
-                let status = unsafe {
-                    (self.f.fmi3DeserializeFMUState)(
-                        c,
-                        bytes.as_ptr(),
-                        bytes.len(),
-                        &mut self.states[k],
-                    )
-                };
-                if status == OK {
-                    self.owner[k] = i;
-                    self.state_time[k] = self.state_time[slot as usize % STATE_SLOTS];
-                }
+                let mut serialized = self.reached.serialize;
+                let (held, shell) = self.held();
+                held.serialize(
+                    &shell,
+                    who,
+                    slot,
+                    size,
+                    corrupt,
+                    truncate,
+                    fix_checksum,
+                    into,
+                    &mut serialized,
+                );
+                self.reached.serialize = serialized;
             }
             Call::SetTime { who, t } => unsafe {
-                (self.f.fmi3SetTime)(self.instance(who), t.get());
+                (self.f.fmi3SetTime)(self.held.instance(who), t.get());
             },
             Call::SetContinuousStates { who, len, ref x } => {
-                let c = self.instance(who);
+                let c = self.held.instance(who);
                 let n = self.len(len, self.fmu.states);
                 let mut got = vec![0.0; n];
                 let valid =
@@ -1168,7 +1137,7 @@ impl World<'_> {
                 len,
                 null_ptr,
             } => {
-                let c = self.instance(who);
+                let c = self.held.instance(who);
                 let right = if kind % 4 == 2 { 0 } else { self.fmu.states };
                 let n = self.len(len, right);
                 let mut v = vec![0.0; n];
@@ -1198,9 +1167,9 @@ impl World<'_> {
                 };
                 unsafe {
                     if states {
-                        (self.f.fmi3GetNumberOfContinuousStates)(self.instance(who), p)
+                        (self.f.fmi3GetNumberOfContinuousStates)(self.held.instance(who), p)
                     } else {
-                        (self.f.fmi3GetNumberOfEventIndicators)(self.instance(who), p)
+                        (self.f.fmi3GetNumberOfEventIndicators)(self.held.instance(who), p)
                     }
                 };
             }
@@ -1211,7 +1180,7 @@ impl World<'_> {
                 unsafe {
                     if null_ptr {
                         (self.f.fmi3UpdateDiscreteStates)(
-                            self.instance(who),
+                            self.held.instance(who),
                             null_mut(),
                             null_mut(),
                             null_mut(),
@@ -1221,7 +1190,7 @@ impl World<'_> {
                         )
                     } else {
                         (self.f.fmi3UpdateDiscreteStates)(
-                            self.instance(who),
+                            self.held.instance(who),
                             a,
                             b,
                             c,
@@ -1233,7 +1202,7 @@ impl World<'_> {
                 };
             }
             Call::EnterContinuousTimeMode(who) => unsafe {
-                (self.f.fmi3EnterContinuousTimeMode)(self.instance(who));
+                (self.f.fmi3EnterContinuousTimeMode)(self.held.instance(who));
             },
             Call::CompletedIntegratorStep {
                 who,
@@ -1244,14 +1213,14 @@ impl World<'_> {
                 unsafe {
                     if null_ptr {
                         (self.f.fmi3CompletedIntegratorStep)(
-                            self.instance(who),
+                            self.held.instance(who),
                             u8::from(no_prior),
                             null_mut(),
                             null_mut(),
                         )
                     } else {
                         (self.f.fmi3CompletedIntegratorStep)(
-                            self.instance(who),
+                            self.held.instance(who),
                             u8::from(no_prior),
                             &mut event,
                             &mut terminate,
@@ -1291,7 +1260,7 @@ impl World<'_> {
                 };
                 unsafe {
                     f(
-                        self.instance(who),
+                        self.held.instance(who),
                         unknowns.as_ptr(),
                         unknowns.len(),
                         known_vrs.as_ptr(),
@@ -1308,19 +1277,8 @@ impl World<'_> {
 
     /// The end of a sequence: everything still held is freed, so leaks show.
     fn finish(&mut self) {
-        for i in 0..2 {
-            self.free_instance(i);
-        }
-        for k in 0..STATE_SLOTS {
-            if !self.states[k].is_null() {
-                let c = self.cleanup_instance();
-                unsafe {
-                    (self.f.fmi3FreeFMUState)(c, &mut self.states[k]);
-                    (self.f.fmi3FreeInstance)(c);
-                }
-                assert!(self.states[k].is_null(), "fmi3FreeFMUState kept a state");
-            }
-        }
+        let (held, shell) = self.held();
+        held.finish(&shell);
     }
 }
 
