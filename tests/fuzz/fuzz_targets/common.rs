@@ -294,6 +294,47 @@ impl Held {
     }
 }
 
+/// The arms of the calls on FMU states, which both versions' `Call` spell alike: a method
+/// `run_state_call` of the sequence's `World` (whose `parts` gives what the calls act on) that
+/// runs `call` if it is one of them.
+macro_rules! state_calls {
+    () => {
+        fn run_state_call(&mut self, call: &Call) {
+            let (held, shell, reached) = self.parts();
+            match *call {
+                Call::GetFmuState {
+                    who,
+                    slot,
+                    null_ptr,
+                } => held.get_state(&shell, who, slot, null_ptr),
+                Call::SetFmuState { who, slot } => held.set_state(&shell, who, slot),
+                Call::FreeFmuState { who, slot } => held.free_state(&shell, who, slot),
+                Call::Serialize {
+                    who,
+                    slot,
+                    size,
+                    ref corrupt,
+                    truncate,
+                    fix_checksum,
+                    into,
+                } => held.serialize(
+                    &shell,
+                    who,
+                    slot,
+                    size,
+                    corrupt,
+                    truncate,
+                    fix_checksum,
+                    into,
+                    &mut reached.serialize,
+                ),
+                _ => {}
+            }
+        }
+    };
+}
+pub(crate) use state_calls;
+
 /// How many of one kind of call a sequence made, and how many returned OK.
 #[derive(Default, Debug, Clone, Copy, PartialEq, Eq)]
 pub struct Count {

@@ -791,14 +791,17 @@ impl World<'_> {
         }
     }
 
-    /// The instances and FMU states held, and the functions that act on them.
-    fn held(&mut self) -> (&mut Held, Shell<'_>) {
+    /// The instances and FMU states held, the functions that act on them, and what the
+    /// sequence reached.
+    fn parts(&mut self) -> (&mut Held, Shell<'_>, &mut Reached) {
         let shell = Shell {
             f: &self.f,
             token: &self.fmu.token,
         };
-        (&mut self.held, shell)
+        (&mut self.held, shell, &mut self.reached)
     }
+
+    crate::common::state_calls!();
 
     fn len(&self, len: Len, right: usize) -> usize {
         match len {
@@ -808,7 +811,7 @@ impl World<'_> {
     }
 
     fn free_instance(&mut self, i: usize) {
-        let (held, shell) = self.held();
+        let (held, shell, _) = self.parts();
         held.free_instance(&shell, i);
     }
 
@@ -1073,46 +1076,10 @@ impl World<'_> {
                     )
                 };
             }
-            Call::GetFmuState {
-                who,
-                slot,
-                null_ptr,
-            } => {
-                let (held, shell) = self.held();
-                held.get_state(&shell, who, slot, null_ptr);
-            }
-            Call::SetFmuState { who, slot } => {
-                let (held, shell) = self.held();
-                held.set_state(&shell, who, slot);
-            }
-            Call::FreeFmuState { who, slot } => {
-                let (held, shell) = self.held();
-                held.free_state(&shell, who, slot);
-            }
-            Call::Serialize {
-                who,
-                slot,
-                size,
-                ref corrupt,
-                truncate,
-                fix_checksum,
-                into,
-            } => {
-                let mut serialized = self.reached.serialize;
-                let (held, shell) = self.held();
-                held.serialize(
-                    &shell,
-                    who,
-                    slot,
-                    size,
-                    corrupt,
-                    truncate,
-                    fix_checksum,
-                    into,
-                    &mut serialized,
-                );
-                self.reached.serialize = serialized;
-            }
+            Call::GetFmuState { .. }
+            | Call::SetFmuState { .. }
+            | Call::FreeFmuState { .. }
+            | Call::Serialize { .. } => self.run_state_call(call),
             Call::SetTime { who, t } => unsafe {
                 (self.f.fmi3SetTime)(self.held.instance(who), t.get());
             },
@@ -1277,7 +1244,7 @@ impl World<'_> {
 
     /// The end of a sequence: everything still held is freed, so leaks show.
     fn finish(&mut self) {
-        let (held, shell) = self.held();
+        let (held, shell, _) = self.parts();
         held.finish(&shell);
     }
 }
