@@ -1,18 +1,27 @@
 //! A co-simulation step makes no heap allocation: fmi2SetReal of the three inputs, fmi2DoStep
-//! of 1 ms and fmi2GetReal of the six outputs, through the C functions the FMU exports (linked
-//! here from the library), counted by a global allocator that counts every allocation made
+//! of 1 ms and fmi2GetReal of the six outputs, through the FMU's C functions (made by the
+//! library's macro as the fuzz targets make them, tests/fuzz/fuzz_targets/fmi2_sequence.rs), counted by a global allocator that counts every allocation made
 //! on the calling thread (the FMU steps on its caller's thread; the test harness's own
 //! threads allocate at times of their own, which made a process-wide count fail under load).
 //! Allocations before the loop (instantiation, initialization, the first steps while buffers
 //! settle) are not counted. The slow model's FMU (feature reduced-fmu, a build of its own) steps
 //! through the same simulator, whose held step is counted here on the slow model.
 
+// the FMU's C functions as the fuzz targets make them, with the library's macro
+#[allow(dead_code)]
+#[path = "fuzz/fuzz_targets/common.rs"]
+mod common;
+#[allow(dead_code)]
+#[path = "fuzz/fuzz_targets/fmi2_sequence.rs"]
+mod fmi2_sequence;
+
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::cell::Cell;
-use std::ffi::{CString, c_char, c_int, c_void};
-use std::ptr::null;
+use std::ffi::c_void;
+use std::ptr::{null, null_mut};
 
-use hasel_fmu::fmu::pack::{guid, platform};
+use fmi2_sequence::Fmu;
+use hasel_fmu::fmi2::types::{FMI2_CO_SIMULATION, Fmi2Status, fmi2CallbackFunctions};
 use hasel_fmu::fmu::variables::rows;
 use hasel_fmu::model::{Params, Platform, Reduction};
 use hasel_fmu::simulation::{DEFAULT_RTOL, Input, Simulator};
@@ -48,45 +57,12 @@ unsafe impl GlobalAlloc for Counting {
 #[global_allocator]
 static GLOBAL: Counting = Counting;
 
-type Component = *mut c_void;
-
-/// `fmi2CallbackFunctions` without a logger: what a quiet importer passes.
-#[repr(C)]
-struct Callbacks {
-    logger: *const c_void,
-    allocate: Option<unsafe extern "C" fn(usize, usize) -> *mut c_void>,
-    free: Option<unsafe extern "C" fn(*mut c_void)>,
-    step_finished: *const c_void,
-    environment: *mut c_void,
-}
-
 unsafe extern "C" {
-    fn fmi2Instantiate(
-        name: *const c_char,
-        kind: c_int,
-        guid: *const c_char,
-        resources: *const c_char,
-        callbacks: *const Callbacks,
-        visible: i32,
-        logging_on: i32,
-    ) -> Component;
-    fn fmi2FreeInstance(c: Component);
-    fn fmi2SetupExperiment(
-        c: Component,
-        tol_on: i32,
-        tol: f64,
-        t0: f64,
-        stop_on: i32,
-        stop: f64,
-    ) -> c_int;
-    fn fmi2EnterInitializationMode(c: Component) -> c_int;
-    fn fmi2ExitInitializationMode(c: Component) -> c_int;
-    fn fmi2SetReal(c: Component, vr: *const u32, n: usize, v: *const f64) -> c_int;
-    fn fmi2GetReal(c: Component, vr: *const u32, n: usize, v: *mut f64) -> c_int;
-    fn fmi2DoStep(c: Component, t: f64, h: f64, no_prior: i32) -> c_int;
     fn calloc(n: usize, size: usize) -> *mut c_void;
     fn free(p: *mut c_void);
 }
+
+const OK: Fmi2Status = Fmi2Status::Ok;
 
 fn vrs<const N: usize>(names: [&str; N]) -> [u32; N] {
     names.map(|name| rows().iter().position(|r| r.name == name).unwrap() as u32)
@@ -96,19 +72,20 @@ fn vrs<const N: usize>(names: [&str; N]) -> [u32; N] {
 fn set_real_do_step_and_get_real_allocate_nothing() {
     let inputs = vrs(["U1", "U2", "U3"]);
     let outputs = vrs(["h1", "h2", "h3", "tip_x", "tip_y", "tip_z"]);
-    let guid = CString::new(guid(&platform(&Params::default()))).unwrap();
-    let callbacks = Callbacks {
-        logger: null(),
-        allocate: Some(calloc),
-        free: Some(free),
-        step_finished: null(),
-        environment: std::ptr::null_mut(),
+    let fmu = Fmu::platform();
+    let f = fmu.functions;
+    let callbacks = fmi2CallbackFunctions {
+        logger: None,
+        allocate_memory: Some(calloc),
+        free_memory: Some(free),
+        step_finished: None,
+        component_environment: null_mut(),
     };
     let c = unsafe {
-        fmi2Instantiate(
+        (f.fmi2Instantiate)(
             c"alloc".as_ptr(),
-            1,
-            guid.as_ptr(),
+            FMI2_CO_SIMULATION,
+            fmu.token.as_ptr(),
             null(),
             &callbacks,
             0,
@@ -117,9 +94,9 @@ fn set_real_do_step_and_get_real_allocate_nothing() {
     };
     assert!(!c.is_null());
     unsafe {
-        assert_eq!(fmi2SetupExperiment(c, 0, 0.0, 0.0, 0, 0.0), 0);
-        assert_eq!(fmi2EnterInitializationMode(c), 0);
-        assert_eq!(fmi2ExitInitializationMode(c), 0);
+        assert_eq!((f.fmi2SetupExperiment)(c, 0, 0.0, 0.0, 0, 0.0), OK);
+        assert_eq!((f.fmi2EnterInitializationMode)(c), OK);
+        assert_eq!((f.fmi2ExitInitializationMode)(c), OK);
     }
     let input = Input::sine(60.0, 3.0 * std::f64::consts::PI);
     let dt = 1e-3;
@@ -127,14 +104,14 @@ fn set_real_do_step_and_get_real_allocate_nothing() {
     let mut step = |k: usize| unsafe {
         let t = k as f64 * dt;
         assert_eq!(
-            fmi2SetReal(c, inputs.as_ptr(), 3, input.value(t).as_ptr()),
-            0
+            (f.fmi2SetReal)(c, inputs.as_ptr(), 3, input.value(t).as_ptr()),
+            OK
         );
-        assert_eq!(fmi2DoStep(c, t, dt, 1), 0, "step {k}");
-        assert_eq!(fmi2GetReal(c, outputs.as_ptr(), 6, y.as_mut_ptr()), 0);
+        assert_eq!((f.fmi2DoStep)(c, t, dt, 1), OK, "step {k}");
+        assert_eq!((f.fmi2GetReal)(c, outputs.as_ptr(), 6, y.as_mut_ptr()), OK);
     };
     let made = allocations_in_steps(&mut step);
-    unsafe { fmi2FreeInstance(c) };
+    unsafe { (f.fmi2FreeInstance)(c) };
     assert!(y.iter().all(|v| v.is_finite()));
     assert_eq!(made, 0, "{made} heap allocations in 2,000 steps");
 }
