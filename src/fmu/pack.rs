@@ -65,7 +65,7 @@ pub fn reduced(params: &Params) -> Spec {
                 the top film on its invariant curve, plus the states of the effects that are on. \
                 Without the nanosecond and microsecond modes of the full model its Model Exchange \
                 runs under any importer's integrator, fixed-step ones included; it follows the \
-                full model within about 0.2 um (the error table is in the project's README, \
+                full model within about 0.2 um (the error table is in the project's book, chapter \
                 \"Reduced models\"). H is the reduced storage (without the charges' and the \
                 momentum's energy), P_supplied adds the electrode's electromechanical power. \
                 Co-Simulation runs the same model with the internal Radau IIA solver; directional \
