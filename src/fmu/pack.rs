@@ -286,10 +286,94 @@ pub fn read_library(
 ) -> Result<Library, FileError> {
     let bytes = std::fs::read(library)
         .map_err(|e| FileError::new(library, format!("cannot read the FMU library: {e}")))?;
-    let platform = platform_of(&bytes).map_err(|e| FileError::new(library, e))?;
+    library_of(bytes, version, feature).map_err(|e| FileError::new(library, e))
+}
+
+/// The largest shared library taken out of an FMU: ten times the release build's largest.
+const MAX_LIBRARY_BYTES: u64 = 100 << 20;
+
+/// The shared libraries in the FMU `fmu` (its `binaries/`), each checked as [`read_library`]
+/// checks a file and named as `identifier`'s, with the FMI version its description declares:
+/// to pack the same model with other start values (`hasel fmu --from`).
+pub fn libraries_in(
+    fmu: &Path,
+    identifier: &str,
+    feature: Option<&str>,
+) -> Result<(FmiVersion, Vec<Library>), FileError> {
+    use std::io::Read;
+    let fail = |what: String| FileError::new(fmu, what);
+    let file = std::fs::File::open(fmu).map_err(|e| fail(format!("cannot read the FMU: {e}")))?;
+    let mut zip =
+        zip::ZipArchive::new(file).map_err(|e| fail(format!("not an FMU (a zip archive): {e}")))?;
+    let mut description = String::new();
+    zip.by_name("modelDescription.xml")
+        .map_err(|e| fail(format!("no modelDescription.xml: {e}")))?
+        .take(MAX_LIBRARY_BYTES)
+        .read_to_string(&mut description)
+        .map_err(|e| fail(format!("modelDescription.xml: {e}")))?;
+    let version = if description.contains(r#"fmiVersion="3.0""#) {
+        FmiVersion::V3
+    } else if description.contains(r#"fmiVersion="2.0""#) {
+        FmiVersion::V2
+    } else {
+        return Err(fail(
+            "modelDescription.xml declares neither fmiVersion 2.0 nor 3.0".into(),
+        ));
+    };
+    let mut libraries = Vec::new();
+    for i in 0..zip.len() {
+        let mut entry = zip
+            .by_index(i)
+            .map_err(|e| fail(format!("entry {i}: {e}")))?;
+        let name = entry
+            .name()
+            .map_err(|e| fail(format!("entry {i}: {e}")))?
+            .to_string();
+        let Some((_, file)) = name
+            .strip_prefix("binaries/")
+            .and_then(|r| r.split_once('/'))
+        else {
+            continue;
+        };
+        if entry.is_dir() || file.is_empty() {
+            continue;
+        }
+        if file.split('.').next() != Some(identifier) {
+            return Err(fail(format!(
+                "{name}: not a library of {identifier} (an FMU of another model?)"
+            )));
+        }
+        if entry.size() > MAX_LIBRARY_BYTES {
+            return Err(fail(format!(
+                "{name}: {} bytes, more than a library of this FMU holds",
+                entry.size()
+            )));
+        }
+        let mut bytes = Vec::new();
+        entry
+            .by_ref()
+            .take(MAX_LIBRARY_BYTES + 1)
+            .read_to_end(&mut bytes)
+            .map_err(|e| fail(format!("{name}: {e}")))?;
+        libraries
+            .push(library_of(bytes, version, feature).map_err(|e| fail(format!("{name}: {e}")))?);
+    }
+    if libraries.is_empty() {
+        return Err(fail("no shared library under binaries/".into()));
+    }
+    Ok((version, libraries))
+}
+
+/// The shared library in `bytes`, checked as [`read_library`] says.
+fn library_of(
+    bytes: Vec<u8>,
+    version: FmiVersion,
+    feature: Option<&str>,
+) -> Result<Library, String> {
+    let platform = platform_of(&bytes)?;
     let folder = platform
         .folder(version == FmiVersion::V3)
-        .map_err(|e| FileError::new(library, format!("a {platform} library: {e}")))?;
+        .map_err(|e| format!("a {platform} library: {e}"))?;
     let (needed, foreign) = version.marker_symbols();
     if !contains(&bytes, needed) || contains(&bytes, foreign) {
         let features: Vec<&str> = feature
@@ -300,12 +384,9 @@ pub fn read_library(
             f if f.is_empty() => "cargo build --release --lib".to_string(),
             f => format!("cargo build --release --lib --features {f}"),
         };
-        return Err(FileError::new(
-            library,
-            format!(
-                "not the {} build of the library (it must export {needed} and not {foreign}; build it with `{build}`)",
-                version.name()
-            ),
+        return Err(format!(
+            "not the {} build of the library (it must export {needed} and not {foreign}; build it with `{build}`)",
+            version.name()
         ));
     }
     Ok(Library {

@@ -95,6 +95,10 @@ pub struct Args {
     /// beside this executable)
     #[arg(long, value_name = "FILE")]
     lib_fmi3: Vec<PathBuf>,
+    /// Take the libraries of this FMU (of the same model, any version and platforms, e.g. one
+    /// the wheel installed) instead of `--lib`/`--lib-fmi3`: the same FMU with other start values
+    #[arg(long, value_name = "FILE.fmu", conflicts_with_all = ["lib", "lib_fmi3"])]
+    from: Option<PathBuf>,
 }
 
 #[derive(clap::Args)]
@@ -150,6 +154,9 @@ pub fn run(a: Args) -> Result<(), Error> {
     check_version(a.model, a.fmi)?;
     let params = load_params(&a.params)?;
     let spec = a.model.spec(&params);
+    if let Some(from) = &a.from {
+        return repack(&a, from, &spec, &params);
+    }
     let out = a
         .out
         .unwrap_or_else(|| PathBuf::from(format!("fmu/{}.fmu", a.model.identifier())));
@@ -188,6 +195,45 @@ pub fn run(a: Args) -> Result<(), Error> {
         );
     }
     Ok(())
+}
+
+/// `hasel fmu --from`: the libraries of the FMU `from`, packed with `params`.
+fn repack(a: &Args, from: &Path, spec: &Spec, params: &Params) -> Result<(), Error> {
+    let (version, libraries) = pack::libraries_in(from, a.model.identifier(), a.model.feature())?;
+    if let Some(fmi) = a.fmi
+        && FmiVersion::from(fmi) != version
+    {
+        return Err(Error::flag(
+            "fmi",
+            version_number(fmi),
+            format!("{} is an {} FMU", from.display(), version.name()),
+        ));
+    }
+    let out = a.out.clone().unwrap_or_else(|| {
+        let out = PathBuf::from(format!("fmu/{}.fmu", a.model.identifier()));
+        match version {
+            FmiVersion::V2 => out,
+            FmiVersion::V3 => fmi3_name(&out),
+        }
+    });
+    let folders: Vec<&str> = libraries.iter().map(|l| l.folder).collect();
+    pack::pack(libraries, spec, params, &out, version)?;
+    say!(
+        "wrote {} ({}, token {}), binaries {} from {}",
+        out.display(),
+        version.name(),
+        version.token(spec),
+        folders.join(", "),
+        from.display()
+    );
+    Ok(())
+}
+
+fn version_number(fmi: Fmi) -> u8 {
+    match fmi {
+        Fmi::V2 => 2,
+        Fmi::V3 => 3,
+    }
 }
 
 pub fn describe(a: DescribeArgs) -> Result<(), Error> {

@@ -48,7 +48,7 @@ enum Command {
     Simulate(simulate::Args),
     /// Print the parameters (defaults, or a file's values over them) as a parameter file
     Params(simulate::ParamsArgs),
-    /// Pack the FMI 2.0 FMU (Co-Simulation and Model Exchange)
+    /// Pack the FMUs (FMI 2.0 and 3.0, Co-Simulation and Model Exchange) with a parameter set
     Fmu(fmu::Args),
     /// Print the FMU's modelDescription.xml
     Describe(fmu::DescribeArgs),
