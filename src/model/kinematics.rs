@@ -16,16 +16,15 @@ pub struct Kinematics {
 }
 
 /// The exact inverse did not converge (the tip is out of reach of the geometry).
-#[derive(Clone, Debug, PartialEq)]
-pub struct IkmError(pub String);
-
-impl std::fmt::Display for IkmError {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(&self.0)
-    }
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum IkmError {
+    /// The kinematics Jacobian is singular at the heights `h` \[m\] of a Newton step.
+    #[error("singular kinematics Jacobian at h = {h:?} m")]
+    SingularJacobian { h: [f64; 3] },
+    /// Newton did not converge in its step limit; `h` \[m\] are the last heights.
+    #[error("inverse kinematics did not converge (last h = {h:?} m)")]
+    NotConverged { h: [f64; 3] },
 }
-
-impl std::error::Error for IkmError {}
 
 /// Which inverse of the kinematics (book/src/model.md, "Inverse kinematics").
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -152,10 +151,7 @@ impl Kinematics {
     ) -> Result<[f64; 3], IkmError> {
         for _ in 0..50 {
             let (r, jac) = residual(self, h);
-            let step = jac
-                .lu()
-                .solve(&r)
-                .ok_or_else(|| IkmError(format!("singular kinematics Jacobian at h = {h:?} m")))?;
+            let step = jac.lu().solve(&r).ok_or(IkmError::SingularJacobian { h })?;
             for i in 0..3 {
                 h[i] -= step[i];
             }
@@ -163,9 +159,7 @@ impl Kinematics {
                 return Ok(h);
             }
         }
-        Err(IkmError(format!(
-            "inverse kinematics did not converge (last h = {h:?} m)"
-        )))
+        Err(IkmError::NotConverged { h })
     }
 }
 

@@ -4,8 +4,6 @@
 //! variables and the identification reports. The table `PARAMETERS` is the single source of
 //! truth for names, units, descriptions, the validation rule and how to read and write each value.
 
-use std::fmt;
-
 use super::effects::{Effect, EffectParams};
 
 /// Parameters of one HASEL actuator (the paper's identified table: book/src/model.md,
@@ -167,30 +165,17 @@ pub struct ParamDef {
 }
 
 /// A parameter value that breaks its rule, or a name that does not exist.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
 pub enum ParamError {
+    #[error("parameter {name} = {value:e}: {rule}")]
     Invalid {
         name: String,
         value: f64,
         rule: String,
     },
-    Unknown {
-        name: String,
-    },
+    #[error("unknown parameter '{name}'")]
+    Unknown { name: String },
 }
-
-impl fmt::Display for ParamError {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        match self {
-            ParamError::Invalid { name, value, rule } => {
-                write!(f, "parameter {name} = {value:e}: {rule}")
-            }
-            ParamError::Unknown { name } => write!(f, "unknown parameter '{name}'"),
-        }
-    }
-}
-
-impl std::error::Error for ParamError {}
 
 macro_rules! actuator_rows {
     ($($field:ident, $name:literal, $unit:literal, $rule:ident, $desc:literal;)*) => {

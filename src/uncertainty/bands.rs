@@ -5,7 +5,7 @@ use std::path::Path;
 use std::sync::Mutex;
 use std::sync::atomic::{AtomicUsize, Ordering};
 
-use super::{Posterior, SampleFailure, UncertaintyError};
+use super::{Posterior, SampleError, UncertaintyError};
 use crate::io::csv::Table;
 use crate::io::file::write_text_atomic;
 use crate::model::Platform;
@@ -50,7 +50,7 @@ pub struct Bands {
     /// ([`Posterior::names`]).
     pub draws: Vec<Vec<f64>>,
     /// Samples whose draw or simulation failed, with the reason; left out of the bands.
-    pub failed: Vec<(usize, SampleFailure)>,
+    pub failed: Vec<(usize, SampleError)>,
 }
 
 /// The quantile `p` of sorted `v` (linear between order statistics: numpy's default).
@@ -67,9 +67,9 @@ fn one(
     input: &Input,
     s: &Settings,
     index: usize,
-) -> (Vec<f64>, Result<Vec<[f64; 6]>, SampleFailure>) {
+) -> (Vec<f64>, Result<Vec<[f64; 6]>, SampleError>) {
     let values = posterior.values_at(&posterior.draw_coordinates(s.seed, index as u64));
-    let run = || -> Result<Vec<[f64; 6]>, SampleFailure> {
+    let run = || -> Result<Vec<[f64; 6]>, SampleError> {
         let params = posterior.params_at(&values)?;
         let model = Platform::new(params)?;
         let mut sim = Simulator::new(model, 0.0, s.rtol)?;
@@ -129,7 +129,7 @@ pub fn run(
     let t: Vec<f64> = (0..=last).map(|k| (k as f64 * s.dt).min(s.t_end)).collect();
     let u: Vec<[f64; 3]> = t.iter().map(|&ti| input.value(ti)).collect();
 
-    type Outcome = (Vec<f64>, Result<Vec<[f64; 6]>, SampleFailure>);
+    type Outcome = (Vec<f64>, Result<Vec<[f64; 6]>, SampleError>);
     let results: Mutex<Vec<Option<Outcome>>> = Mutex::new(vec![None; s.samples]);
     let next = AtomicUsize::new(0);
     std::thread::scope(|scope| {
@@ -157,13 +157,13 @@ pub fn run(
     let mut failed = Vec::new();
     let mut ok: Vec<Vec<[f64; 6]>> = Vec::new();
     for (k, r) in results.into_iter().enumerate() {
-        let (values, outcome) = r.unwrap_or((Vec::new(), Err(SampleFailure::NotRun)));
+        let (values, outcome) = r.unwrap_or((Vec::new(), Err(SampleError::NotRun)));
         draws.push(values);
         match outcome {
             Ok(out) if out.len() == t.len() => ok.push(out),
             Ok(out) => failed.push((
                 k,
-                SampleFailure::ShortRun {
+                SampleError::ShortRun {
                     got: out.len(),
                     expected: t.len(),
                 },
