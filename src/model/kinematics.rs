@@ -29,11 +29,11 @@ pub enum IkmError {
 /// Which inverse of the kinematics (book/src/model.md, "Inverse kinematics").
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Inverse {
-    /// The paper's closed form, approximate: [`Kinematics::heights_closed_form`].
+    /// The paper's closed form, approximate: `Kinematics::heights_closed_form`.
     ClosedForm,
     /// Newton on the FKM: [`Kinematics::heights`].
     Exact,
-    /// From the tip's X and Y and the mean height h̄ \[m\]: [`Kinematics::heights_from_xy`].
+    /// From the tip's X and Y and the mean height h̄ \[m\]: `Kinematics::heights_from_xy`.
     Xy { mean_height: f64 },
 }
 
@@ -100,7 +100,7 @@ impl Kinematics {
     /// The paper's closed-form IKM ("normal-aligned stick"): v = (X − mean X_i, Y − mean Y_i, Z),
     /// n = v/‖v‖, C_p = Tip − L n, h_i = C_pZ − (n_X (X_i − C_pX) + n_Y (Y_i − C_pY)) / n_Z.
     /// Approximate: about 0.25 µm error per 100 µm of mean height.
-    pub fn heights_closed_form(&self, tip: [f64; 3]) -> [f64; 3] {
+    fn heights_closed_form(&self, tip: [f64; 3]) -> [f64; 3] {
         let m = self.anchor_mean();
         let n = Vector3::new(tip[0] - m[0], tip[1] - m[1], tip[2]).normalize();
         let c_p = Vector3::from(tip) - self.length * n;
@@ -128,7 +128,7 @@ impl Kinematics {
     }
 
     /// Inverse from tip X, Y and the mean height h̄ (heave is not observable from X, Y alone).
-    pub fn heights_from_xy(&self, xy: [f64; 2], mean_height: f64) -> Result<[f64; 3], IkmError> {
+    fn heights_from_xy(&self, xy: [f64; 2], mean_height: f64) -> Result<[f64; 3], IkmError> {
         let guess = [mean_height; 3];
         self.newton(guess, |k, h| {
             let tip = k.tip(h);

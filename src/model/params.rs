@@ -338,7 +338,7 @@ impl Params {
     /// A_s(θ = 0, l_p = Lp) + Xh·Le: the liquid area for which the electrode is unzipped
     /// (le = 0) at θ = 0, the pinned default of A_T (book/src/model.md, "Open choices and
     /// pinned defaults").
-    pub fn unzipped_liquid_area(&self) -> f64 {
+    fn unzipped_liquid_area(&self) -> f64 {
         let geometry = crate::model::shell::Shell::new(0.0, self.lp, self.lv)
             .expect("Lp > Lv at theta = 0 for the default geometry");
         geometry.a_s + self.xh * self.le

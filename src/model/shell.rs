@@ -102,7 +102,8 @@ impl Shell {
     }
 
     /// δ1 \[rad\].
-    pub fn delta1(&self) -> f64 {
+    #[cfg(test)]
+    fn delta1(&self) -> f64 {
         self.sin_d.atan2(self.cos_d)
     }
 

@@ -103,7 +103,7 @@ fn voltage_at(a: &Actuator, theta: f64, height: f64) -> Result<f64, UnreachableE
 /// branch: h = ½ Lv sin θ (model.md, "Shell geometry and C2") gives θ; the equilibrium is
 /// stable where the stiffness along the curve −∂ṗ/∂θ at fixed U is positive, i.e. where the
 /// holding voltage grows with θ (∂ṗ/∂U > 0), checked over a step of `STABILITY_PROBE` θ*.
-pub fn holding_voltage(a: &Actuator, lv: f64, h: f64) -> Result<f64, UnreachableError> {
+fn holding_voltage(a: &Actuator, lv: f64, h: f64) -> Result<f64, UnreachableError> {
     let limit = 0.5 * lv;
     if h.is_nan() || h.abs() >= limit {
         return Err(UnreachableError::NoAngle { height: h, limit });

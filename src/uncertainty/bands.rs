@@ -16,9 +16,9 @@ use crate::simulation::{Input, Simulator};
 pub const OUTPUTS: [&str; 6] = ["h1", "h2", "h3", "tip_x", "tip_y", "tip_z"];
 
 /// The probabilities of the bands' edges and middle.
-pub const LOWER: f64 = 0.025;
-pub const MEDIAN: f64 = 0.5;
-pub const UPPER: f64 = 0.975;
+const LOWER: f64 = 0.025;
+const MEDIAN: f64 = 0.5;
+const UPPER: f64 = 0.975;
 
 /// The most memory the kept outputs of a study may take [bytes].
 const MAX_BYTES: f64 = 8e9;
@@ -241,7 +241,7 @@ impl Bands {
     /// (the estimated ones as drawn, the rest at their value), so each row is a complete
     /// parameter set for the FMU. Failed samples are marked in `failed` (1) with their reason
     /// left to the command's report.
-    pub fn draws_csv(&self, posterior: &Posterior) -> String {
+    fn draws_csv(&self, posterior: &Posterior) -> String {
         let all: Vec<&'static str> = crate::model::params::parameters().map(|d| d.name).collect();
         let mut text = format!("sample,failed,{}\n", all.join(","));
         for (k, values) in self.draws.iter().enumerate() {

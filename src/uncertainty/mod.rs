@@ -97,7 +97,7 @@ fn mix(mut z: u64) -> u64 {
 }
 
 /// The seed of sample `index` of a study seeded `seed`: a function of the two alone.
-pub fn sample_seed(seed: u64, index: u64) -> u64 {
+fn sample_seed(seed: u64, index: u64) -> u64 {
     mix(mix(seed) ^ index)
 }
 
