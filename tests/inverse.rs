@@ -4,7 +4,7 @@
 
 use hasel_fmu::control::equilibrium;
 use hasel_fmu::model::kinematics::Inverse;
-use hasel_fmu::model::statics::{StaticsError, Unreachable, feedforward, holding_voltages};
+use hasel_fmu::model::statics::{StaticsError, UnreachableError, feedforward, holding_voltages};
 use hasel_fmu::model::{Params, Platform};
 use hasel_fmu::simulation::Simulator;
 
@@ -96,9 +96,9 @@ fn heights_without_a_holding_voltage_are_named() {
         };
         assert_eq!(*a, actuator, "{e}");
         let matches = match what {
-            "below" => matches!(cause, Unreachable::BelowRest { .. }),
-            "beyond" => matches!(cause, Unreachable::BeyondGain { .. }),
-            _ => matches!(cause, Unreachable::NoAngle { .. }),
+            "below" => matches!(cause, UnreachableError::BelowRest { .. }),
+            "beyond" => matches!(cause, UnreachableError::BeyondGain { .. }),
+            _ => matches!(cause, UnreachableError::NoAngle { .. }),
         };
         assert!(matches, "{what}: {e}");
     }

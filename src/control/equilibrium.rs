@@ -404,7 +404,7 @@ impl<'m> Reduced<'m> {
 /// ẋ = (J − R)∇H + g U (model.md, "Dynamics"): the rounding of f_r is a few ulps of size_r,
 /// so at an equilibrium computed to round-off this is a small multiple of 1e-16. The effects'
 /// contributions are counted as the magnitudes of their Jacobian terms |∂f_r/∂x_k x_k|.
-pub fn relative_residual(model: &Platform, x: &[f64], u: [f64; 3]) -> Result<f64, ControlError> {
+fn relative_residual(model: &Platform, x: &[f64], u: [f64; 3]) -> Result<f64, ControlError> {
     let sizes = term_sizes(model, x, u)?;
     let n = x.len();
     let mut f = vec![0.0; n];
@@ -416,7 +416,7 @@ pub fn relative_residual(model: &Platform, x: &[f64], u: [f64; 3]) -> Result<f64
 }
 
 /// The magnitudes of the terms of each row of ẋ at (x, U) (see [`relative_residual`]).
-pub fn term_sizes(model: &Platform, x: &[f64], u: [f64; 3]) -> Result<Vec<f64>, ControlError> {
+fn term_sizes(model: &Platform, x: &[f64], u: [f64; 3]) -> Result<Vec<f64>, ControlError> {
     let n = x.len();
     let nb = n / 3;
     let params = model.params();

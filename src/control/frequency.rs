@@ -103,7 +103,7 @@ impl Evaluator {
     }
 
     /// The state phasor X = (jωI − A)⁻¹ B û for the input phasor û, in SI units.
-    pub fn state_phasor(&self, omega: f64, u: [f64; 3]) -> Result<Vec<Complex<f64>>, ControlError> {
+    fn state_phasor(&self, omega: f64, u: [f64; 3]) -> Result<Vec<Complex<f64>>, ControlError> {
         let x = self.resolvent_b(omega)?;
         Ok((0..x.nrows())
             .map(|r| (0..3).map(|j| x[(r, j)] * u[j]).sum::<Complex<f64>>() * self.back[r])

@@ -208,7 +208,7 @@ pub fn tie(n: usize, slopes: &[f64; 3]) -> (DMatrix<f64>, Vec<usize>) {
 }
 
 /// The minimal model on the invariant curves: A_m = L A T, B_m = L B, C_m = C T, D_m = D.
-pub fn minimal_model(full: &StateSpace, slopes: &[f64; 3]) -> StateSpace {
+fn minimal_model(full: &StateSpace, slopes: &[f64; 3]) -> StateSpace {
     let n = full.n_states();
     let (t, kept) = tie(n, slopes);
     let select = |m: &DMatrix<f64>| DMatrix::from_fn(kept.len(), m.ncols(), |r, c| m[(kept[r], c)]);

@@ -26,8 +26,6 @@ pub mod port_hamiltonian;
 pub mod reduce;
 pub mod report;
 
-use std::fmt;
-
 use crate::io::file::FileError;
 use crate::model::shell::DomainError;
 use crate::model::{ModelError, ParamError};
@@ -52,14 +50,13 @@ pub enum NoEquilibrium {
 }
 
 /// Errors of the control-design computations.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
 pub enum ControlError {
     /// A requested voltage is not a finite number.
-    BadVoltage {
-        input: usize,
-        value: f64,
-    },
+    #[error("U{} = {value}: must be a finite number", .input + 1)]
+    BadVoltage { input: usize, value: f64 },
     /// No equilibrium on the branch through the rest state at the requested voltages.
+    #[error("{}", no_equilibrium(*.actuator, .requested, .reached, .cause))]
     NoEquilibrium {
         /// 1-based actuator that limits the branch.
         actuator: usize,
@@ -70,114 +67,70 @@ pub enum ControlError {
         cause: NoEquilibrium,
     },
     /// A setting is out of range (the name and the value).
-    Setting {
-        name: &'static str,
-        value: f64,
-    },
-    Param(ParamError),
-    Model(ModelError),
-    Simulation(SimError),
+    #[error("{name} = {value}: out of range")]
+    Setting { name: &'static str, value: f64 },
+    #[error(transparent)]
+    Param(#[from] ParamError),
+    #[error(transparent)]
+    Model(#[from] ModelError),
+    #[error("simulation: {0}")]
+    Simulation(#[from] SimError),
     /// A dense computation failed (what, and why).
+    #[error("{what}: {why}")]
     Numerics {
         what: &'static str,
         why: &'static str,
     },
     /// The decomposition is implemented for the paper's model; these effects are active.
+    #[error(
+        "{what} is implemented for the paper's model; active effects: {}",
+        .effects.join(", ")
+    )]
     Unsupported {
         what: &'static str,
         effects: Vec<String>,
     },
     /// The linearization has eigenvalues on or right of the imaginary axis (after removing
     /// the Casimir directions), so the Gramians of a balanced reduction do not exist.
-    NotStable {
-        eigenvalue: (f64, f64),
-    },
+    #[error(
+        "the linearization is not asymptotically stable (eigenvalue {:.4e} {:+.4e}i)",
+        .eigenvalue.0,
+        .eigenvalue.1
+    )]
+    NotStable { eigenvalue: (f64, f64) },
     /// The linearization does not move the outputs at all (every U0 = 0: the electrostatic
     /// force goes with U², so its first-order gain is zero), so there is nothing to reduce.
+    #[error(
+        "the linearization has no gain from the voltages to the outputs (at U = 0 the \
+         electrostatic force goes with U², so its first-order response is zero): no \
+         reduced model"
+    )]
     NoGain,
-    File(FileError),
+    #[error(transparent)]
+    File(#[from] FileError),
 }
 
-impl fmt::Display for ControlError {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        match self {
-            ControlError::BadVoltage { input, value } => {
-                write!(f, "U{} = {value}: must be a finite number", input + 1)
-            }
-            ControlError::NoEquilibrium {
-                actuator,
-                requested,
-                reached,
-                cause,
-            } => {
-                let i = actuator - 1;
-                write!(
-                    f,
-                    "no equilibrium at U{actuator} = {} V on the branch through the rest state: \
-                     continued from 0 V up to U{actuator} = {} V, ",
-                    requested[i], reached[i]
-                )?;
-                match cause {
-                    NoEquilibrium::PullIn { stiffness } => write!(
-                        f,
-                        "where the stiffness along the invariant curve falls to {stiffness:.3e} \
-                         N m/rad (pull-in: the branch folds)"
-                    ),
-                    NoEquilibrium::Domain(e) => {
-                        write!(f, "where it leaves the model's domain ({e})")
-                    }
-                    NoEquilibrium::NotConverged => {
-                        f.write_str("where Newton stops converging (no equilibrium nearby)")
-                    }
-                }
-            }
-            ControlError::Setting { name, value } => write!(f, "{name} = {value}: out of range"),
-            ControlError::Param(e) => write!(f, "{e}"),
-            ControlError::Model(e) => write!(f, "{e}"),
-            ControlError::Simulation(e) => write!(f, "simulation: {e}"),
-            ControlError::Numerics { what, why } => write!(f, "{what}: {why}"),
-            ControlError::Unsupported { what, effects } => write!(
-                f,
-                "{what} is implemented for the paper's model; active effects: {}",
-                effects.join(", ")
-            ),
-            ControlError::NotStable { eigenvalue } => write!(
-                f,
-                "the linearization is not asymptotically stable (eigenvalue {:.4e} {:+.4e}i)",
-                eigenvalue.0, eigenvalue.1
-            ),
-            ControlError::NoGain => f.write_str(
-                "the linearization has no gain from the voltages to the outputs (at U = 0 the \
-                 electrostatic force goes with U², so its first-order response is zero): no \
-                 reduced model",
-            ),
-            ControlError::File(e) => write!(f, "{e}"),
+/// The message of [`ControlError::NoEquilibrium`]: how far the branch went, and why it ended.
+fn no_equilibrium(
+    actuator: usize,
+    requested: &[f64; 3],
+    reached: &[f64; 3],
+    cause: &NoEquilibrium,
+) -> String {
+    let i = actuator - 1;
+    let why = match cause {
+        NoEquilibrium::PullIn { stiffness } => format!(
+            "where the stiffness along the invariant curve falls to {stiffness:.3e} \
+             N m/rad (pull-in: the branch folds)"
+        ),
+        NoEquilibrium::Domain(e) => format!("where it leaves the model's domain ({e})"),
+        NoEquilibrium::NotConverged => {
+            "where Newton stops converging (no equilibrium nearby)".to_string()
         }
-    }
-}
-
-impl std::error::Error for ControlError {}
-
-impl From<ModelError> for ControlError {
-    fn from(e: ModelError) -> Self {
-        ControlError::Model(e)
-    }
-}
-
-impl From<SimError> for ControlError {
-    fn from(e: SimError) -> Self {
-        ControlError::Simulation(e)
-    }
-}
-
-impl From<FileError> for ControlError {
-    fn from(e: FileError) -> Self {
-        ControlError::File(e)
-    }
-}
-
-impl From<ParamError> for ControlError {
-    fn from(e: ParamError) -> Self {
-        ControlError::Param(e)
-    }
+    };
+    format!(
+        "no equilibrium at U{actuator} = {} V on the branch through the rest state: \
+         continued from 0 V up to U{actuator} = {} V, {why}",
+        requested[i], reached[i]
+    )
 }

@@ -133,7 +133,7 @@ pub struct Passivity {
     /// Are all eigenvalues of the minimal model in the open left half-plane? (Without that
     /// the frequency-domain test says nothing.)
     pub stable: bool,
-    /// stable and min_hermitian ≥ −[`PASSIVITY_TOLERANCE`] · scale.
+    /// stable and min_hermitian ≥ −`PASSIVITY_TOLERANCE` · scale.
     pub passive: bool,
     /// The port's DC conductance G_port(0) per actuator (diagonal) \[S\].
     pub dc: Vec<f64>,
@@ -141,7 +141,7 @@ pub struct Passivity {
 
 /// Rounding allowance of the grid check, relative to the port's largest gain: G(jω) is
 /// computed with a condition number of about 1e8 (the time scales span eight decades).
-pub const PASSIVITY_TOLERANCE: f64 = 1e-9;
+const PASSIVITY_TOLERANCE: f64 = 1e-9;
 
 /// The decomposition at the linearization's point (see the module documentation).
 pub fn decompose(model: &Platform, lin: &Linearization) -> Result<PortHamiltonian, ControlError> {

@@ -27,7 +27,7 @@ use super::{ControlError, linalg};
 const NUMERICAL_ZERO: f64 = 1e-7;
 
 /// The highest frequency of the reported error \[Hz\].
-pub const ERROR_BAND: f64 = 100.0;
+const ERROR_BAND: f64 = 100.0;
 
 /// How far the reduced model's frequency response is from the full one.
 #[derive(Clone, Debug, PartialEq)]

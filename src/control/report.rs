@@ -22,8 +22,8 @@ use crate::plot::{self, Panel, Series};
 /// (between them the slow film modes; the time scales at rest in book/src/control.md,
 /// "Time scales and accuracy": 2.4–30,
 /// 1.8e4–2.3e5 and 4.4e7–3.65e8 s⁻¹).
-pub const ELECTRICAL: f64 = 1e6;
-pub const MECHANICAL: f64 = 1e3;
+const ELECTRICAL: f64 = 1e6;
+const MECHANICAL: f64 = 1e3;
 
 /// The class of a mode by its rate.
 pub fn mode_class(lambda: Complex<f64>) -> &'static str {
@@ -43,7 +43,7 @@ fn pairs(ev: &[Complex<f64>]) -> Value {
 
 /// A matrix as CSV text: one row per line, no header, every number in Rust's shortest
 /// round-trip exponent form (`-1.2345e-9`).
-pub fn csv_text(m: &DMatrix<f64>) -> String {
+fn csv_text(m: &DMatrix<f64>) -> String {
     let mut s = String::new();
     for r in 0..m.nrows() {
         let line: Vec<String> = (0..m.ncols()).map(|c| format!("{:e}", m[(r, c)])).collect();
@@ -92,7 +92,7 @@ pub struct Contents<'a> {
 }
 
 /// `linearization.json`.
-pub fn linearization_json(c: &Contents) -> Value {
+fn linearization_json(c: &Contents) -> Value {
     let lin = c.lin;
     let mut m = system_json(&lin.system, lin.u0, &lin.x0, lin.y0, &lin.eigenvalues);
     m.insert(
@@ -263,7 +263,7 @@ fn ph_json(ph: &PortHamiltonian, lin: &Linearization) -> Value {
 }
 
 /// `reduced.json`.
-pub fn reduced_json(r: &Reduced, lin: &Linearization) -> Value {
+fn reduced_json(r: &Reduced, lin: &Linearization) -> Value {
     let mut m = system_json(
         &r.system,
         lin.u0,
@@ -342,7 +342,7 @@ pub fn write(dir: &Path, c: &Contents, bode: &Bode) -> Result<Vec<std::path::Pat
 pub struct Bode {
     pub freqs: Vec<f64>,
     pub g: Vec<DMatrix<Complex<f64>>>,
-    pub poles: Vec<Complex<f64>>,
+    poles: Vec<Complex<f64>>,
     pub outputs: Vec<String>,
 }
 
@@ -407,7 +407,7 @@ fn unwrap_phase(g: &[Complex<f64>]) -> Vec<f64> {
 
 /// `bode.png`: magnitude (dB re 1 um/V) and phase from each voltage to the heights and to the
 /// tip, on a logarithmic frequency axis, with the poles marked by class.
-pub fn draw_bode(path: &Path, b: &Bode) -> Result<(), FileError> {
+fn draw_bode(path: &Path, b: &Bode) -> Result<(), FileError> {
     let peak =
         b.g.iter()
             .flat_map(|g| g.iter().map(|z| z.norm()))
@@ -564,7 +564,7 @@ pub fn draw_bode(path: &Path, b: &Bode) -> Result<(), FileError> {
 }
 
 /// `step.png`: the outputs' response to the voltage step, linear (lines) and nonlinear (dots).
-pub fn draw_step(path: &Path, s: &StepComparison) -> Result<(), FileError> {
+fn draw_step(path: &Path, s: &StepComparison) -> Result<(), FileError> {
     let um = 1e6;
     let series = |outputs: &[(usize, &str)]| -> Vec<Series> {
         outputs

@@ -8,7 +8,7 @@ use crate::identify::{Channel, Experiment};
 use crate::simulation::Sample;
 
 /// Highest harmonic of the drive examined.
-pub const HARMONICS: usize = 6;
+const HARMONICS: usize = 6;
 
 /// Number of time windows the record is split into to find where the model is worst.
 const WINDOWS: usize = 12;
@@ -110,7 +110,7 @@ pub fn trim_outliers(
 }
 
 /// Drive frequency from the zero crossings of U1 − mean [rad/s].
-pub fn drive_frequency(exp: &Experiment) -> f64 {
+fn drive_frequency(exp: &Experiment) -> f64 {
     let u: Vec<f64> = exp.t.iter().map(|&t| exp.input.value(t)[0]).collect();
     let mean = u.iter().sum::<f64>() / u.len() as f64;
     let crossings: Vec<f64> = (1..u.len())

@@ -16,9 +16,9 @@ pub struct Artifacts {
     /// Share of the samples of each output that are spikes.
     pub outlier_rate: f64,
     /// Size of a spike in noise standard deviations, drawn within this range, either sign.
-    pub outlier_sigmas: (f64, f64),
+    outlier_sigmas: (f64, f64),
     /// Share of the rows dropped at random.
-    pub dropout_rate: f64,
+    dropout_rate: f64,
     /// Length of one gap in the record \[s\].
     pub gap: f64,
     seed: u64,

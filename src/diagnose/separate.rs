@@ -14,7 +14,7 @@ const DT: f64 = 1e-3;
 
 /// The models are told apart when their predictions differ by more than this many noise σ
 /// (RMS over the record): the difference then stands out of the noise on every sample's scale.
-pub const SEPARATES: f64 = 1.0;
+const SEPARATES: f64 = 1.0;
 
 /// The experiment that exposes one effect, as a command.
 pub struct Exposing {

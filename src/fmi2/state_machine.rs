@@ -141,8 +141,6 @@ pub mod allowed {
 
     // Co-Simulation (section 4.2.4)
     pub const DO_STEP: Mask = STEP_COMPLETE;
-    /// `fmi2CancelStep`: only while a step is in progress, which never happens here.
-    pub const CANCEL_STEP: Mask = 0;
     /// `fmi2Get{,Real,Integer,Boolean,String}Status`.
     pub const GET_STATUS: Mask = STEP_COMPLETE | STEP_FAILED | TERMINATED;
 }

@@ -4,9 +4,9 @@
 //! and e.g. `N.m/rad` times `rad` is `N.m`. All units here are coherent SI (factor 1, offset 0).
 
 /// Exponents of the base units, in the order of [`BASE_UNIT_NAMES`].
-pub type Exponents = [i32; 8];
+type Exponents = [i32; 8];
 
-/// The attribute names of `<BaseUnit>` in the order of [`Exponents`].
+/// The attribute names of `<BaseUnit>` in the order of `Exponents`.
 pub const BASE_UNIT_NAMES: [&str; 8] = ["kg", "m", "s", "A", "K", "mol", "cd", "rad"];
 
 /// `(unit, exponents of kg, m, s, A, K, mol, cd, rad)`.

@@ -159,7 +159,7 @@ impl Variable {
 
     /// Whether the variable needs a start value: initial exact or approx, or an input
     /// (section 2.2.7, attribute `start`).
-    pub fn requires_start(&self) -> bool {
+    fn requires_start(&self) -> bool {
         self.causality == Causality::Input
             || matches!(
                 self.effective_initial(),

@@ -96,7 +96,7 @@ pub fn check_structure(vars: &[Variable], structure: &ModelStructure) -> Result<
 
 /// The optional attributes of `<fmiModelDescription>` the model gives (description, author,
 /// version, generationTool), in that order.
-pub fn model_attributes(info: &ModelInfo) -> Vec<(&'static str, &str)> {
+fn model_attributes(info: &ModelInfo) -> Vec<(&'static str, &str)> {
     [
         ("description", &info.description),
         ("author", &info.author),
@@ -124,7 +124,7 @@ pub fn log_categories(shell: &[(&str, &str)], info: &ModelInfo) -> Vec<(String, 
 }
 
 /// `<LogCategories>` (FMI 2.0 section 2.2.4, FMI 3.0 section 2.4.5).
-pub fn write_log_categories(w: &mut XmlWriter, categories: &[(String, String)]) -> io::Result<()> {
+fn write_log_categories(w: &mut XmlWriter, categories: &[(String, String)]) -> io::Result<()> {
     w.create_element("LogCategories").write_inner_content(|w| {
         for (name, description) in categories {
             w.create_element("Category")
@@ -140,7 +140,7 @@ pub fn write_log_categories(w: &mut XmlWriter, categories: &[(String, String)]) 
 }
 
 /// `<DefaultExperiment>` (FMI 2.0 section 2.2.5, FMI 3.0 section 2.4.6).
-pub fn write_default_experiment(w: &mut XmlWriter, info: &ModelInfo) -> io::Result<()> {
+fn write_default_experiment(w: &mut XmlWriter, info: &ModelInfo) -> io::Result<()> {
     let e = &info.default_experiment;
     let values = [
         ("startTime", e.start_time),
@@ -188,7 +188,7 @@ pub fn initial_unknowns<'a>(
 
 /// `<UnitDefinitions>`: every unit of `vars`, with its SI base-unit exponents; nothing when no
 /// variable has a unit. The table must have passed `check_variable_table` (known units only).
-pub fn write_unit_definitions(w: &mut XmlWriter, vars: &[Variable]) -> io::Result<()> {
+fn write_unit_definitions(w: &mut XmlWriter, vars: &[Variable]) -> io::Result<()> {
     let used: BTreeSet<&str> = vars.iter().filter_map(|v| v.unit.as_deref()).collect();
     if used.is_empty() {
         return Ok(());

@@ -142,7 +142,7 @@ pub fn rows_of(reduction: Reduction) -> &'static [Row] {
 }
 
 /// Causality, variability, initial and start of a variable.
-pub type Kind = (Causality, Variability, Option<Initial>, Option<f64>);
+type Kind = (Causality, Variability, Option<Initial>, Option<f64>);
 
 /// An output the model computes.
 pub const OUTPUT: Kind = (

@@ -44,8 +44,8 @@ impl Channel {
 
 /// Fewest samples and shortest duration an experiment may have: the slowest actuator settles
 /// with a 0.42 s time constant, so a shorter record determines nothing.
-pub const MIN_SAMPLES: usize = 50;
-pub const MIN_DURATION: f64 = 1.0;
+const MIN_SAMPLES: usize = 50;
+const MIN_DURATION: f64 = 1.0;
 
 /// One experiment: its input and its measured channels at the sample times.
 #[derive(Clone, Debug)]
@@ -237,7 +237,8 @@ impl Experiment {
     }
 
     /// Whether the tip is measured in X and Y.
-    pub fn has_tip_xy(&self) -> bool {
+    #[cfg(test)]
+    fn has_tip_xy(&self) -> bool {
         self.measured(Channel::Tip(0)).is_some() && self.measured(Channel::Tip(1)).is_some()
     }
 }

@@ -159,7 +159,7 @@ pub fn residual_series(
 }
 
 /// Measured against simulated outputs of one experiment, the tip path, and the residuals.
-pub fn experiment_panels(exp: &Experiment, sim: &[Sample], label: &str) -> Vec<Panel> {
+fn experiment_panels(exp: &Experiment, sim: &[Sample], label: &str) -> Vec<Panel> {
     let um = 1e6;
     let mut panels = Vec::new();
     let mut measured_sim = Vec::new();

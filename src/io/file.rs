@@ -1,11 +1,16 @@
 //! Files in general: the error that names the file, the line and the column, and writes that
 //! never leave a half-written file (a temporary file in the same folder, renamed into place).
 
-use std::fmt;
 use std::path::{Path, PathBuf};
 
 /// Where in which file something is wrong, and what.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+#[error(
+    "{}{}{}: {message}",
+    .path.display(),
+    .line.map(|l| format!(":{l}")).unwrap_or_default(),
+    .column.as_ref().map(|c| format!(", column {c}")).unwrap_or_default()
+)]
 pub struct FileError {
     pub path: PathBuf,
     /// 1-based line, when the problem has one.
@@ -14,21 +19,6 @@ pub struct FileError {
     pub column: Option<String>,
     pub message: String,
 }
-
-impl fmt::Display for FileError {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        write!(f, "{}", self.path.display())?;
-        if let Some(l) = self.line {
-            write!(f, ":{l}")?;
-        }
-        if let Some(c) = &self.column {
-            write!(f, ", column {c}")?;
-        }
-        write!(f, ": {}", self.message)
-    }
-}
-
-impl std::error::Error for FileError {}
 
 impl FileError {
     pub fn new(path: &Path, message: impl Into<String>) -> FileError {

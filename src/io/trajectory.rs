@@ -9,7 +9,7 @@ use super::csv::{BYTES_PER_NUMBER, format_row};
 use super::file::{AtomicFile, FileError};
 use crate::simulation::Sample;
 
-pub const COLUMNS: [&str; 10] = [
+const COLUMNS: [&str; 10] = [
     "t", "U1", "U2", "U3", "h1", "h2", "h3", "tip_x", "tip_y", "tip_z",
 ];
 

@@ -16,25 +16,24 @@ pub struct Kinematics {
 }
 
 /// The exact inverse did not converge (the tip is out of reach of the geometry).
-#[derive(Clone, Debug, PartialEq)]
-pub struct IkmError(pub String);
-
-impl std::fmt::Display for IkmError {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(&self.0)
-    }
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum IkmError {
+    /// The kinematics Jacobian is singular at the heights `h` \[m\] of a Newton step.
+    #[error("singular kinematics Jacobian at h = {h:?} m")]
+    SingularJacobian { h: [f64; 3] },
+    /// Newton did not converge in its step limit; `h` \[m\] are the last heights.
+    #[error("inverse kinematics did not converge (last h = {h:?} m)")]
+    NotConverged { h: [f64; 3] },
 }
-
-impl std::error::Error for IkmError {}
 
 /// Which inverse of the kinematics (book/src/model.md, "Inverse kinematics").
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Inverse {
-    /// The paper's closed form, approximate: [`Kinematics::heights_closed_form`].
+    /// The paper's closed form, approximate: `Kinematics::heights_closed_form`.
     ClosedForm,
     /// Newton on the FKM: [`Kinematics::heights`].
     Exact,
-    /// From the tip's X and Y and the mean height h̄ \[m\]: [`Kinematics::heights_from_xy`].
+    /// From the tip's X and Y and the mean height h̄ \[m\]: `Kinematics::heights_from_xy`.
     Xy { mean_height: f64 },
 }
 
@@ -101,7 +100,7 @@ impl Kinematics {
     /// The paper's closed-form IKM ("normal-aligned stick"): v = (X − mean X_i, Y − mean Y_i, Z),
     /// n = v/‖v‖, C_p = Tip − L n, h_i = C_pZ − (n_X (X_i − C_pX) + n_Y (Y_i − C_pY)) / n_Z.
     /// Approximate: about 0.25 µm error per 100 µm of mean height.
-    pub fn heights_closed_form(&self, tip: [f64; 3]) -> [f64; 3] {
+    fn heights_closed_form(&self, tip: [f64; 3]) -> [f64; 3] {
         let m = self.anchor_mean();
         let n = Vector3::new(tip[0] - m[0], tip[1] - m[1], tip[2]).normalize();
         let c_p = Vector3::from(tip) - self.length * n;
@@ -129,7 +128,7 @@ impl Kinematics {
     }
 
     /// Inverse from tip X, Y and the mean height h̄ (heave is not observable from X, Y alone).
-    pub fn heights_from_xy(&self, xy: [f64; 2], mean_height: f64) -> Result<[f64; 3], IkmError> {
+    fn heights_from_xy(&self, xy: [f64; 2], mean_height: f64) -> Result<[f64; 3], IkmError> {
         let guess = [mean_height; 3];
         self.newton(guess, |k, h| {
             let tip = k.tip(h);
@@ -152,10 +151,7 @@ impl Kinematics {
     ) -> Result<[f64; 3], IkmError> {
         for _ in 0..50 {
             let (r, jac) = residual(self, h);
-            let step = jac
-                .lu()
-                .solve(&r)
-                .ok_or_else(|| IkmError(format!("singular kinematics Jacobian at h = {h:?} m")))?;
+            let step = jac.lu().solve(&r).ok_or(IkmError::SingularJacobian { h })?;
             for i in 0..3 {
                 h[i] -= step[i];
             }
@@ -163,9 +159,7 @@ impl Kinematics {
                 return Ok(h);
             }
         }
-        Err(IkmError(format!(
-            "inverse kinematics did not converge (last h = {h:?} m)"
-        )))
+        Err(IkmError::NotConverged { h })
     }
 }
 

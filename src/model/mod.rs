@@ -20,4 +20,4 @@ pub use effects::{Effect, EffectParams};
 pub use kinematics::Kinematics;
 pub use params::{ParamError, Params};
 pub use platform::{ModelError, Platform};
-pub use reduction::{Reduction, UnknownReduction};
+pub use reduction::{Reduction, UnknownReductionError};

@@ -4,8 +4,6 @@
 //! variables and the identification reports. The table `PARAMETERS` is the single source of
 //! truth for names, units, descriptions, the validation rule and how to read and write each value.
 
-use std::fmt;
-
 use super::effects::{Effect, EffectParams};
 
 /// Parameters of one HASEL actuator (the paper's identified table: book/src/model.md,
@@ -167,30 +165,17 @@ pub struct ParamDef {
 }
 
 /// A parameter value that breaks its rule, or a name that does not exist.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
 pub enum ParamError {
+    #[error("parameter {name} = {value:e}: {rule}")]
     Invalid {
         name: String,
         value: f64,
         rule: String,
     },
-    Unknown {
-        name: String,
-    },
+    #[error("unknown parameter '{name}'")]
+    Unknown { name: String },
 }
-
-impl fmt::Display for ParamError {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        match self {
-            ParamError::Invalid { name, value, rule } => {
-                write!(f, "parameter {name} = {value:e}: {rule}")
-            }
-            ParamError::Unknown { name } => write!(f, "unknown parameter '{name}'"),
-        }
-    }
-}
-
-impl std::error::Error for ParamError {}
 
 macro_rules! actuator_rows {
     ($($field:ident, $name:literal, $unit:literal, $rule:ident, $desc:literal;)*) => {
@@ -353,7 +338,7 @@ impl Params {
     /// A_s(θ = 0, l_p = Lp) + Xh·Le: the liquid area for which the electrode is unzipped
     /// (le = 0) at θ = 0, the pinned default of A_T (book/src/model.md, "Open choices and
     /// pinned defaults").
-    pub fn unzipped_liquid_area(&self) -> f64 {
+    fn unzipped_liquid_area(&self) -> f64 {
         let geometry = crate::model::shell::Shell::new(0.0, self.lp, self.lv)
             .expect("Lp > Lv at theta = 0 for the default geometry");
         geometry.a_s + self.xh * self.le

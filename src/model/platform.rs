@@ -2,8 +2,6 @@
 //!
 //! State layout: actuator i occupies x[5i .. 5i+5] as (θ, l_p, p, Q1, Q2).
 
-use std::fmt;
-
 use super::actuator::{self, Actuator, StateInfo};
 use super::effects::terms::{Extra, Terms};
 use super::invariant_curve::Curve;
@@ -21,20 +19,13 @@ pub(super) enum Wrt {
 }
 
 /// The model cannot be evaluated at a state.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+#[error("actuator {actuator}: {cause}")]
 pub struct ModelError {
     /// 1-based actuator index.
     pub actuator: usize,
     pub cause: DomainError,
 }
-
-impl fmt::Display for ModelError {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        write!(f, "actuator {}: {}", self.actuator, self.cause)
-    }
-}
-
-impl std::error::Error for ModelError {}
 
 /// The HASEL platform model, built from validated parameters: the three actuators of the paper
 /// and the terms of the active effects (none by default).

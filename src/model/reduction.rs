@@ -44,14 +44,14 @@ impl Reduction {
 /// A model name that is none of [`Reduction::ALL`].
 #[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
 #[error("unknown model {0:?}: one of full, quasi-static, slow")]
-pub struct UnknownReduction(pub String);
+pub struct UnknownReductionError(pub String);
 
 impl FromStr for Reduction {
-    type Err = UnknownReduction;
-    fn from_str(s: &str) -> Result<Reduction, UnknownReduction> {
+    type Err = UnknownReductionError;
+    fn from_str(s: &str) -> Result<Reduction, UnknownReductionError> {
         Reduction::ALL
             .into_iter()
             .find(|r| r.name() == s)
-            .ok_or_else(|| UnknownReduction(s.to_string()))
+            .ok_or_else(|| UnknownReductionError(s.to_string()))
     }
 }

@@ -13,26 +13,16 @@
 //! gravity terms and the heights of one evaluation.
 
 /// The model is defined only where the asin argument is below 1, i.e. l_p > Lv cos(θ/2).
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, thiserror::Error)]
+#[error(
+    "shell geometry undefined at theta = {theta:e} rad, l_p = {l_p:e} m: needs l_p > Lv cos(theta/2) = {bound:e} m",
+    bound = .lv * (.theta / 2.0).cos()
+)]
 pub struct DomainError {
     pub theta: f64,
     pub l_p: f64,
     pub lv: f64,
 }
-
-impl std::fmt::Display for DomainError {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        write!(
-            f,
-            "shell geometry undefined at theta = {:e} rad, l_p = {:e} m: needs l_p > Lv cos(theta/2) = {:e} m",
-            self.theta,
-            self.l_p,
-            self.lv * (self.theta / 2.0).cos()
-        )
-    }
-}
-
-impl std::error::Error for DomainError {}
 
 /// A_s and d at one (θ, l_p) with their first partials; subscripts `_t` = ∂/∂θ, `_l` = ∂/∂l_p.
 /// Second partials come from [`Shell::curvature`], which only the Jacobian needs.
@@ -112,7 +102,8 @@ impl Shell {
     }
 
     /// δ1 \[rad\].
-    pub fn delta1(&self) -> f64 {
+    #[cfg(test)]
+    fn delta1(&self) -> f64 {
         self.sin_d.atan2(self.cos_d)
     }
 

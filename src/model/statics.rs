@@ -11,7 +11,7 @@ use super::{Effect, Platform};
 
 /// Why no constant voltage holds an actuator at a height.
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
-pub enum Unreachable {
+pub enum UnreachableError {
     /// h = ½ Lv sin θ has no angle: |h| > ½ Lv.
     #[error(
         "h = {height:.6e} m is beyond the film length: |h| must be below 1/2 Lv = {limit:.6e} m"
@@ -42,7 +42,10 @@ pub enum Unreachable {
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
 pub enum StaticsError {
     #[error("actuator {actuator}: {cause}")]
-    Actuator { actuator: usize, cause: Unreachable },
+    Actuator {
+        actuator: usize,
+        cause: UnreachableError,
+    },
     /// The closed form is the paper's model's; these effects are active.
     #[error("the holding voltages are implemented for the paper's model; active effects: {}",
         .0.iter().map(|e| e.name()).collect::<Vec<_>>().join(", "))]
@@ -61,7 +64,7 @@ const STABILITY_PROBE: f64 = 1e-7;
 /// (model.md, "Statics"): p = 0, l_p on the invariant curve, the charges of the DC circuit
 /// V1 = R1 i, V2 = R2 i, i = ga(θ) U / (R0 + R1 + R2), and
 /// ṗ = −(∂H/∂θ + d ∂H/∂l_p) = ṗ₀ + s V2² = 0, which gives V2² = −ṗ₀ / s.
-fn voltage_at(a: &Actuator, theta: f64, height: f64) -> Result<f64, Unreachable> {
+fn voltage_at(a: &Actuator, theta: f64, height: f64) -> Result<f64, UnreachableError> {
     let l_p = a.l_p_on_curve(theta)?;
     let par = &a.par;
     // ṗ at p = 0 with the DC charges of a given V2 = R2 i: affine in V2²
@@ -85,13 +88,13 @@ fn voltage_at(a: &Actuator, theta: f64, height: f64) -> Result<f64, Unreachable>
         if height >= rest - REST_ROUNDING {
             return Ok(0.0);
         }
-        return Err(Unreachable::BelowRest { height, rest });
+        return Err(UnreachableError::BelowRest { height, rest });
     }
     // ga = γ1 cos(γ2 θ) > 0 on the first lobe only: beyond θ* the force's branches repeat
     let theta_star = std::f64::consts::FRAC_PI_2 / par.gamma2;
     if theta >= theta_star {
         let limit = a.height(theta_star);
-        return Err(Unreachable::BeyondGain { height, limit });
+        return Err(UnreachableError::BeyondGain { height, limit });
     }
     Ok(v2_squared.sqrt() * (par.r0 + par.r1 + par.r2) / (par.r2 * a.ga(theta)))
 }
@@ -100,17 +103,17 @@ fn voltage_at(a: &Actuator, theta: f64, height: f64) -> Result<f64, Unreachable>
 /// branch: h = ½ Lv sin θ (model.md, "Shell geometry and C2") gives θ; the equilibrium is
 /// stable where the stiffness along the curve −∂ṗ/∂θ at fixed U is positive, i.e. where the
 /// holding voltage grows with θ (∂ṗ/∂U > 0), checked over a step of `STABILITY_PROBE` θ*.
-pub fn holding_voltage(a: &Actuator, lv: f64, h: f64) -> Result<f64, Unreachable> {
+fn holding_voltage(a: &Actuator, lv: f64, h: f64) -> Result<f64, UnreachableError> {
     let limit = 0.5 * lv;
     if h.is_nan() || h.abs() >= limit {
-        return Err(Unreachable::NoAngle { height: h, limit });
+        return Err(UnreachableError::NoAngle { height: h, limit });
     }
     let theta = (h / limit).asin();
     let u = voltage_at(a, theta, h)?;
     let step = STABILITY_PROBE * a.state_scales()[0];
     match voltage_at(a, theta + step, h) {
-        Ok(above) if above <= u => Err(Unreachable::Unstable { height: h }),
-        Ok(_) | Err(Unreachable::BeyondGain { .. }) => Ok(u),
+        Ok(above) if above <= u => Err(UnreachableError::Unstable { height: h }),
+        Ok(_) | Err(UnreachableError::BeyondGain { .. }) => Ok(u),
         Err(e) => Err(e),
     }
 }

@@ -29,16 +29,16 @@ pub enum Interpolation {
     Spline,
     /// A measured command (book/src/identify.md, "How an experiment is simulated"): the
     /// natural spline through each smooth run of samples, and the command held across a step
-    /// (a change from one sample to the next larger than [`STEP_MIN`], at a rate [`STEP_RATIO`]
+    /// (a change from one sample to the next larger than `STEP_MIN`, at a rate `STEP_RATIO`
     /// times both neighbouring intervals' rates: a gap of dropped rows is no step), where the integrator stops exactly, as with zero-order hold.
     /// A staircase replays as steps, a sine or a chirp as one spline.
     Measured,
 }
 
 /// A change between two samples of a measured command is a step when it exceeds this \[V\]…
-pub const STEP_MIN: f64 = 0.5;
+const STEP_MIN: f64 = 0.5;
 /// …and this many times the changes before and after it.
-pub const STEP_RATIO: f64 = 4.0;
+const STEP_RATIO: f64 = 4.0;
 
 /// Why samples cannot make a sampled input.
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]

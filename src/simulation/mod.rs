@@ -55,40 +55,19 @@ const NON_STIFF_H_RHO: f64 = 1.0;
 const MAX_EXPLICIT_STEPS: usize = 100_000;
 
 /// Why a simulation could not go on.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
 pub enum SimError {
     /// The initial state could not be computed or evaluated.
-    Model(ModelError),
-    Solver(SolverError),
+    #[error(transparent)]
+    Model(#[from] ModelError),
+    #[error("solver: {0}")]
+    Solver(#[from] SolverError),
     /// A setting is out of range (named, with its value).
+    #[error("{0}")]
     Setting(String),
     /// The sensitivities could not follow the solution (`sensitivity`).
+    #[error(transparent)]
     Sensitivity(SensitivityError),
-}
-
-impl std::fmt::Display for SimError {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        match self {
-            SimError::Model(e) => write!(f, "{e}"),
-            SimError::Solver(e) => write!(f, "solver: {e}"),
-            SimError::Setting(s) => f.write_str(s),
-            SimError::Sensitivity(e) => write!(f, "{e}"),
-        }
-    }
-}
-
-impl std::error::Error for SimError {}
-
-impl From<ModelError> for SimError {
-    fn from(e: ModelError) -> Self {
-        SimError::Model(e)
-    }
-}
-
-impl From<SolverError> for SimError {
-    fn from(e: SolverError) -> Self {
-        SimError::Solver(e)
-    }
 }
 
 /// One smooth piece of the voltage the model sees: a piece of the command, late by `delay`

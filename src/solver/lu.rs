@@ -3,7 +3,7 @@
 //! each per step size), and of block-diagonal matrices block by block ([`BlockLu`]).
 //!
 //! Written here rather than taken from nalgebra because nalgebra's `LU` owns and reallocates
-//! its matrix, and the solver must not allocate per step. Blocks of up to [`UNROLLED`] rows are
+//! its matrix, and the solver must not allocate per step. Blocks of up to `UNROLLED` rows are
 //! factored and solved by code compiled for their size (loops unrolled, no bounds checks), with
 //! the pivots' reciprocals kept so that solving only multiplies: the block solves of a 1 ms
 //! co-simulation step of the platform take a tenth of the instructions of generic code over
@@ -47,7 +47,7 @@ impl Entry for Complex<f64> {
 }
 
 /// Largest block size with code of its own.
-pub const UNROLLED: usize = 8;
+const UNROLLED: usize = 8;
 
 /// Calls `$f(m, args…)` with `m` a constant for each size up to [`UNROLLED`], so that the
 /// inlined body is compiled for that size.

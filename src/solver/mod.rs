@@ -33,39 +33,24 @@ pub trait OdeSystem {
 }
 
 /// The system could not be evaluated (for example outside the domain of its equations).
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+#[error("{0}")]
 pub struct RhsError(pub String);
 
 /// Why an integration stopped.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
 pub enum SolverError {
     /// The step size fell below the rounding of t: the problem is too stiff, singular or
     /// undefined here.
+    #[error("step size {h:e} s too small at t = {t} s ({reason})")]
     StepTooSmall { t: f64, h: f64, reason: String },
     /// More steps than the limit in one call.
+    #[error("more than {limit} steps without reaching the end, at t = {t} s")]
     TooManySteps { t: f64, limit: usize },
     /// f or J failed at the start of the step, so no smaller step can help.
+    #[error("at t = {t} s: {message}")]
     Rhs { t: f64, message: String },
 }
-
-impl std::fmt::Display for SolverError {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        match self {
-            SolverError::StepTooSmall { t, h, reason } => {
-                write!(f, "step size {h:e} s too small at t = {t} s ({reason})")
-            }
-            SolverError::TooManySteps { t, limit } => {
-                write!(
-                    f,
-                    "more than {limit} steps without reaching the end, at t = {t} s"
-                )
-            }
-            SolverError::Rhs { t, message } => write!(f, "at t = {t} s: {message}"),
-        }
-    }
-}
-
-impl std::error::Error for SolverError {}
 
 /// Error control: the local error of state i is kept below `atol[i] + rtol |y_i|`.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]

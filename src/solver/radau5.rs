@@ -153,7 +153,7 @@ pub struct Radau5 {
     /// Largest step size \[s\].
     pub h_max: f64,
     /// Most steps one call to [`Radau5::advance`] may take.
-    pub max_steps: usize,
+    max_steps: usize,
     t: f64,
     y: Vec<f64>,
     /// f(t, y) at the current point.

@@ -5,7 +5,7 @@ use std::path::Path;
 use std::sync::Mutex;
 use std::sync::atomic::{AtomicUsize, Ordering};
 
-use super::{Posterior, SampleFailure, UncertaintyError};
+use super::{Posterior, SampleError, UncertaintyError};
 use crate::io::csv::Table;
 use crate::io::file::write_text_atomic;
 use crate::model::Platform;
@@ -16,9 +16,9 @@ use crate::simulation::{Input, Simulator};
 pub const OUTPUTS: [&str; 6] = ["h1", "h2", "h3", "tip_x", "tip_y", "tip_z"];
 
 /// The probabilities of the bands' edges and middle.
-pub const LOWER: f64 = 0.025;
-pub const MEDIAN: f64 = 0.5;
-pub const UPPER: f64 = 0.975;
+const LOWER: f64 = 0.025;
+const MEDIAN: f64 = 0.5;
+const UPPER: f64 = 0.975;
 
 /// The most memory the kept outputs of a study may take [bytes].
 const MAX_BYTES: f64 = 8e9;
@@ -50,7 +50,7 @@ pub struct Bands {
     /// ([`Posterior::names`]).
     pub draws: Vec<Vec<f64>>,
     /// Samples whose draw or simulation failed, with the reason; left out of the bands.
-    pub failed: Vec<(usize, SampleFailure)>,
+    pub failed: Vec<(usize, SampleError)>,
 }
 
 /// The quantile `p` of sorted `v` (linear between order statistics: numpy's default).
@@ -67,9 +67,9 @@ fn one(
     input: &Input,
     s: &Settings,
     index: usize,
-) -> (Vec<f64>, Result<Vec<[f64; 6]>, SampleFailure>) {
+) -> (Vec<f64>, Result<Vec<[f64; 6]>, SampleError>) {
     let values = posterior.values_at(&posterior.draw_coordinates(s.seed, index as u64));
-    let run = || -> Result<Vec<[f64; 6]>, SampleFailure> {
+    let run = || -> Result<Vec<[f64; 6]>, SampleError> {
         let params = posterior.params_at(&values)?;
         let model = Platform::new(params)?;
         let mut sim = Simulator::new(model, 0.0, s.rtol)?;
@@ -129,7 +129,7 @@ pub fn run(
     let t: Vec<f64> = (0..=last).map(|k| (k as f64 * s.dt).min(s.t_end)).collect();
     let u: Vec<[f64; 3]> = t.iter().map(|&ti| input.value(ti)).collect();
 
-    type Outcome = (Vec<f64>, Result<Vec<[f64; 6]>, SampleFailure>);
+    type Outcome = (Vec<f64>, Result<Vec<[f64; 6]>, SampleError>);
     let results: Mutex<Vec<Option<Outcome>>> = Mutex::new(vec![None; s.samples]);
     let next = AtomicUsize::new(0);
     std::thread::scope(|scope| {
@@ -157,13 +157,13 @@ pub fn run(
     let mut failed = Vec::new();
     let mut ok: Vec<Vec<[f64; 6]>> = Vec::new();
     for (k, r) in results.into_iter().enumerate() {
-        let (values, outcome) = r.unwrap_or((Vec::new(), Err(SampleFailure::NotRun)));
+        let (values, outcome) = r.unwrap_or((Vec::new(), Err(SampleError::NotRun)));
         draws.push(values);
         match outcome {
             Ok(out) if out.len() == t.len() => ok.push(out),
             Ok(out) => failed.push((
                 k,
-                SampleFailure::ShortRun {
+                SampleError::ShortRun {
                     got: out.len(),
                     expected: t.len(),
                 },
@@ -241,7 +241,7 @@ impl Bands {
     /// (the estimated ones as drawn, the rest at their value), so each row is a complete
     /// parameter set for the FMU. Failed samples are marked in `failed` (1) with their reason
     /// left to the command's report.
-    pub fn draws_csv(&self, posterior: &Posterior) -> String {
+    fn draws_csv(&self, posterior: &Posterior) -> String {
         let all: Vec<&'static str> = crate::model::params::parameters().map(|d| d.name).collect();
         let mut text = format!("sample,failed,{}\n", all.join(","));
         for (k, values) in self.draws.iter().enumerate() {

@@ -14,7 +14,6 @@
 
 pub mod bands;
 
-use std::fmt;
 use std::path::{Path, PathBuf};
 
 use nalgebra::{DMatrix, DVector};
@@ -26,47 +25,29 @@ use crate::model::params::{ParamError, parameter};
 use crate::simulation::SimError;
 
 /// What can go wrong in an uncertainty study.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
 pub enum UncertaintyError {
     /// The identification file cannot be read or is not what `hasel identify` writes.
+    #[error("{}: {message}", .path.display())]
     Identification { path: PathBuf, message: String },
     /// A setting of the study is out of range.
+    #[error("{0}")]
     Setting(String),
     /// Every sample failed; the first failure is given.
+    #[error("all {samples} samples failed (sample {sample}: {reason})")]
     AllFailed {
         samples: usize,
         sample: usize,
-        reason: SampleFailure,
+        reason: SampleError,
     },
     /// A result file or figure could not be written.
+    #[error("{0}")]
     Output(String),
 }
 
-impl fmt::Display for UncertaintyError {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        match self {
-            UncertaintyError::Identification { path, message } => {
-                write!(f, "{}: {message}", path.display())
-            }
-            UncertaintyError::Setting(s) => f.write_str(s),
-            UncertaintyError::AllFailed {
-                samples,
-                sample,
-                reason,
-            } => write!(
-                f,
-                "all {samples} samples failed (sample {sample}: {reason})"
-            ),
-            UncertaintyError::Output(s) => f.write_str(s),
-        }
-    }
-}
-
-impl std::error::Error for UncertaintyError {}
-
 /// Why one sample of a study has no outputs: it is left out of the bands, with this reason.
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
-pub enum SampleFailure {
+pub enum SampleError {
     /// The drawn parameters break a parameter's rule.
     #[error("{0}")]
     Parameters(#[from] ParamError),
@@ -116,7 +97,7 @@ fn mix(mut z: u64) -> u64 {
 }
 
 /// The seed of sample `index` of a study seeded `seed`: a function of the two alone.
-pub fn sample_seed(seed: u64, index: u64) -> u64 {
+fn sample_seed(seed: u64, index: u64) -> u64 {
     mix(mix(seed) ^ index)
 }
 

@@ -101,7 +101,7 @@ impl Cs {
         Cs { c, log, t: 0.0 }
     }
 
-    pub fn with_token(token: &CStr, event_mode_used: bool) -> Cs {
+    fn with_token(token: &CStr, event_mode_used: bool) -> Cs {
         let log = Box::<Log>::default();
         let c = unsafe {
             v3::fmi3InstantiateCoSimulation(

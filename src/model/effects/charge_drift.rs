@@ -38,7 +38,7 @@ impl DriftSite {
     }
 
     /// The site of a `drift_site` value (already checked to be 0, 1 or 2).
-    pub fn from_index(v: f64) -> DriftSite {
+    fn from_index(v: f64) -> DriftSite {
         DriftSite::ALL[(v.round() as usize).min(2)]
     }
 }

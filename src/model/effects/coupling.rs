@@ -76,7 +76,7 @@ impl Coupling {
 
     /// A pair's energy, force and stiffness at the height difference d, per unit of its weight
     /// (effects.md, "coupling"): the linear spring and the series, each convex and even.
-    pub fn pair_law(&self, d: f64) -> (f64, f64, f64) {
+    fn pair_law(&self, d: f64) -> (f64, f64, f64) {
         let spring = (0.5 * self.k_c * d * d, self.k_c * d, self.k_c);
         sum([spring, series(&POWERS, &self.series, D_REF, d)])
     }

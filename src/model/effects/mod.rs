@@ -205,11 +205,6 @@ impl Effect {
         self.family().forms
     }
 
-    /// The form of the family called `name`.
-    pub fn form_named(self, name: &str) -> Option<&'static Form> {
-        self.forms().iter().find(|f| f.name == name)
-    }
-
     /// Is the family switched on by `p`?
     pub fn is_active(self, p: &EffectParams) -> bool {
         (self.family().is_active)(p)

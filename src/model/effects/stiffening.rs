@@ -51,7 +51,7 @@ impl Stiffening {
 
     /// The added energy, its torque dH/dθ and stiffness d²H/dθ² at θ (effects.md,
     /// "stiffening"): each term convex and even, so the torque is odd and monotone.
-    pub fn energy_torque_stiffness(&self, theta: f64) -> (f64, f64, f64) {
+    fn energy_torque_stiffness(&self, theta: f64) -> (f64, f64, f64) {
         let a = theta.abs();
         let quartic = (
             0.25 * self.k3 * a.powi(4),
