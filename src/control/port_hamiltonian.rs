@@ -152,6 +152,60 @@ pub fn decompose(model: &Platform, lin: &Linearization) -> Result<PortHamiltonia
             effects: active.iter().map(|e| e.name().to_string()).collect(),
         });
     }
+    let Parts {
+        j,
+        r,
+        hessian,
+        m,
+        source_map,
+        source_feedback,
+        port_c,
+        source_gain,
+    } = parts(model, lin)?;
+    let q = &hessian + &m;
+
+    let n = model.n_states();
+    let (t, _) = tie(n, &lin.casimirs.slopes);
+    let minimal = lin.minimal();
+    let checks = checks(
+        lin,
+        (&j, &r, &q, &hessian),
+        (&source_map, &source_feedback, &source_gain, &port_c),
+        &t,
+        &minimal,
+    );
+    let stable = lin.minimal_eigenvalues.iter().all(|e| e.re < 0.0);
+    let passivity = passivity(&minimal, &(&port_c * &t), stable)?;
+    Ok(PortHamiltonian {
+        j,
+        r,
+        q,
+        hessian,
+        source_map,
+        source_gain,
+        source_feedback,
+        port_c,
+        checks,
+        passivity,
+    })
+}
+
+/// The structure of the whole platform at the point, actuator by actuator (the effects all
+/// off): J, R, the Hessian of H, the Casimir leaf's curvature M, the source voltage's map,
+/// gain and feedback, and the voltage port's output Jacobian.
+struct Parts {
+    j: DMatrix<f64>,
+    r: DMatrix<f64>,
+    hessian: DMatrix<f64>,
+    m: DMatrix<f64>,
+    source_map: DMatrix<f64>,
+    source_feedback: DMatrix<f64>,
+    port_c: DMatrix<f64>,
+    source_gain: [f64; 3],
+}
+
+/// Assembles the [`Parts`] from each actuator's at the linearization's state and voltages.
+fn parts(model: &Platform, lin: &Linearization) -> Result<Parts, ControlError> {
     let n = model.n_states();
     let nb = actuator::N;
     let x0 = &lin.x0;
@@ -197,17 +251,43 @@ pub fn decompose(model: &Platform, lin: &Linearization) -> Result<PortHamiltonia
         source_gain[i] = a.ga(xi[THETA]);
         source_feedback[(i, o + THETA)] = a.ga_prime(xi[THETA]) * u0[i];
     }
-    let q = &hessian + &m;
+    Ok(Parts {
+        j,
+        r,
+        hessian,
+        m,
+        source_map,
+        source_feedback,
+        port_c,
+        source_gain,
+    })
+}
 
+/// The checks of the decomposition (J, R, Q; the residuals of A against (J − R) Q from each
+/// port; collocation and KYP) in the state scales, with `t` the Casimir tie and `minimal` the
+/// minimal model.
+fn checks(
+    lin: &Linearization,
+    (j, r, q, hessian): (&DMatrix<f64>, &DMatrix<f64>, &DMatrix<f64>, &DMatrix<f64>),
+    (source_map, source_feedback, source_gain, port_c): (
+        &DMatrix<f64>,
+        &DMatrix<f64>,
+        &[f64; 3],
+        &DMatrix<f64>,
+    ),
+    t: &DMatrix<f64>,
+    minimal: &StateSpace,
+) -> Checks {
+    let n = j.nrows();
     let s = &lin.system.scales;
     // scaled: A_s = S⁻¹AS, J_s = S⁻¹JS⁻¹, Q_s = SQS, g̃_s = S⁻¹g̃, K_x,s = K_x S
     let congruent_inv = |x: &DMatrix<f64>| DMatrix::from_fn(n, n, |a, b| x[(a, b)] / (s[a] * s[b]));
     let congruent = |x: &DMatrix<f64>| DMatrix::from_fn(n, n, |a, b| x[(a, b)] * s[a] * s[b]);
     let a_s = linalg::scale_similar(&lin.system.a, s);
-    let (j_s, r_s) = (congruent_inv(&j), congruent_inv(&r));
-    let (q_s, hess_s) = (congruent(&q), congruent(&hessian));
+    let (j_s, r_s) = (congruent_inv(j), congruent_inv(r));
+    let (q_s, hess_s) = (congruent(q), congruent(hessian));
     let f_s = &j_s - &r_s;
-    let modulated = linalg::scale_rows(&source_map, s) * linalg::scale_columns(&source_feedback, s);
+    let modulated = linalg::scale_rows(source_map, s) * linalg::scale_columns(source_feedback, s);
     let a_norm = a_s.norm();
     let rel = |x: DMatrix<f64>, scale: f64| x.norm() / scale.max(f64::MIN_POSITIVE);
     let range = |ev: Vec<f64>| {
@@ -216,17 +296,15 @@ pub fn decompose(model: &Platform, lin: &Linearization) -> Result<PortHamiltonia
             ev.last().copied().unwrap_or(0.0),
         )
     };
-    let (t, _) = tie(n, &lin.casimirs.slopes);
     let t_s = DMatrix::from_fn(t.nrows(), t.ncols(), |a, b| t[(a, b)] / s[a]);
     // the reachable subspace in scaled coordinates: x̃ = S⁻¹ T z, with z scaled likewise
-    let minimal = lin.minimal();
     let z_scale = &minimal.scales;
     let t_sz = DMatrix::from_fn(n, t.ncols(), |a, b| t_s[(a, b)] * z_scale[b]);
     let q_reach = t_sz.transpose() * &q_s * &t_sz;
     let b = &lin.system.b;
-    let c_port_s = linalg::scale_columns(&port_c, s);
+    let c_port_s = linalg::scale_columns(port_c, s);
     let bq = linalg::scale_rows(b, s).transpose() * &q_s;
-    let checks = Checks {
+    Checks {
         j_skew: rel(&j_s + j_s.transpose(), j_s.norm()),
         r_asymmetry: rel(&r_s - r_s.transpose(), r_s.norm()),
         r_eigenvalues: range(linalg::symmetric_eigenvalues(&r_s)),
@@ -240,27 +318,13 @@ pub fn decompose(model: &Platform, lin: &Linearization) -> Result<PortHamiltonia
         residual_source_port: rel(&a_s - &f_s * &q_s - &modulated, a_norm),
         residual_source_port_rows: by_rows(&(&a_s - &f_s * &q_s - &modulated), &a_s),
         residual_input: rel(
-            b - &source_map
-                * DMatrix::from_diagonal(&nalgebra::DVector::from_column_slice(&source_gain)),
+            b - source_map
+                * DMatrix::from_diagonal(&nalgebra::DVector::from_column_slice(source_gain)),
             b.norm(),
         ),
         collocation_voltage_port: rel(&c_port_s - &bq, c_port_s.norm()),
-        kyp_voltage_port: kyp(&minimal, &q_reach, &port_c, &t),
-    };
-    let stable = lin.minimal_eigenvalues.iter().all(|e| e.re < 0.0);
-    let passivity = passivity(&minimal, &(&port_c * &t), stable)?;
-    Ok(PortHamiltonian {
-        j,
-        r,
-        q,
-        hessian,
-        source_map,
-        source_gain,
-        source_feedback,
-        port_c,
-        checks,
-        passivity,
-    })
+        kyp_voltage_port: kyp(minimal, &q_reach, port_c, t),
+    }
 }
 
 /// max over the rows of `a` of ‖row_r(x)‖ / ‖row_r(a)‖.

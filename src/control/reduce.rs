@@ -110,15 +110,8 @@ pub fn reduce(lin: &Linearization, tolerance: f64) -> Result<Reduced, ControlErr
         .take_while(|&&s| s > NUMERICAL_ZERO * sigma1)
         .count();
 
-    // ‖G‖∞ on a wide grid (the peak is at DC for this plant, the grid confirms it)
     let ev_full = Evaluator::new(&minimal);
-    let mut wide = vec![0.0];
-    wide.extend(log_grid(1e-3, 1e10, 20));
-    let mut peak_gain: f64 = 0.0;
-    for f in &wide {
-        let g = ev_full.at(2.0 * std::f64::consts::PI * f)?;
-        peak_gain = peak_gain.max(linalg::spectral_norm(&g));
-    }
+    let peak_gain = peak_gain(&ev_full)?;
     if n_min == 0 || peak_gain == 0.0 {
         return Err(ControlError::NoGain);
     }
@@ -139,35 +132,9 @@ pub fn reduce(lin: &Linearization, tolerance: f64) -> Result<Reduced, ControlErr
     let bb = &t_inv * &b;
     let cb = &c * &t_bal;
 
-    // singular perturbation of the states beyond the order
     let r = order;
     let k = n_min - r;
-    let (a11, a12, a21, a22) = (
-        ab.view((0, 0), (r, r)).into_owned(),
-        ab.view((0, r), (r, k)).into_owned(),
-        ab.view((r, 0), (k, r)).into_owned(),
-        ab.view((r, r), (k, k)).into_owned(),
-    );
-    let (b1, b2) = (bb.rows(0, r).into_owned(), bb.rows(r, k).into_owned());
-    let (c1, c2) = (cb.columns(0, r).into_owned(), cb.columns(r, k).into_owned());
-    let (x21, x2u) = if k > 0 {
-        (
-            -linalg::solve(&a22, &a21, "singular perturbation")?,
-            -linalg::solve(&a22, &b2, "singular perturbation")?,
-        )
-    } else {
-        (DMatrix::zeros(0, r), DMatrix::zeros(0, 3))
-    };
-    let system = StateSpace {
-        a: &a11 + &a12 * &x21,
-        b: &b1 + &a12 * &x2u,
-        c: &c1 + &c2 * &x21,
-        d: &d + &c2 * &x2u,
-        states: (1..=r).map(|i| format!("z{i}")).collect(),
-        inputs: minimal.inputs.clone(),
-        outputs: minimal.outputs.clone(),
-        scales: vec![1.0; r],
-    };
+    let (system, x21, x2u) = singular_perturbation(&ab, &bb, &cb, &d, r, &minimal)?;
     let eigenvalues = linalg::eigenvalues(&system.a, &system.scales)?;
 
     // the full state from z: δx = T_tie Z T_bal [I; X21] z + T_tie Z T_bal [0; X2u] δU
@@ -194,6 +161,60 @@ pub fn reduce(lin: &Linearization, tolerance: f64) -> Result<Reduced, ControlErr
         state_map,
         input_map,
     })
+}
+
+/// ‖G‖∞ on a wide grid (the peak is at DC for this plant, the grid confirms it).
+fn peak_gain(ev_full: &Evaluator) -> Result<f64, ControlError> {
+    let mut wide = vec![0.0];
+    wide.extend(log_grid(1e-3, 1e10, 20));
+    let mut peak_gain: f64 = 0.0;
+    for f in &wide {
+        let g = ev_full.at(2.0 * std::f64::consts::PI * f)?;
+        peak_gain = peak_gain.max(linalg::spectral_norm(&g));
+    }
+    Ok(peak_gain)
+}
+
+/// The balanced realization (`ab`, `bb`, `cb`, `d`) cut to its first `r` states by singular
+/// perturbation of the others (held at their quasi-steady state); with the maps X21, X2u that
+/// give those states from the kept ones and the input.
+fn singular_perturbation(
+    ab: &DMatrix<f64>,
+    bb: &DMatrix<f64>,
+    cb: &DMatrix<f64>,
+    d: &DMatrix<f64>,
+    r: usize,
+    minimal: &StateSpace,
+) -> Result<(StateSpace, DMatrix<f64>, DMatrix<f64>), ControlError> {
+    let n_min = ab.nrows();
+    let k = n_min - r;
+    let (a11, a12, a21, a22) = (
+        ab.view((0, 0), (r, r)).into_owned(),
+        ab.view((0, r), (r, k)).into_owned(),
+        ab.view((r, 0), (k, r)).into_owned(),
+        ab.view((r, r), (k, k)).into_owned(),
+    );
+    let (b1, b2) = (bb.rows(0, r).into_owned(), bb.rows(r, k).into_owned());
+    let (c1, c2) = (cb.columns(0, r).into_owned(), cb.columns(r, k).into_owned());
+    let (x21, x2u) = if k > 0 {
+        (
+            -linalg::solve(&a22, &a21, "singular perturbation")?,
+            -linalg::solve(&a22, &b2, "singular perturbation")?,
+        )
+    } else {
+        (DMatrix::zeros(0, r), DMatrix::zeros(0, 3))
+    };
+    let system = StateSpace {
+        a: &a11 + &a12 * &x21,
+        b: &b1 + &a12 * &x2u,
+        c: &c1 + &c2 * &x21,
+        d: d + &c2 * &x2u,
+        states: (1..=r).map(|i| format!("z{i}")).collect(),
+        inputs: minimal.inputs.clone(),
+        outputs: minimal.outputs.clone(),
+        scales: vec![1.0; r],
+    };
+    Ok((system, x21, x2u))
 }
 
 /// The error of `reduced` against the full response from 0 to [`ERROR_BAND`].

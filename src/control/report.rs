@@ -412,40 +412,7 @@ fn draw_bode(path: &Path, b: &Bode) -> Result<(), FileError> {
         b.g.iter()
             .flat_map(|g| g.iter().map(|z| z.norm()))
             .fold(0.0, f64::max);
-    let groups: Vec<(&str, Vec<Channel>)> = vec![
-        (
-            "heights h_i / U_i",
-            (0..3)
-                .map(|i| Channel {
-                    output: i,
-                    input: i,
-                    label: format!("h{0}/U{0}", i + 1),
-                })
-                .collect(),
-        ),
-        (
-            "tip x, y / U_j",
-            (3..5)
-                .flat_map(|o| {
-                    (0..3).map(move |j| Channel {
-                        output: o,
-                        input: j,
-                        label: format!("{}/U{}", ["x", "y"][o - 3], j + 1),
-                    })
-                })
-                .collect(),
-        ),
-        (
-            "tip z / U_j",
-            (0..3)
-                .map(|j| Channel {
-                    output: 5,
-                    input: j,
-                    label: format!("z/U{}", j + 1),
-                })
-                .collect(),
-        ),
-    ];
+    let groups = bode_groups();
     let (f0, f1) = (b.freqs[0], b.freqs[b.freqs.len() - 1]);
     plot::to_png(path, (1600, 1500), |root| {
         let areas = root.split_evenly((3, 2));
@@ -459,21 +426,7 @@ fn draw_bode(path: &Path, b: &Bode) -> Result<(), FileError> {
                         .any(|g| g[(c.output, c.input)].norm() > CHANNEL_FLOOR * peak)
                 })
                 .collect();
-            let mags: Vec<Vec<f64>> = live
-                .iter()
-                .map(|c| {
-                    b.g.iter()
-                        .map(|g| 20.0 * (g[(c.output, c.input)].norm() / 1e-6).log10())
-                        .collect()
-                })
-                .collect();
-            let phases: Vec<Vec<f64>> = live
-                .iter()
-                .map(|c| {
-                    let z: Vec<Complex<f64>> = b.g.iter().map(|g| g[(c.output, c.input)]).collect();
-                    unwrap_phase(&z)
-                })
-                .collect();
+            let (mags, phases) = magnitudes_and_phases(b, &live);
             for (col, (data, y_label)) in [
                 (&mags, "magnitude [dB re 1 um/V]"),
                 (&phases, "phase [deg]"),
@@ -481,16 +434,7 @@ fn draw_bode(path: &Path, b: &Bode) -> Result<(), FileError> {
             .into_iter()
             .enumerate()
             {
-                let finite = data.iter().flatten().copied().filter(|v| v.is_finite());
-                let (lo, hi) = finite.fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), v| {
-                    (l.min(v), h.max(v))
-                });
-                let (lo, hi) = if lo.is_finite() {
-                    let lo = if col == 0 { lo.max(hi - 200.0) } else { lo };
-                    (lo - 5.0, hi + 5.0)
-                } else {
-                    (-1.0, 1.0)
-                };
+                let (lo, hi) = y_range(data, col == 0);
                 let area = &areas[row * 2 + col];
                 let mut chart = ChartBuilder::on(area)
                     .caption(
@@ -561,6 +505,79 @@ fn draw_bode(path: &Path, b: &Bode) -> Result<(), FileError> {
         }
         Ok(())
     })
+}
+
+/// The Bode plot's rows: each voltage to its height, to the tip's x and y, and to its z.
+fn bode_groups() -> Vec<(&'static str, Vec<Channel>)> {
+    vec![
+        (
+            "heights h_i / U_i",
+            (0..3)
+                .map(|i| Channel {
+                    output: i,
+                    input: i,
+                    label: format!("h{0}/U{0}", i + 1),
+                })
+                .collect(),
+        ),
+        (
+            "tip x, y / U_j",
+            (3..5)
+                .flat_map(|o| {
+                    (0..3).map(move |j| Channel {
+                        output: o,
+                        input: j,
+                        label: format!("{}/U{}", ["x", "y"][o - 3], j + 1),
+                    })
+                })
+                .collect(),
+        ),
+        (
+            "tip z / U_j",
+            (0..3)
+                .map(|j| Channel {
+                    output: 5,
+                    input: j,
+                    label: format!("z/U{}", j + 1),
+                })
+                .collect(),
+        ),
+    ]
+}
+
+/// Each channel's magnitude [dB re 1 um/V] and unwrapped phase [deg] over the frequencies.
+fn magnitudes_and_phases(b: &Bode, live: &[&Channel]) -> (Vec<Vec<f64>>, Vec<Vec<f64>>) {
+    let mags: Vec<Vec<f64>> = live
+        .iter()
+        .map(|c| {
+            b.g.iter()
+                .map(|g| 20.0 * (g[(c.output, c.input)].norm() / 1e-6).log10())
+                .collect()
+        })
+        .collect();
+    let phases: Vec<Vec<f64>> = live
+        .iter()
+        .map(|c| {
+            let z: Vec<Complex<f64>> = b.g.iter().map(|g| g[(c.output, c.input)]).collect();
+            unwrap_phase(&z)
+        })
+        .collect();
+    (mags, phases)
+}
+
+/// The y range of a panel: its finite values with 5 units to spare, a magnitude panel's
+/// (`magnitude`) at most 200 dB deep.
+fn y_range(data: &[Vec<f64>], magnitude: bool) -> (f64, f64) {
+    let finite = data.iter().flatten().copied().filter(|v| v.is_finite());
+    let (lo, hi) = finite.fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), v| {
+        (l.min(v), h.max(v))
+    });
+    if lo.is_finite() {
+        let lo = if magnitude { lo.max(hi - 200.0) } else { lo };
+        (lo - 5.0, hi + 5.0)
+    } else {
+        (-1.0, 1.0)
+    }
 }
 
 /// `step.png`: the outputs' response to the voltage step, linear (lines) and nonlinear (dots).

@@ -752,11 +752,7 @@ pub fn diagnose(
         analysis::trim_outliers(experiments).map_err(identify::Error::from)?;
     let experiments = with_held_out(experiments)?;
     let (estimation, held) = experiments.split_at(1);
-    let mut bounds = BTreeMap::new();
-    for name in identify::default_free() {
-        let v = start.get(&name)?;
-        bounds.insert(name, (v / opts.base_range, v * opts.base_range));
-    }
+    let bounds = base_bounds(start, opts)?;
     let id_opts = |forms: &[&Form]| IdOptions {
         free: free_list(forms),
         bounds: bounds.clone(),
@@ -781,16 +777,7 @@ pub fn diagnose(
             ..id_opts(&[])
         },
     )?;
-    // the records under the conditions found: the estimation experiment, then the held-out
-    // ones (the ordering of the identification's `simulated`)
-    let ordered: Vec<Experiment> = experiments
-        .iter()
-        .zip(&base.conditions)
-        .map(|(e, found)| Experiment {
-            conditions: found.conditions.clone(),
-            ..e.clone()
-        })
-        .collect();
+    let ordered = under_found_conditions(&experiments, &base);
     let (estimation, held) = ordered.split_at(1);
     timing.push((
         "re-identify the paper's model".to_string(),
@@ -798,207 +785,22 @@ pub fn diagnose(
     ));
     let before = disagreements(&ordered, &base)?;
 
-    let mut effects: Vec<Effect> = Vec::new();
-    let mut forms: Vec<&'static Form> = Vec::new();
-    let mut current = base.clone();
-    let mut rounds = Vec::new();
-    let mut verdict = None;
-    let mut ambiguous_between = Vec::new();
-    let mut separation = Vec::new();
-    while effects.len() < opts.max_effects {
-        let now = disagreements(&ordered, &current)?;
-        if pooled_excess(&now) < NOISE_FLOOR_EXCESS {
-            break;
-        }
-        if !effects.is_empty() && worst_gap_to_floor(held, &current) <= AT_FLOOR {
-            break;
-        }
-        let t0 = Instant::now();
-        let mut candidates = screen(&current, &estimation[0], &forms, opts)?;
-        timing.push((
-            format!("screen candidates (round {})", rounds.len() + 1),
-            t0.elapsed().as_secs_f64(),
-        ));
-        let t0 = Instant::now();
-        // the candidates are refitted in parallel, each on its own: the results do not depend
-        // on the number of threads (a refit that runs out of its budget fails its candidate)
-        let plan = refit_plan(&candidates, opts.refits);
-        let mut starts = Vec::new();
-        for (_, form, start) in &plan {
-            let mut with = forms.clone();
-            with.push(form);
-            let o = id_opts(&with);
-            let nested = nested_rss(&current, &estimation[0], &o)?;
-            starts.push((*form, start, o, nested));
-        }
-        let here = &current.params;
-        let refits: Vec<Result<Identification, Error>> = std::thread::scope(|s| {
-            let handles: Vec<_> = starts
-                .iter()
-                .map(|(form, start, o, nested)| {
-                    let nested = *nested;
-                    s.spawn(move || {
-                        let mut o = o.clone();
-                        o.lm.deadline = opts.refit_budget.map(|b| Instant::now() + b);
-                        nested_refit(here, form, start, estimation, held, &o, nested)
-                    })
-                })
-                .collect();
-            handles
-                .into_iter()
-                .map(|h| h.join().expect("a refit does not panic"))
-                .collect()
-        });
-        // a refit that cannot run (the model leaves its domain) fails its form
-        settle_forms(&mut candidates, &plan, refits, |form, id| {
-            judge(form, id, &current, estimation, held, &forms)
-        });
-        timing.push((
-            format!(
-                "refit {} candidate forms (round {})",
-                plan.len(),
-                rounds.len() + 1
-            ),
-            t0.elapsed().as_secs_f64(),
-        ));
-        let evidence = |passes: fn(&Refit) -> bool| -> Vec<Option<Evidence>> {
-            candidates
-                .iter()
-                .map(|c| {
-                    c.refit.as_ref().map(|r| Evidence {
-                        delta_bic: r.delta_bic,
-                        fit_gain: r.fit_gain,
-                        passes: passes(r),
-                    })
-                })
-                .collect()
-        };
-        let mut decision = decide(&evidence(Refit::passes));
-        let mut provisional = None;
-        // no first effect closes half the gap: one that closes a clear part of it may be one of
-        // two causes; it is added provisionally, the one with the best BIC
-        if decision == Decision::Nothing
-            && effects.is_empty()
-            && let Decision::Add(k) | Decision::Tie(k, _) = decide(&evidence(|r| r.partial))
-        {
-            decision = Decision::Add(k);
-            provisional = Some(Provisional {
-                form: candidates[k].form,
-                kept: true,
-            });
-        }
-        // a later candidate that passes all but closing the rest of the gap may be held back by
-        // a stand-in chosen earlier for its share: it is tried with the earlier effects revisited
-        // beside it, and kept only when a revisit swaps one (book/src/diagnose.md, "Two
-        // mechanisms at once")
-        let mut tentative = None;
-        if decision == Decision::Nothing
-            && !effects.is_empty()
-            && let Decision::Add(k) | Decision::Tie(k, _) = decide(&evidence(|r| r.short_of_floor))
-        {
-            decision = Decision::Add(k);
-            tentative = Some(current.clone());
-        }
-        let round_effects = effects.clone();
-        let mut added = match decision {
-            Decision::Nothing => {
-                if effects.is_empty() {
-                    verdict = Some(Verdict::Unexplained);
-                }
-                None
-            }
-            Decision::Tie(a, b) => {
-                ambiguous_between = vec![candidates[a].effect, candidates[b].effect];
-                // both refitted models driven by the experiments that would separate them
-                let fitted = |k: usize| {
-                    let c = &candidates[k];
-                    let r = c.refit.as_ref().expect("a tied candidate was refitted");
-                    (c.effect, &r.id.params)
-                };
-                separation =
-                    separate::separations(fitted(a), fitted(b), &estimation[0], opts.rtol)?;
-                verdict = Some(Verdict::Ambiguous);
-                None
-            }
-            Decision::Add(k) => {
-                let best = &candidates[k];
-                let rb = best
-                    .refit
-                    .as_ref()
-                    .expect("a decided candidate was refitted");
-                effects.push(best.effect);
-                forms.push(best.form);
-                // the budget bounds the competition, not the answer: the model taken on is
-                // fitted to convergence
-                current = converged(
-                    rb.id.clone(),
-                    estimation,
-                    held,
-                    &id_opts(&forms),
-                    opts.refit_budget,
-                );
-                Some(best.effect)
-            }
-        };
-        let mut added_form = added.and(forms.last().copied());
-        let t0 = Instant::now();
-        let revisits = if added.is_some() && effects.len() > 1 {
-            revisit(
-                &rounds,
-                &mut forms,
-                &mut current,
-                estimation,
-                held,
-                &id_opts,
-                opts,
-            )?
-        } else {
-            Vec::new()
-        };
-        if let Some(before) = tentative.filter(|_| revisits.iter().all(|v| !v.swapped)) {
-            forms.pop();
-            effects.pop();
-            current = before;
-            added = None;
-            added_form = None;
-        }
-        if !revisits.is_empty() {
-            effects = forms.iter().map(|f| f.effect).collect();
-            timing.push((
-                format!("revisit earlier effects (round {})", rounds.len() + 1),
-                t0.elapsed().as_secs_f64(),
-            ));
-        }
-        rounds.push(Round {
-            effects_before: round_effects,
-            added_form,
-            evidence: evidence_weights(&candidates),
-            candidates,
-            added,
-            revisits,
-            provisional,
-        });
-        if added.is_none() {
+    let mut search = Search::from(base.clone());
+    while search.effects.len() < opts.max_effects {
+        if !search.round(&ordered, &id_opts, opts, &mut timing)? {
             break;
         }
     }
-    // a provisional first effect stays only if, with what was added after it, every held-out
-    // fit is within the tolerance of its noise floor; otherwise the answer is as without it
-    let alone = effects.len() == 1 && verdict.is_none();
-    if let Some(first) = rounds.first_mut().filter(|r| r.provisional.is_some())
-        && alone
-        && worst_gap_to_floor(held, &current) > FIT_TOLERANCE
-    {
-        first.added = None;
-        first.added_form = None;
-        if let Some(p) = first.provisional.as_mut() {
-            p.kept = false;
-        }
-        effects.clear();
-        forms.clear();
-        current = base.clone();
-        verdict = Some(Verdict::Unexplained);
-    }
+    search.drop_unkept_provisional(held, &base);
+    let Search {
+        effects,
+        forms,
+        current,
+        rounds,
+        verdict,
+        ambiguous_between,
+        separation,
+    } = search;
     let verdict = verdict.unwrap_or(if effects.is_empty() {
         Verdict::None
     } else {
@@ -1034,6 +836,324 @@ pub fn diagnose(
         outliers,
         fits,
     })
+}
+
+/// The base parameters' bounds: each free one within a factor `opts.base_range` of `start`.
+fn base_bounds(start: &Params, opts: &Options) -> Result<BTreeMap<String, (f64, f64)>, Error> {
+    let mut bounds = BTreeMap::new();
+    for name in identify::default_free() {
+        let v = start.get(&name)?;
+        bounds.insert(name, (v / opts.base_range, v * opts.base_range));
+    }
+    Ok(bounds)
+}
+
+/// The records under the conditions `base` found: the estimation experiment, then the held-out
+/// ones (the ordering of the identification's `simulated`).
+fn under_found_conditions(experiments: &[Experiment], base: &Identification) -> Vec<Experiment> {
+    experiments
+        .iter()
+        .zip(&base.conditions)
+        .map(|(e, found)| Experiment {
+            conditions: found.conditions.clone(),
+            ..e.clone()
+        })
+        .collect()
+}
+
+/// Where the search for effects stands between rounds: what it has taken on, the model with
+/// it, the rounds so far, and a verdict once one is reached.
+struct Search {
+    effects: Vec<Effect>,
+    forms: Vec<&'static Form>,
+    current: Identification,
+    rounds: Vec<Round>,
+    verdict: Option<Verdict>,
+    ambiguous_between: Vec<Effect>,
+    separation: Vec<separate::Separation>,
+}
+
+/// What a round's evidence decides, with the way a candidate was let in short of passing.
+struct RoundDecision {
+    decision: Decision,
+    /// A first effect added provisionally (it closes only a part of the gap).
+    provisional: Option<Provisional>,
+    /// A later effect added tentatively: kept only if a revisit swaps an earlier one.
+    tentative: bool,
+}
+
+impl Search {
+    /// The search before its first round: nothing taken on, the model `base`.
+    fn from(base: Identification) -> Self {
+        Search {
+            effects: Vec::new(),
+            forms: Vec::new(),
+            current: base,
+            rounds: Vec::new(),
+            verdict: None,
+            ambiguous_between: Vec::new(),
+            separation: Vec::new(),
+        }
+    }
+
+    /// One round on `ordered` (the estimation record, then the held-out ones): screens the
+    /// candidates, refits the best, takes on the one the evidence decides for and revisits the
+    /// earlier effects beside it; whether another round may follow.
+    fn round(
+        &mut self,
+        ordered: &[Experiment],
+        id_opts: &dyn Fn(&[&Form]) -> IdOptions,
+        opts: &Options,
+        timing: &mut Vec<(String, f64)>,
+    ) -> Result<bool, Error> {
+        let (estimation, held) = ordered.split_at(1);
+        let now = disagreements(ordered, &self.current)?;
+        if pooled_excess(&now) < NOISE_FLOOR_EXCESS {
+            return Ok(false);
+        }
+        if !self.effects.is_empty() && worst_gap_to_floor(held, &self.current) <= AT_FLOOR {
+            return Ok(false);
+        }
+        let t0 = Instant::now();
+        let mut candidates = screen(&self.current, &estimation[0], &self.forms, opts)?;
+        timing.push((
+            format!("screen candidates (round {})", self.rounds.len() + 1),
+            t0.elapsed().as_secs_f64(),
+        ));
+        let t0 = Instant::now();
+        let plan = refit_plan(&candidates, opts.refits);
+        let refits = refit_all(
+            &plan,
+            &self.forms,
+            &self.current,
+            (estimation, held),
+            id_opts,
+            opts,
+        )?;
+        // a refit that cannot run (the model leaves its domain) fails its form
+        settle_forms(&mut candidates, &plan, refits, |form, id| {
+            judge(form, id, &self.current, estimation, held, &self.forms)
+        });
+        timing.push((
+            format!(
+                "refit {} candidate forms (round {})",
+                plan.len(),
+                self.rounds.len() + 1
+            ),
+            t0.elapsed().as_secs_f64(),
+        ));
+        let RoundDecision {
+            decision,
+            provisional,
+            tentative,
+        } = round_decision(&candidates, self.effects.is_empty());
+        let tentative = tentative.then(|| self.current.clone());
+        let round_effects = self.effects.clone();
+        let mut added = self.take_on(decision, &candidates, (estimation, held), id_opts, opts)?;
+        let mut added_form = added.and(self.forms.last().copied());
+        let t0 = Instant::now();
+        let revisits = if added.is_some() && self.effects.len() > 1 {
+            revisit(
+                &self.rounds,
+                &mut self.forms,
+                &mut self.current,
+                estimation,
+                held,
+                id_opts,
+                opts,
+            )?
+        } else {
+            Vec::new()
+        };
+        if let Some(before) = tentative.filter(|_| revisits.iter().all(|v| !v.swapped)) {
+            self.forms.pop();
+            self.effects.pop();
+            self.current = before;
+            added = None;
+            added_form = None;
+        }
+        if !revisits.is_empty() {
+            self.effects = self.forms.iter().map(|f| f.effect).collect();
+            timing.push((
+                format!("revisit earlier effects (round {})", self.rounds.len() + 1),
+                t0.elapsed().as_secs_f64(),
+            ));
+        }
+        self.rounds.push(Round {
+            effects_before: round_effects,
+            added_form,
+            evidence: evidence_weights(&candidates),
+            candidates,
+            added,
+            revisits,
+            provisional,
+        });
+        Ok(added.is_some())
+    }
+
+    /// Acts on a round's `decision`: a tie is recorded with the experiments that would
+    /// separate the two, nothing found in the first round leaves the data unexplained, and an
+    /// added candidate is taken on; the effect added, if any.
+    fn take_on(
+        &mut self,
+        decision: Decision,
+        candidates: &[Candidate],
+        (estimation, held): (&[Experiment], &[Experiment]),
+        id_opts: &dyn Fn(&[&Form]) -> IdOptions,
+        opts: &Options,
+    ) -> Result<Option<Effect>, Error> {
+        Ok(match decision {
+            Decision::Nothing => {
+                if self.effects.is_empty() {
+                    self.verdict = Some(Verdict::Unexplained);
+                }
+                None
+            }
+            Decision::Tie(a, b) => {
+                self.ambiguous_between = vec![candidates[a].effect, candidates[b].effect];
+                // both refitted models driven by the experiments that would separate them
+                let fitted = |k: usize| {
+                    let c = &candidates[k];
+                    let r = c.refit.as_ref().expect("a tied candidate was refitted");
+                    (c.effect, &r.id.params)
+                };
+                self.separation =
+                    separate::separations(fitted(a), fitted(b), &estimation[0], opts.rtol)?;
+                self.verdict = Some(Verdict::Ambiguous);
+                None
+            }
+            Decision::Add(k) => {
+                let best = &candidates[k];
+                let rb = best
+                    .refit
+                    .as_ref()
+                    .expect("a decided candidate was refitted");
+                self.effects.push(best.effect);
+                self.forms.push(best.form);
+                // the budget bounds the competition, not the answer: the model taken on is
+                // fitted to convergence
+                self.current = converged(
+                    rb.id.clone(),
+                    estimation,
+                    held,
+                    &id_opts(&self.forms),
+                    opts.refit_budget,
+                );
+                Some(best.effect)
+            }
+        })
+    }
+
+    /// A provisional first effect stays only if, with what was added after it, every held-out
+    /// fit is within the tolerance of its noise floor; otherwise the answer is as without it
+    /// (`base`, unexplained).
+    fn drop_unkept_provisional(&mut self, held: &[Experiment], base: &Identification) {
+        let alone = self.effects.len() == 1 && self.verdict.is_none();
+        if let Some(first) = self.rounds.first_mut().filter(|r| r.provisional.is_some())
+            && alone
+            && worst_gap_to_floor(held, &self.current) > FIT_TOLERANCE
+        {
+            first.added = None;
+            first.added_form = None;
+            if let Some(p) = first.provisional.as_mut() {
+                p.kept = false;
+            }
+            self.effects.clear();
+            self.forms.clear();
+            self.current = base.clone();
+            self.verdict = Some(Verdict::Unexplained);
+        }
+    }
+}
+
+/// Refits each planned form beside `forms` from `current`. The candidates are refitted in
+/// parallel, each on its own: the results do not depend on the number of threads (a refit that
+/// runs out of its budget fails its candidate).
+fn refit_all(
+    plan: &[PlannedRefit],
+    forms: &[&'static Form],
+    current: &Identification,
+    (estimation, held): (&[Experiment], &[Experiment]),
+    id_opts: &dyn Fn(&[&Form]) -> IdOptions,
+    opts: &Options,
+) -> Result<Vec<Result<Identification, Error>>, Error> {
+    let mut starts = Vec::new();
+    for (_, form, start) in plan {
+        let mut with = forms.to_vec();
+        with.push(form);
+        let o = id_opts(&with);
+        let nested = nested_rss(current, &estimation[0], &o)?;
+        starts.push((*form, start, o, nested));
+    }
+    let here = &current.params;
+    Ok(std::thread::scope(|s| {
+        let handles: Vec<_> = starts
+            .iter()
+            .map(|(form, start, o, nested)| {
+                let nested = *nested;
+                s.spawn(move || {
+                    let mut o = o.clone();
+                    o.lm.deadline = opts.refit_budget.map(|b| Instant::now() + b);
+                    nested_refit(here, form, start, estimation, held, &o, nested)
+                })
+            })
+            .collect();
+        handles
+            .into_iter()
+            .map(|h| h.join().expect("a refit does not panic"))
+            .collect()
+    }))
+}
+
+/// Each candidate's refit as the decision sees it, passing by `passes`.
+fn evidence(candidates: &[Candidate], passes: fn(&Refit) -> bool) -> Vec<Option<Evidence>> {
+    candidates
+        .iter()
+        .map(|c| {
+            c.refit.as_ref().map(|r| Evidence {
+                delta_bic: r.delta_bic,
+                fit_gain: r.fit_gain,
+                passes: passes(r),
+            })
+        })
+        .collect()
+}
+
+/// What a round's refitted `candidates` decide, `first` when no effect is taken on yet: the
+/// one that passes, or else one let in short of passing.
+fn round_decision(candidates: &[Candidate], first: bool) -> RoundDecision {
+    let mut decision = decide(&evidence(candidates, Refit::passes));
+    let mut provisional = None;
+    // no first effect closes half the gap: one that closes a clear part of it may be one of
+    // two causes; it is added provisionally, the one with the best BIC
+    if decision == Decision::Nothing
+        && first
+        && let Decision::Add(k) | Decision::Tie(k, _) = decide(&evidence(candidates, |r| r.partial))
+    {
+        decision = Decision::Add(k);
+        provisional = Some(Provisional {
+            form: candidates[k].form,
+            kept: true,
+        });
+    }
+    // a later candidate that passes all but closing the rest of the gap may be held back by
+    // a stand-in chosen earlier for its share: it is tried with the earlier effects revisited
+    // beside it, and kept only when a revisit swaps one (book/src/diagnose.md, "Two
+    // mechanisms at once")
+    let mut tentative = false;
+    if decision == Decision::Nothing
+        && !first
+        && let Decision::Add(k) | Decision::Tie(k, _) =
+            decide(&evidence(candidates, |r| r.short_of_floor))
+    {
+        decision = Decision::Add(k);
+        tentative = true;
+    }
+    RoundDecision {
+        decision,
+        provisional,
+        tentative,
+    }
 }
 
 /// `id` itself, or, when its fit stopped at the iteration budget, where that fit goes on to

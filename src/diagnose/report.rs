@@ -7,7 +7,7 @@ use std::path::Path;
 use serde_json::{Map, Value, json};
 
 use super::analysis::Disagreement;
-use super::{Candidate, Diagnosis, Remaining, Verdict};
+use super::{Candidate, Diagnosis, Remaining, Round, Verdict};
 use crate::identify::report::{
     conditions_json, conditions_section, fits_json, residual_series, round,
 };
@@ -137,22 +137,7 @@ pub fn to_json(d: &Diagnosis) -> Value {
         "verdict": d.verdict.name(),
         "effects": d.effects.iter().map(|e| e.name()).collect::<Vec<_>>(),
         "forms": d.forms.iter().map(|f| f.name).collect::<Vec<_>>(),
-        "laws": d.effects.iter().zip(&d.laws).filter_map(|(e, law)| {
-            let law = law.as_ref()?;
-            Some(json!({
-                "effect": e.name(),
-                "what": law.what,
-                "axes": law.axes,
-                "points": law.points.iter().map(|&(x, y)| [x, y]).collect::<Vec<_>>(),
-                "nearest": law.textbook[law.nearest].name,
-                "distance": law.distance,
-                "textbook": law.textbook.iter().map(|k| json!({
-                    "name": k.name,
-                    "values": k.values,
-                    "distance": round(k.distance, 4),
-                })).collect::<Vec<_>>(),
-            }))
-        }).collect::<Vec<_>>(),
+        "laws": laws_json(d),
         "ambiguous_between": d.ambiguous_between.iter().map(|e| e.name()).collect::<Vec<_>>(),
         "separating_experiment": d.separating_experiment,
         "separation": d.separation.iter().map(|s| json!({
@@ -167,34 +152,7 @@ pub fn to_json(d: &Diagnosis) -> Value {
         "noise_floor_fit": as_map(&d.fits.held_out_floor),
         "fits_on": "held-out experiments",
         "candidates": d.rounds.first().map(|r| r.candidates.iter().map(candidate_json).collect::<Vec<_>>()).unwrap_or_default(),
-        "rounds": d.rounds.iter().map(|r| json!({
-            "effects_before": r.effects_before.iter().map(|e| e.name()).collect::<Vec<_>>(),
-            "added": r.added.map(|e| e.name()),
-            "added_form": r.added_form.map(|f| f.name),
-            "provisional": r.provisional.map(|p| json!({
-                "effect": p.form.effect.name(),
-                "form": p.form.name,
-                "kept": p.kept,
-            })),
-            "candidates": r.candidates.iter().map(candidate_json).collect::<Vec<_>>(),
-            "evidence": r.evidence.iter().map(|(e, w)| json!({
-                "effect": e.map_or("none", |e| e.name()),
-                "weight": w,
-            })).collect::<Vec<_>>(),
-            "revisits": r.revisits.iter().map(|v| {
-                let mut j = json!({
-                    "replaced": v.replaced.name(),
-                    "by": v.by.map(|f| f.effect.name()),
-                    "by_form": v.by.map(|f| f.name),
-                    "swapped": v.swapped,
-                });
-                match &v.delta_bic {
-                    Ok(b) => j["delta_bic"] = json!(b),
-                    Err(e) => j["refit_error"] = json!(e),
-                }
-                j
-            }).collect::<Vec<_>>(),
-        })).collect::<Vec<_>>(),
+        "rounds": d.rounds.iter().map(round_json).collect::<Vec<_>>(),
         "parameters": effect_params,
         "estimation": d.estimation,
         "held_out": d.held_out,
@@ -218,6 +176,63 @@ pub fn to_json(d: &Diagnosis) -> Value {
             "times_s": o.times.iter().map(|t| round(*t, 4)).collect::<Vec<_>>(),
         })).collect::<Vec<_>>(),
         "timing_s": d.timing.iter().map(|(s, t)| (s.clone(), json!(round(*t, 2)))).collect::<Map<_, _>>(),
+    })
+}
+
+/// Each named effect's fitted law: its points and the textbook laws nearest it.
+fn laws_json(d: &Diagnosis) -> Vec<Value> {
+    d.effects
+        .iter()
+        .zip(&d.laws)
+        .filter_map(|(e, law)| {
+            let law = law.as_ref()?;
+            Some(json!({
+                "effect": e.name(),
+                "what": law.what,
+                "axes": law.axes,
+                "points": law.points.iter().map(|&(x, y)| [x, y]).collect::<Vec<_>>(),
+                "nearest": law.textbook[law.nearest].name,
+                "distance": law.distance,
+                "textbook": law.textbook.iter().map(|k| json!({
+                    "name": k.name,
+                    "values": k.values,
+                    "distance": round(k.distance, 4),
+                })).collect::<Vec<_>>(),
+            }))
+        })
+        .collect()
+}
+
+/// One round of the search: the model it started from, what it added, its candidates, their
+/// evidence weights and the revisits.
+fn round_json(r: &Round) -> Value {
+    json!({
+        "effects_before": r.effects_before.iter().map(|e| e.name()).collect::<Vec<_>>(),
+        "added": r.added.map(|e| e.name()),
+        "added_form": r.added_form.map(|f| f.name),
+        "provisional": r.provisional.map(|p| json!({
+            "effect": p.form.effect.name(),
+            "form": p.form.name,
+            "kept": p.kept,
+        })),
+        "candidates": r.candidates.iter().map(candidate_json).collect::<Vec<_>>(),
+        "evidence": r.evidence.iter().map(|(e, w)| json!({
+            "effect": e.map_or("none", |e| e.name()),
+            "weight": w,
+        })).collect::<Vec<_>>(),
+        "revisits": r.revisits.iter().map(|v| {
+            let mut j = json!({
+                "replaced": v.replaced.name(),
+                "by": v.by.map(|f| f.effect.name()),
+                "by_form": v.by.map(|f| f.name),
+                "swapped": v.swapped,
+            });
+            match &v.delta_bic {
+                Ok(b) => j["delta_bic"] = json!(b),
+                Err(e) => j["refit_error"] = json!(e),
+            }
+            j
+        }).collect::<Vec<_>>(),
     })
 }
 
@@ -501,6 +516,47 @@ pub fn write(dir: &Path, d: &Diagnosis) -> Result<(), FileError> {
     std::fs::create_dir_all(dir)
         .map_err(|e| FileError::new(dir, format!("cannot create folder: {e}")))?;
     let mut md = format!("# Diagnosis: {}\n\n{}\n\n", d.verdict.name(), headline(d));
+    introduction(&mut md, d);
+    let _ = writeln!(md, "## Where and how the paper's model disagreed\n");
+    disagreement_table(&mut md, &d.before);
+    let _ = writeln!(
+        md,
+        "\nExcess over noise: residual variance beyond the measurement noise (estimated from the samples' departures from their neighbours), relative to it; 0 % is the noise floor. Harmonics are of the drive frequency found in U1; the off-harmonic share is residual power neither at a harmonic nor slow.\n"
+    );
+    for (k, r) in d.rounds.iter().enumerate() {
+        round_section(&mut md, k, r);
+    }
+    passing_rule(&mut md);
+    if !d.effects.is_empty() {
+        effects_section(&mut md, d);
+    }
+    laws_figure(dir, d, &mut md)?;
+    let _ = writeln!(md, "## Fits before and after (NRMSE, MATLAB `compare`)\n");
+    fits_table(&mut md, d);
+    let _ = writeln!(md, "\n## Where the disagreement went\n");
+    disagreement_table(&mut md, &d.after);
+    if !d.fits.remaining.is_empty() {
+        let _ = writeln!(md, "\n## What remains\n");
+        for r in &d.fits.remaining {
+            let _ = writeln!(md, "- {}", where_it_remains(r));
+        }
+    }
+    conditions_section(&mut md, &d.base.conditions);
+    outliers_section(&mut md, d);
+    figures(dir, d, &mut md)?;
+    let _ = writeln!(md, "## Time\n\n| stage | s |\n|---|---|");
+    for (s, t) in &d.timing {
+        let _ = writeln!(md, "| {s} | {t:.1} |");
+    }
+    let json = serde_json::to_string_pretty(&to_json(d)).expect("JSON of plain values");
+    write_text_atomic(&dir.join("diagnosis.json"), &(json + "\n"))?;
+    params_file::write(&dir.join("fitted.toml"), &d.last.params)?;
+    write_text_atomic(&dir.join("report.md"), &md)
+}
+
+/// The report's opening lines: what was re-identified on which records, and what the
+/// experiments that would separate two tied candidates would show.
+fn introduction(md: &mut String, d: &Diagnosis) {
     let _ = writeln!(
         md,
         "The paper's model was re-identified (Kb, b, gamma1, gamma2 of each actuator) on `{}`; decisions use the held-out {}.\n",
@@ -526,86 +582,87 @@ pub fn write(dir: &Path, d: &Diagnosis) -> Result<(), FileError> {
             }
         );
     }
-    let _ = writeln!(md, "## Where and how the paper's model disagreed\n");
-    disagreement_table(&mut md, &d.before);
+}
+
+/// One round of the search: its candidates, their evidence weights, what was added, and what
+/// became of a provisional effect and of the earlier effects revisited.
+fn round_section(md: &mut String, k: usize, r: &Round) {
     let _ = writeln!(
         md,
-        "\nExcess over noise: residual variance beyond the measurement noise (estimated from the samples' departures from their neighbours), relative to it; 0 % is the noise floor. Harmonics are of the drive frequency found in U1; the off-harmonic share is residual power neither at a harmonic nor slow.\n"
+        "## Candidates, round {} (model with {})\n",
+        k + 1,
+        if r.effects_before.is_empty() {
+            "no effect".to_string()
+        } else {
+            r.effects_before
+                .iter()
+                .map(|e| e.name())
+                .collect::<Vec<_>>()
+                .join(", ")
+        }
     );
-    for (k, r) in d.rounds.iter().enumerate() {
+    candidates_table(md, &r.candidates);
+    let _ = writeln!(
+        md,
+        "\nEvidence weights (Schwarz, from the estimation BIC): {}.",
+        evidence_line(&r.evidence)
+    );
+    let _ = writeln!(
+        md,
+        "\n{}\n",
+        match (r.added, r.added_form) {
+            (Some(e), Some(f)) if !f.is_library() => format!(
+                "Added: `{}` in the form `{}` (frees {}).",
+                e.name(),
+                f.name,
+                f.free.join(", ")
+            ),
+            (Some(e), _) => format!("Added: `{}`, {}.", e.name(), e.form()),
+            (None, _) if !r.revisits.is_empty() => "Nothing added in this round: its best candidate, failing only by leaving a held-out fit beyond the tolerance of its noise floor, was tried tentatively with the earlier effects revisited beside it (below), and none of them was replaced.".into(),
+            (None, _) => "Nothing added in this round.".into(),
+        }
+    );
+    if let Some(p) = r.provisional {
         let _ = writeln!(
             md,
-            "## Candidates, round {} (model with {})\n",
-            k + 1,
-            if r.effects_before.is_empty() {
-                "no effect".to_string()
+            "No effect closes {:.0} % of the held-out gap: `{}` in the form `{}`, which closes at least {:.0} %, was added provisionally, to be kept only if the effects after it bring every held-out fit to within {} point(s) of its noise floor: {}.\n",
+            100.0 * super::GAP_CLOSED,
+            p.form.effect.name(),
+            p.form.name,
+            100.0 * super::PARTIAL_GAP,
+            super::FIT_TOLERANCE,
+            if p.kept {
+                "kept"
             } else {
-                r.effects_before
-                    .iter()
-                    .map(|e| e.name())
-                    .collect::<Vec<_>>()
-                    .join(", ")
+                "they did not, and it was dropped"
             }
         );
-        candidates_table(&mut md, &r.candidates);
-        let _ = writeln!(
-            md,
-            "\nEvidence weights (Schwarz, from the estimation BIC): {}.",
-            evidence_line(&r.evidence)
-        );
-        let _ = writeln!(
-            md,
-            "\n{}\n",
-            match (r.added, r.added_form) {
-                (Some(e), Some(f)) if !f.is_library() => format!(
-                    "Added: `{}` in the form `{}` (frees {}).",
-                    e.name(),
-                    f.name,
-                    f.free.join(", ")
-                ),
-                (Some(e), _) => format!("Added: `{}`, {}.", e.name(), e.form()),
-                (None, _) if !r.revisits.is_empty() => "Nothing added in this round: its best candidate, failing only by leaving a held-out fit beyond the tolerance of its noise floor, was tried tentatively with the earlier effects revisited beside it (below), and none of them was replaced.".into(),
-                (None, _) => "Nothing added in this round.".into(),
-            }
-        );
-        if let Some(p) = r.provisional {
-            let _ = writeln!(
-                md,
-                "No effect closes {:.0} % of the held-out gap: `{}` in the form `{}`, which closes at least {:.0} %, was added provisionally, to be kept only if the effects after it bring every held-out fit to within {} point(s) of its noise floor: {}.\n",
-                100.0 * super::GAP_CLOSED,
-                p.form.effect.name(),
-                p.form.name,
-                100.0 * super::PARTIAL_GAP,
-                super::FIT_TOLERANCE,
-                if p.kept {
-                    "kept"
-                } else {
-                    "they did not, and it was dropped"
-                }
-            );
-        }
-        for v in &r.revisits {
-            let against = match v.by {
-                Some(f) => format!(
-                    "`{}` in the form `{}`, its round's runner-up,",
-                    f.effect.name(),
-                    f.name
-                ),
-                None => "the model without it".into(),
-            };
-            let _ = writeln!(
-                md,
-                "Revisited: `{}` against {against} refitted beside the later effects: {}.\n",
-                v.replaced.name(),
-                match (&v.delta_bic, v.swapped) {
-                    (Ok(b), true) if v.by.is_none() => format!("ΔBIC {b:.1}, dropped"),
-                    (Ok(b), true) => format!("ΔBIC {b:.1}, the runner-up takes its place"),
-                    (Ok(b), false) => format!("ΔBIC {b:.1}, kept"),
-                    (Err(e), _) => format!("the refit failed ({e}), kept"),
-                }
-            );
-        }
     }
+    for v in &r.revisits {
+        let against = match v.by {
+            Some(f) => format!(
+                "`{}` in the form `{}`, its round's runner-up,",
+                f.effect.name(),
+                f.name
+            ),
+            None => "the model without it".into(),
+        };
+        let _ = writeln!(
+            md,
+            "Revisited: `{}` against {against} refitted beside the later effects: {}.\n",
+            v.replaced.name(),
+            match (&v.delta_bic, v.swapped) {
+                (Ok(b), true) if v.by.is_none() => format!("ΔBIC {b:.1}, dropped"),
+                (Ok(b), true) => format!("ΔBIC {b:.1}, the runner-up takes its place"),
+                (Ok(b), false) => format!("ΔBIC {b:.1}, kept"),
+                (Err(e), _) => format!("the refit failed ({e}), kept"),
+            }
+        );
+    }
+}
+
+/// The rule an effect must pass to be added, in words with the thresholds in force.
+fn passing_rule(md: &mut String) {
     let _ = writeln!(
         md,
         "An effect passes when it lowers the BIC on the estimation data by more than {margin}, closes at least {:.0} % of the held-out gap to the noise floor, gains at least {gain} points of held-out fit (half the gap to the floor where that is less), and the 95 % interval of its magnitude excludes the neutral value. Of two that pass, the one with the lower BIC is added if it beats the other by {margin}, else the one with {gain} points more of held-out fit; otherwise the answer is `ambiguous`.\n",
@@ -613,40 +670,46 @@ pub fn write(dir: &Path, d: &Diagnosis) -> Result<(), FileError> {
         margin = super::BIC_MARGIN,
         gain = super::MIN_GAIN
     );
-    if !d.effects.is_empty() {
-        let _ = writeln!(
-            md,
-            "## The named effects and their parameters\n\n| effect | form | parameter | estimate | 95 % interval |\n|---|---|---|---|---|"
-        );
-        for f in &d.forms {
-            let e = f.effect;
-            let form = if f.is_library() {
-                format!("`{}`: {}", f.name, e.form())
-            } else {
-                format!("`{}`", f.name)
-            };
-            for name in f.free {
-                if let Some(est) = d.last.estimates.iter().find(|x| x.name == *name) {
-                    let ci = est
-                        .ci95
-                        .map_or("held (not determined)".to_string(), |(a, b)| {
-                            format!("[{a:.4e}, {b:.4e}]")
-                        });
-                    let _ = writeln!(
-                        md,
-                        "| {} | {} | {} | {:.4e} | {} |",
-                        e.name(),
-                        form,
-                        name,
-                        est.value,
-                        ci
-                    );
-                }
+}
+
+/// The named effects' parameters (estimate, 95 % interval) and their fitted laws.
+fn effects_section(md: &mut String, d: &Diagnosis) {
+    let _ = writeln!(
+        md,
+        "## The named effects and their parameters\n\n| effect | form | parameter | estimate | 95 % interval |\n|---|---|---|---|---|"
+    );
+    for f in &d.forms {
+        let e = f.effect;
+        let form = if f.is_library() {
+            format!("`{}`: {}", f.name, e.form())
+        } else {
+            format!("`{}`", f.name)
+        };
+        for name in f.free {
+            if let Some(est) = d.last.estimates.iter().find(|x| x.name == *name) {
+                let ci = est
+                    .ci95
+                    .map_or("held (not determined)".to_string(), |(a, b)| {
+                        format!("[{a:.4e}, {b:.4e}]")
+                    });
+                let _ = writeln!(
+                    md,
+                    "| {} | {} | {} | {:.4e} | {} |",
+                    e.name(),
+                    form,
+                    name,
+                    est.value,
+                    ci
+                );
             }
         }
-        let _ = writeln!(md);
-        laws_section(&mut md, d);
     }
+    let _ = writeln!(md);
+    laws_section(md, d);
+}
+
+/// `laws.png`, a panel per named effect with a law to draw, and its link in the report.
+fn laws_figure(dir: &Path, d: &Diagnosis, md: &mut String) -> Result<(), FileError> {
     let panels: Vec<Panel> = d
         .effects
         .iter()
@@ -662,17 +725,11 @@ pub fn write(dir: &Path, d: &Diagnosis) -> Result<(), FileError> {
         )?;
         let _ = writeln!(md, "![the fitted laws](laws.png)\n");
     }
-    let _ = writeln!(md, "## Fits before and after (NRMSE, MATLAB `compare`)\n");
-    fits_table(&mut md, d);
-    let _ = writeln!(md, "\n## Where the disagreement went\n");
-    disagreement_table(&mut md, &d.after);
-    if !d.fits.remaining.is_empty() {
-        let _ = writeln!(md, "\n## What remains\n");
-        for r in &d.fits.remaining {
-            let _ = writeln!(md, "- {}", where_it_remains(r));
-        }
-    }
-    conditions_section(&mut md, &d.base.conditions);
+    Ok(())
+}
+
+/// The samples trimmed as outliers, per channel and experiment, if any.
+fn outliers_section(md: &mut String, d: &Diagnosis) {
     if !d.outliers.is_empty() {
         let _ = writeln!(
             md,
@@ -694,6 +751,10 @@ pub fn write(dir: &Path, d: &Diagnosis) -> Result<(), FileError> {
             );
         }
     }
+}
+
+/// `diagnosis_k.png`, one figure per experiment, and their links in the report.
+fn figures(dir: &Path, d: &Diagnosis, md: &mut String) -> Result<(), FileError> {
     let _ = writeln!(md, "\n## Figures\n");
     for k in 0..d.experiments.len() {
         let file = format!("diagnosis_{k}.png");
@@ -707,12 +768,5 @@ pub fn write(dir: &Path, d: &Diagnosis) -> Result<(), FileError> {
         )?;
         let _ = writeln!(md, "![{}]({file})\n", d.experiments[k].name);
     }
-    let _ = writeln!(md, "## Time\n\n| stage | s |\n|---|---|");
-    for (s, t) in &d.timing {
-        let _ = writeln!(md, "| {s} | {t:.1} |");
-    }
-    let json = serde_json::to_string_pretty(&to_json(d)).expect("JSON of plain values");
-    write_text_atomic(&dir.join("diagnosis.json"), &(json + "\n"))?;
-    params_file::write(&dir.join("fitted.toml"), &d.last.params)?;
-    write_text_atomic(&dir.join("report.md"), &md)
+    Ok(())
 }

@@ -233,35 +233,7 @@ impl<'a> Point<'a> {
         };
         let total = self.residual_perp.norm_squared().max(1e-300);
         let explained = (total - (r_perp - &d_perp * &realized).norm_squared()).max(0.0);
-        let mut start = Vec::new();
-        if probe.scaling == Scaling::Pairs {
-            // pair j's stiffness is k_c c_j; the weights are relative to pair (1, 2)
-            let c = |j: usize| coef[j].max(0.05 * coef.max().max(1e-12));
-            let k_c = probe.columns[0][0].1 * c(0);
-            start = vec![
-                ("k_c", k_c),
-                ("w_c12", 1.0),
-                ("w_c13", c(1) / c(0)),
-                ("w_c23", c(2) / c(0)),
-            ];
-        }
-        for (k, column) in probe
-            .columns
-            .iter()
-            .enumerate()
-            .filter(|_| probe.scaling != Scaling::Pairs)
-        {
-            for (i, &(name, v)) in column.iter().enumerate() {
-                // the first setting of a column is its magnitude; the others (time constants,
-                // saturation angles) are kept
-                let value = match probe.scaling {
-                    Scaling::Magnitude if i == 0 => v * realized[k],
-                    Scaling::Signed | Scaling::Weights if i == 0 => v * coef[k],
-                    _ => v,
-                };
-                start.push((name, value));
-            }
-        }
+        let start = start_values(probe, &coef, &realized);
         // an effect that can only act with one sign explains nothing against it
         let wrong_sign = match probe.scaling {
             Scaling::Magnitude => coef[0] <= 0.0,
@@ -284,4 +256,44 @@ impl<'a> Point<'a> {
             start,
         })
     }
+}
+
+/// The probe's settings scaled as the fit found them, where the form's refit starts: the
+/// magnitudes as `realized`, signed amplitudes and weights as fitted (`coef`), a coupling's
+/// pair stiffnesses relative to pair (1, 2).
+fn start_values(
+    probe: &Probe,
+    coef: &DVector<f64>,
+    realized: &DVector<f64>,
+) -> Vec<(&'static str, f64)> {
+    let mut start = Vec::new();
+    if probe.scaling == Scaling::Pairs {
+        // pair j's stiffness is k_c c_j; the weights are relative to pair (1, 2)
+        let c = |j: usize| coef[j].max(0.05 * coef.max().max(1e-12));
+        let k_c = probe.columns[0][0].1 * c(0);
+        start = vec![
+            ("k_c", k_c),
+            ("w_c12", 1.0),
+            ("w_c13", c(1) / c(0)),
+            ("w_c23", c(2) / c(0)),
+        ];
+    }
+    for (k, column) in probe
+        .columns
+        .iter()
+        .enumerate()
+        .filter(|_| probe.scaling != Scaling::Pairs)
+    {
+        for (i, &(name, v)) in column.iter().enumerate() {
+            // the first setting of a column is its magnitude; the others (time constants,
+            // saturation angles) are kept
+            let value = match probe.scaling {
+                Scaling::Magnitude if i == 0 => v * realized[k],
+                Scaling::Signed | Scaling::Weights if i == 0 => v * coef[k],
+                _ => v,
+            };
+            start.push((name, value));
+        }
+    }
+    start
 }

@@ -246,78 +246,14 @@ pub fn estimate(
     };
     let model = Platform::new(params.clone())?;
     let mut at = exp.conditions.clone();
-    let estimate_lag = match choice.lag {
-        LagChoice::Estimate => {
-            at.lag = 0.0;
-            true
-        }
-        LagChoice::Stated(lag) => {
-            at.lag = lag;
-            false
-        }
-        LagChoice::Kept => false,
-    };
-    let found_before = matches!(exp.conditions.start, Start::Settled { .. });
-    let (estimate_start, start_how) = match choice.start {
-        StartChoice::Rest => {
-            at.start = Start::Rest;
-            (false, "rest")
-        }
-        StartChoice::Heights(h) => {
-            at.start = Start::Settled {
-                theta: h.map(|h| (2.0 * h / params.lv).clamp(-0.99, 0.99).asin()),
-                slow: Vec::new(),
-            };
-            (false, "stated")
-        }
-        StartChoice::Estimate => (true, "estimated"),
-        StartChoice::Kept => (false, "kept"),
-        // the angles were found before under a model without the effect, which moves the
-        // trajectory the start must meet: a delay's as much as a lag's states
-        StartChoice::Refined if found_before => (true, "detected mid-run, estimated"),
-        StartChoice::Refined => (false, "rest"),
-        StartChoice::Auto => {
-            // once found mid-run, a record stays so: the fit under its start no longer holds
-            // the parameters that set the rest heights to the first samples
-            if found_before || starts_mid_run(params, exp, rtol)? {
-                (true, "detected mid-run, estimated")
-            } else {
-                at.start = Start::Rest;
-                (false, "rest")
-            }
-        }
-    };
-    let mut z0 = Vec::new();
-    let (mut lo, mut hi) = (Vec::new(), Vec::new());
-    if estimate_lag {
-        z0.push(exp.conditions.lag / LAG_MAX);
-        lo.push(0.0);
-        hi.push(1.0);
-    }
-    let mut slow_scales = Vec::new();
-    if estimate_start {
-        let theta = match exp.conditions.start {
-            Start::Settled { theta, .. } => theta,
-            Start::Rest => angles_at_first_samples(&model, exp)?,
-        };
-        let theta_max = model
-            .actuators
-            .iter()
-            .map(|a| std::f64::consts::FRAC_PI_2 / a.par.gamma2);
-        for (t, m) in theta.iter().zip(theta_max) {
-            z0.push(t / THETA_UNIT);
-            lo.push(-m / THETA_UNIT);
-            hi.push(m / THETA_UNIT);
-        }
-        let slow = slow_at_start(&model, exp, theta)?;
-        // the effects' scales, picked from the state's as the effects' states are
-        slow_scales = model.effect_states(&model.state_scales());
-        for (v, s) in slow.iter().zip(&slow_scales) {
-            z0.push(v / s);
-            lo.push(-SLOW_RANGE);
-            hi.push(SLOW_RANGE);
-        }
-    }
+    let estimate_lag = lag_choice(choice.lag, &mut at);
+    let (estimate_start, start_how) = start_choice(choice.start, &mut at, params, exp, rtol)?;
+    let StartingPoint {
+        z0,
+        lo,
+        hi,
+        slow_scales,
+    } = unknown_start(&model, exp, estimate_lag, estimate_start)?;
     let len = exp.channels.iter().map(|(_, y)| y.len()).sum();
     let problem = Unknowns {
         params,
@@ -354,6 +290,118 @@ pub fn estimate(
         start_how,
         heights: model.heights(&x0),
         lag_se,
+    })
+}
+
+/// Sets the lag of `at` as `lag` asks; whether it is to be estimated.
+fn lag_choice(lag: LagChoice, at: &mut Conditions) -> bool {
+    match lag {
+        LagChoice::Estimate => {
+            at.lag = 0.0;
+            true
+        }
+        LagChoice::Stated(lag) => {
+            at.lag = lag;
+            false
+        }
+        LagChoice::Kept => false,
+    }
+}
+
+/// Sets the start of `at` as `start` asks (detecting a start mid-run where it is to be
+/// detected); whether it is to be estimated, and how it was set, in words.
+fn start_choice(
+    start: StartChoice,
+    at: &mut Conditions,
+    params: &Params,
+    exp: &Experiment,
+    rtol: f64,
+) -> Result<(bool, &'static str), Error> {
+    let found_before = matches!(exp.conditions.start, Start::Settled { .. });
+    Ok(match start {
+        StartChoice::Rest => {
+            at.start = Start::Rest;
+            (false, "rest")
+        }
+        StartChoice::Heights(h) => {
+            at.start = Start::Settled {
+                theta: h.map(|h| (2.0 * h / params.lv).clamp(-0.99, 0.99).asin()),
+                slow: Vec::new(),
+            };
+            (false, "stated")
+        }
+        StartChoice::Estimate => (true, "estimated"),
+        StartChoice::Kept => (false, "kept"),
+        // the angles were found before under a model without the effect, which moves the
+        // trajectory the start must meet: a delay's as much as a lag's states
+        StartChoice::Refined if found_before => (true, "detected mid-run, estimated"),
+        StartChoice::Refined => (false, "rest"),
+        StartChoice::Auto => {
+            // once found mid-run, a record stays so: the fit under its start no longer holds
+            // the parameters that set the rest heights to the first samples
+            if found_before || starts_mid_run(params, exp, rtol)? {
+                (true, "detected mid-run, estimated")
+            } else {
+                at.start = Start::Rest;
+                (false, "rest")
+            }
+        }
+    })
+}
+
+/// The unknowns of a record's conditions in the optimiser's units: their start, bounds, and
+/// the effects' state scales.
+struct StartingPoint {
+    z0: Vec<f64>,
+    lo: Vec<f64>,
+    hi: Vec<f64>,
+    slow_scales: Vec<f64>,
+}
+
+/// The unknowns to estimate, their start from `exp`'s current conditions: the lag, and the
+/// start's angles and effects' states.
+fn unknown_start(
+    model: &Platform,
+    exp: &Experiment,
+    estimate_lag: bool,
+    estimate_start: bool,
+) -> Result<StartingPoint, Error> {
+    let mut z0 = Vec::new();
+    let (mut lo, mut hi) = (Vec::new(), Vec::new());
+    if estimate_lag {
+        z0.push(exp.conditions.lag / LAG_MAX);
+        lo.push(0.0);
+        hi.push(1.0);
+    }
+    let mut slow_scales = Vec::new();
+    if estimate_start {
+        let theta = match exp.conditions.start {
+            Start::Settled { theta, .. } => theta,
+            Start::Rest => angles_at_first_samples(model, exp)?,
+        };
+        let theta_max = model
+            .actuators
+            .iter()
+            .map(|a| std::f64::consts::FRAC_PI_2 / a.par.gamma2);
+        for (t, m) in theta.iter().zip(theta_max) {
+            z0.push(t / THETA_UNIT);
+            lo.push(-m / THETA_UNIT);
+            hi.push(m / THETA_UNIT);
+        }
+        let slow = slow_at_start(model, exp, theta)?;
+        // the effects' scales, picked from the state's as the effects' states are
+        slow_scales = model.effect_states(&model.state_scales());
+        for (v, s) in slow.iter().zip(&slow_scales) {
+            z0.push(v / s);
+            lo.push(-SLOW_RANGE);
+            hi.push(SLOW_RANGE);
+        }
+    }
+    Ok(StartingPoint {
+        z0,
+        lo,
+        hi,
+        slow_scales,
     })
 }
 

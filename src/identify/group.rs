@@ -381,73 +381,21 @@ pub(super) fn fit_group(
 ) -> Result<(Params, GroupResult), Error> {
     let defs = &group.params;
     let n = defs.len();
-    let len: usize = experiments
-        .iter()
-        .map(|e| {
-            group
-                .channels
-                .iter()
-                .filter(|&&c| e.measured(c).is_some())
-                .count()
-                * e.t.len()
-        })
-        .sum();
+    let len = residual_count(group, experiments);
     let coords = Coordinate::of(defs, base);
-    let problem = Problem {
+    let problem = Problem::new(base, &coords, group, experiments, opts.rtol, len);
+    // for the covariance: tighter simulations (see `polish`)
+    let precise = Problem::new(
         base,
-        coords: coords.clone(),
-        channels: group.channels.clone(),
+        &coords,
+        group,
         experiments,
-        rtol: opts.rtol,
+        opts.rtol * COVARIANCE_RTOL_FACTOR,
         len,
-        counter: Default::default(),
-    };
-    // for the covariance: tighter simulations (see below)
-    let precise = Problem {
-        base,
-        coords: coords.clone(),
-        channels: group.channels.clone(),
-        experiments,
-        rtol: opts.rtol * COVARIANCE_RTOL_FACTOR,
-        len,
-        counter: Default::default(),
-    };
+    );
     let x0: Vec<f64> = coords.iter().map(|c| c.to_x((c.def.get)(base))).collect();
-    // the bounds of each parameter, then in the fit's coordinates
-    let bounds: Vec<(f64, f64)> = coords
-        .iter()
-        .map(|c| {
-            let prior = (c.def.get)(base);
-            let default = match c.def.rule {
-                Rule::Positive | Rule::Limit => (prior / 20.0, prior * 20.0),
-                Rule::Weight => (0.0, f64::INFINITY),
-                Rule::NonNegative => (
-                    0.0,
-                    if prior > 0.0 {
-                        prior * 20.0
-                    } else {
-                        f64::INFINITY
-                    },
-                ),
-                Rule::Finite => (f64::NEG_INFINITY, f64::INFINITY),
-                // a choice among forms is never fitted
-                Rule::Index(_) => (prior, prior),
-            };
-            opts.bounds.get(c.def.name).copied().unwrap_or(default)
-        })
-        .collect();
-    let (lo, hi): (Vec<f64>, Vec<f64>) = coords
-        .iter()
-        .zip(&bounds)
-        .map(|(c, &(l, h))| {
-            (
-                if l.is_finite() { c.to_x(l) } else { l },
-                if h.is_finite() { c.to_x(h) } else { h },
-            )
-        })
-        .unzip();
-    // a value at its bound is the bound itself, not exp(ln(bound)) a rounding outside
-    let value_at = |c: usize, x: f64| coords[c].to_p(x).clamp(bounds[c].0, bounds[c].1);
+    let bounds = parameter_bounds(&coords, base, opts);
+    let (lo, hi) = coordinate_bounds(&coords, &bounds);
     let mut held: Vec<DVector<f64>> = Vec::new();
     let mut reasons: Vec<String> = Vec::new();
     let mut iterations = 0;
@@ -472,158 +420,40 @@ pub(super) fn fit_group(
         };
         let m = basis.ncols();
         if m == 0 {
-            let simulations = problem.counter.load(std::sync::atomic::Ordering::Relaxed)
-                + precise.counter.load(std::sync::atomic::Ordering::Relaxed);
-            let not_identifiable = held
-                .iter()
-                .zip(&reasons)
-                .map(|(v, r)| (describe(v, &coords).1, r.clone()))
-                .collect();
             return Ok((
                 base.clone(),
                 GroupResult {
-                    estimates: vec![],
-                    not_identifiable,
-                    held_combinations: vec![],
-                    names: vec![],
-                    coords: vec![],
-                    covariance: DMatrix::zeros(0, 0),
                     iterations,
-                    simulations,
+                    simulations: simulations(&problem, &precise),
                     out_of_budget,
+                    ..GroupResult::all_held(&held, &reasons, &coords)
                 },
             ));
         }
         let (z_lo, z_hi) = reduced.z_bounds();
-        // the last fit's point without its component along the held directions
-        let z_start: Vec<f64> = (0..m)
-            .map(|k| {
-                let z: f64 = (0..n)
-                    .map(|i| basis[(i, k)] * (x_last[i] - anchor[i]))
-                    .sum();
-                z.clamp(z_lo[k], z_hi[k])
-            })
-            .collect();
-        let left = opts
-            .iteration_budget
-            .map_or(usize::MAX, |b| b.saturating_sub(iterations));
-        let run = lm::Options {
-            max_iterations: lm_opts.max_iterations.min(left),
-            ..lm_opts.clone()
-        };
-        let sol = lm::minimize(&reduced, &z_start, &z_lo, &z_hi, &run)?;
-        iterations += sol.iterations;
-        out_of_budget |= !sol.converged && left < lm_opts.max_iterations && sol.iterations == left;
-        // polish with Gauss–Newton on the sensitivities of tighter simulations, which
-        // also gives the covariance: Kb and gamma1 correlate to 0.999, and forward differences
-        // at the optimiser's tolerance misjudge the gradient and the information along that valley
+        let z_start = reduced.start_from(&x_last, &z_lo, &z_hi);
+        let sol = optimise(
+            &reduced,
+            &z_start,
+            (&z_lo, &z_hi),
+            &lm_opts,
+            opts.iteration_budget,
+            (&mut iterations, &mut out_of_budget),
+        )?;
         let sharp = Reduced {
             inner: &precise,
             ..reduced
         };
-        let mut z = sol.x.clone();
-        let mut r = lm::evaluate(&sharp, &z)?;
-        let mut j = polish_jacobian(&sharp, &z, opts.lm.threads)?;
-        for _ in 0..GN_POLISH {
-            lm::check_deadline(opts.lm.deadline)?;
-            let Some(step) = (j.transpose() * &j)
-                .cholesky()
-                .map(|c| c.solve(&(-(j.transpose() * &r))))
-            else {
-                break;
-            };
-            let mut z_new: Vec<f64> = (0..m)
-                .map(|k| (z[k] + step[k]).clamp(z_lo[k], z_hi[k]))
-                .collect();
-            lm::Residuals::project(&sharp, &mut z_new);
-            match lm::evaluate(&sharp, &z_new) {
-                Ok(r_new) if r_new.norm_squared() < r.norm_squared() => {
-                    (z, r) = (z_new, r_new);
-                    j = polish_jacobian(&sharp, &z, opts.lm.threads)?;
-                    if step.amax() < 1e-8 {
-                        break;
-                    }
-                }
-                _ => break,
-            }
-        }
-        let x = sharp.x_of(&z);
-        let residuals = r;
-        // covariance of the unweighted least-squares estimate with per-channel noise levels
-        // σ_c from the residuals: the sandwich (JᵀJ)⁻¹ JᵀΣJ (JᵀJ)⁻¹ in the reduced coordinates
-        let mut sigma2 = Vec::with_capacity(j.nrows());
-        let mut k = 0;
-        for e in experiments {
-            for &c in &group.channels {
-                if e.measured(c).is_some() {
-                    let rows = e.t.len();
-                    let var = residuals.rows(k, rows).norm_squared() / rows as f64;
-                    sigma2.extend(std::iter::repeat_n(var, rows));
-                    k += rows;
-                }
-            }
-        }
-        let jtj = j.transpose() * &j;
-        let cov_z = jtj.clone().try_inverse().map(|inv| {
-            let mut meat = DMatrix::zeros(m, m);
-            for (row, s2) in j.row_iter().zip(&sigma2) {
-                meat += row.transpose() * row * *s2;
-            }
-            &inv * meat * &inv
-        });
-        // the worst-determined direction, if its 95 % interval is wider than ×/÷ 1.5. Weights
-        // of a series are not held for a wide interval: neighbours of a spectrum share what the
-        // data tell of them, the sum is what is judged, and 0 is a value a weight may take
-        // (book/src/identify.md, "Parameters the data do not determine"); the other
-        // parameters are judged on their marginal covariance
-        let worst = match &cov_z {
-            None => {
-                let eig = jtj.symmetric_eigen();
-                let (kmin, _) = eig.eigenvalues.argmin();
-                Some((
-                    &basis * eig.eigenvectors.column(kmin),
-                    "the measured outputs do not depend on it".to_string(),
-                ))
-            }
-            Some(cov) => {
-                let judged: Vec<usize> = (0..n)
-                    .filter(|&i| coords[i].def.rule != Rule::Weight)
-                    .collect();
-                let cov_x = &basis * cov * basis.transpose();
-                let eig = (!judged.is_empty()).then(|| {
-                    cov_x
-                        .select_rows(&judged)
-                        .select_columns(&judged)
-                        .symmetric_eigen()
-                });
-                eig.as_ref()
-                    .map(|eig| eig.eigenvalues.argmax())
-                    .map(|(kmax, var)| (kmax, 1.96 * var.max(0.0).sqrt()))
-                    .filter(|&(_, half)| half > MAX_LOG_HALF_WIDTH)
-                    .map(|(kmax, half)| {
-                        let vectors = &eig.as_ref().expect("judged above").eigenvectors;
-                        let mut v = DVector::zeros(n);
-                        for (k, &i) in judged.iter().enumerate() {
-                            v[i] = vectors[(k, kmax)];
-                        }
-                        (
-                            v,
-                            format!(
-                                "its 95 % interval would span a factor of {:.3e}",
-                                (2.0 * half).exp()
-                            ),
-                        )
-                    })
-            }
-        };
-        if let Some((mut v, reason)) = worst {
-            // a direction mostly along one parameter holds exactly that parameter (when several
-            // parameters do nothing at all, their null space is entered one at a time)
-            let j = v.iamax();
-            if v[j].abs() > SINGLE {
-                v = DVector::from_fn(n, |i, _| if i == j { 1.0 } else { 0.0 });
-            }
-            held.push(v.normalize());
+        let polished = polish(&sharp, sol.x.clone(), (&z_lo, &z_hi), opts)?;
+        let x = sharp.x_of(&polished.z);
+        let (jtj, cov_z) = sandwich_covariance(
+            &polished.jacobian,
+            &polished.residuals,
+            experiments,
+            &group.channels,
+        );
+        if let Some((v, reason)) = worst_direction(cov_z.as_ref(), jtj, &basis, &coords) {
+            held.push(snapped_to_single(v).normalize());
             reasons.push(reason);
             if opts.hold == Hold::Reached {
                 anchor = x.clone();
@@ -633,81 +463,454 @@ pub(super) fn fit_group(
         }
         let cov = cov_z.expect("checked above");
         let cov_x = &basis * cov * basis.transpose();
-        let mut not_identifiable = Vec::new();
-        let mut held_combinations = Vec::new();
-        let mut fixed = Vec::new();
-        for (v, r) in held.iter().zip(&reasons) {
-            let (single, text) = describe(v, &coords);
-            if let Some(name) = single {
-                fixed.push(name.clone());
-                not_identifiable.push((name, r.clone()));
-            } else {
-                held_combinations.push(
-                    coords
-                        .iter()
-                        .zip(v.iter())
-                        .map(|(c, w)| (c.def.name.to_string(), *w))
-                        .collect(),
-                );
-                not_identifiable.push((
-                    format!("combination {text}"),
-                    format!(
-                        "{r}; held {}, so the parameters in it are estimated relative to that",
-                        opts.hold.at()
-                    ),
-                ));
-            }
-        }
-        let active: Vec<usize> = (0..n)
-            .filter(|&c| !fixed.iter().any(|f| f == coords[c].def.name))
-            .collect();
-        // a parameter held at the start keeps its start value exactly (not exp(ln(value)));
-        // one held where the fit had taken it takes that value
-        let mut fitted = base.clone();
-        for c in (0..n).filter(|c| opts.hold == Hold::Reached || active.contains(c)) {
-            fitted.set(coords[c].def.name, value_at(c, x[c]))?;
-        }
-        let estimates = active
-            .iter()
-            .map(|&c| {
-                let coord = coords[c];
-                let value = value_at(c, x[c]);
-                let se_x = cov_x[(c, c)].max(0.0).sqrt();
-                let (se, ci) = if coord.log {
-                    (
-                        value * se_x,
-                        (value * (-1.96 * se_x).exp(), value * (1.96 * se_x).exp()),
-                    )
-                } else {
-                    let se = se_x * coord.scale;
-                    (se, (value - 1.96 * se, value + 1.96 * se))
-                };
-                (coord.def.name.to_string(), value, se, ci)
-            })
-            .collect();
-        let names = active
-            .iter()
-            .map(|&c| coords[c].def.name.to_string())
-            .collect();
-        let active_coords = active.iter().map(|&c| coords[c]).collect();
-        let covariance = DMatrix::from_fn(active.len(), active.len(), |a, b| {
-            cov_x[(active[a], active[b])]
-        });
-        let simulations = problem.counter.load(std::sync::atomic::Ordering::Relaxed)
-            + precise.counter.load(std::sync::atomic::Ordering::Relaxed);
+        let report = held_report(&held, &reasons, &coords, opts.hold);
+        let (fitted, result) = determined(base, &coords, &bounds, &x, &cov_x, report, opts.hold)?;
         return Ok((
             fitted,
             GroupResult {
-                estimates,
-                not_identifiable,
-                held_combinations,
-                names,
-                coords: active_coords,
-                covariance,
                 iterations,
-                simulations,
+                simulations: simulations(&problem, &precise),
                 out_of_budget,
+                ..result
             },
         ));
     }
+}
+
+/// One run of the optimiser from `z_start` within what is left of the iteration `budget`: adds
+/// its iterations to the count and notes whether the budget ran out before it converged.
+fn optimise(
+    reduced: &Reduced<'_, '_>,
+    z_start: &[f64],
+    (z_lo, z_hi): (&[f64], &[f64]),
+    lm_opts: &lm::Options,
+    budget: Option<usize>,
+    (iterations, out_of_budget): (&mut usize, &mut bool),
+) -> Result<lm::Solution, Error> {
+    let left = budget.map_or(usize::MAX, |b| b.saturating_sub(*iterations));
+    let run = lm::Options {
+        max_iterations: lm_opts.max_iterations.min(left),
+        ..lm_opts.clone()
+    };
+    let sol = lm::minimize(reduced, z_start, z_lo, z_hi, &run)?;
+    *iterations += sol.iterations;
+    *out_of_budget |= !sol.converged && left < lm_opts.max_iterations && sol.iterations == left;
+    Ok(sol)
+}
+
+/// `v`, or where it lies mostly along one parameter exactly that parameter's axis: it holds
+/// that parameter (when several parameters do nothing at all, their null space is entered one
+/// at a time).
+fn snapped_to_single(mut v: DVector<f64>) -> DVector<f64> {
+    let n = v.len();
+    let j = v.iamax();
+    if v[j].abs() > SINGLE {
+        v = DVector::from_fn(n, |i, _| if i == j { 1.0 } else { 0.0 });
+    }
+    v
+}
+
+impl<'a> Problem<'a> {
+    /// The residuals of `group`'s channels in `experiments` (`len` of them), its parameters
+    /// moved in `coords` from `base`, simulated to `rtol`.
+    fn new(
+        base: &'a Params,
+        coords: &[Coordinate],
+        group: &Group,
+        experiments: &'a [Experiment],
+        rtol: f64,
+        len: usize,
+    ) -> Self {
+        Problem {
+            base,
+            coords: coords.to_vec(),
+            channels: group.channels.clone(),
+            experiments,
+            rtol,
+            len,
+            counter: Default::default(),
+        }
+    }
+}
+
+impl Reduced<'_, '_> {
+    /// The last fit's point `x_last` without its component along the held directions, in z.
+    fn start_from(&self, x_last: &[f64], z_lo: &[f64], z_hi: &[f64]) -> Vec<f64> {
+        let (n, m) = self.basis.shape();
+        (0..m)
+            .map(|k| {
+                let z: f64 = (0..n)
+                    .map(|i| self.basis[(i, k)] * (x_last[i] - self.anchor[i]))
+                    .sum();
+                z.clamp(z_lo[k], z_hi[k])
+            })
+            .collect()
+    }
+}
+
+impl GroupResult {
+    /// Every direction held, nothing estimated: the held ones in words, with their reasons
+    /// (no iterations or simulations counted yet).
+    fn all_held(held: &[DVector<f64>], reasons: &[String], coords: &[Coordinate]) -> Self {
+        let not_identifiable = held
+            .iter()
+            .zip(reasons)
+            .map(|(v, r)| (describe(v, coords).1, r.clone()))
+            .collect();
+        GroupResult {
+            estimates: vec![],
+            not_identifiable,
+            held_combinations: vec![],
+            names: vec![],
+            coords: vec![],
+            covariance: DMatrix::zeros(0, 0),
+            iterations: 0,
+            simulations: 0,
+            out_of_budget: false,
+        }
+    }
+}
+
+/// The fitted parameters and the result once every direction left is determined: the
+/// parameters not held single (`report.fixed`) estimated at `x` with covariance `cov_x` (no
+/// iterations or simulations counted yet).
+fn determined(
+    base: &Params,
+    coords: &[Coordinate],
+    bounds: &[(f64, f64)],
+    x: &[f64],
+    cov_x: &DMatrix<f64>,
+    report: HeldReport,
+    hold: Hold,
+) -> Result<(Params, GroupResult), Error> {
+    let HeldReport {
+        not_identifiable,
+        held_combinations,
+        fixed,
+    } = report;
+    let active: Vec<usize> = (0..coords.len())
+        .filter(|&c| !fixed.iter().any(|f| f == coords[c].def.name))
+        .collect();
+    let fitted = fitted_params(base, coords, bounds, x, &active, hold)?;
+    let estimates = estimates(coords, bounds, x, cov_x, &active);
+    let names = active
+        .iter()
+        .map(|&c| coords[c].def.name.to_string())
+        .collect();
+    let active_coords = active.iter().map(|&c| coords[c]).collect();
+    let covariance = DMatrix::from_fn(active.len(), active.len(), |a, b| {
+        cov_x[(active[a], active[b])]
+    });
+    Ok((
+        fitted,
+        GroupResult {
+            estimates,
+            not_identifiable,
+            held_combinations,
+            names,
+            coords: active_coords,
+            covariance,
+            iterations: 0,
+            simulations: 0,
+            out_of_budget: false,
+        },
+    ))
+}
+
+/// Rows of the group's residual vector: one per sample of each channel an experiment measures.
+fn residual_count(group: &Group, experiments: &[Experiment]) -> usize {
+    experiments
+        .iter()
+        .map(|e| {
+            group
+                .channels
+                .iter()
+                .filter(|&&c| e.measured(c).is_some())
+                .count()
+                * e.t.len()
+        })
+        .sum()
+}
+
+/// Simulations run so far by the fit's problem and the covariance's tighter one together.
+fn simulations(problem: &Problem<'_>, precise: &Problem<'_>) -> usize {
+    problem.counter.load(std::sync::atomic::Ordering::Relaxed)
+        + precise.counter.load(std::sync::atomic::Ordering::Relaxed)
+}
+
+/// The bounds of each parameter: the caller's, or a default by the parameter's rule.
+fn parameter_bounds(coords: &[Coordinate], base: &Params, opts: &Options) -> Vec<(f64, f64)> {
+    coords
+        .iter()
+        .map(|c| {
+            let prior = (c.def.get)(base);
+            let default = match c.def.rule {
+                Rule::Positive | Rule::Limit => (prior / 20.0, prior * 20.0),
+                Rule::Weight => (0.0, f64::INFINITY),
+                Rule::NonNegative => (
+                    0.0,
+                    if prior > 0.0 {
+                        prior * 20.0
+                    } else {
+                        f64::INFINITY
+                    },
+                ),
+                Rule::Finite => (f64::NEG_INFINITY, f64::INFINITY),
+                // a choice among forms is never fitted
+                Rule::Index(_) => (prior, prior),
+            };
+            opts.bounds.get(c.def.name).copied().unwrap_or(default)
+        })
+        .collect()
+}
+
+/// The parameters' bounds in the fit's coordinates (lower, upper); an infinite one stays so.
+fn coordinate_bounds(coords: &[Coordinate], bounds: &[(f64, f64)]) -> (Vec<f64>, Vec<f64>) {
+    coords
+        .iter()
+        .zip(bounds)
+        .map(|(c, &(l, h))| {
+            (
+                if l.is_finite() { c.to_x(l) } else { l },
+                if h.is_finite() { c.to_x(h) } else { h },
+            )
+        })
+        .unzip()
+}
+
+/// Parameter `c` at coordinate `x`: a value at its bound is the bound itself, not
+/// exp(ln(bound)) a rounding outside.
+fn value_at(coords: &[Coordinate], bounds: &[(f64, f64)], c: usize, x: f64) -> f64 {
+    coords[c].to_p(x).clamp(bounds[c].0, bounds[c].1)
+}
+
+/// Polishes the optimiser's `z` with Gauss–Newton on the sensitivities of tighter simulations,
+/// which also gives the covariance: Kb and gamma1 correlate to 0.999, and forward differences
+/// at the optimiser's tolerance misjudge the gradient and the information along that valley.
+fn polish(
+    sharp: &Reduced<'_, '_>,
+    mut z: Vec<f64>,
+    (z_lo, z_hi): (&[f64], &[f64]),
+    opts: &Options,
+) -> Result<Polished, Error> {
+    let m = z.len();
+    let mut r = lm::evaluate(sharp, &z)?;
+    let mut j = polish_jacobian(sharp, &z, opts.lm.threads)?;
+    for _ in 0..GN_POLISH {
+        lm::check_deadline(opts.lm.deadline)?;
+        let Some(step) = (j.transpose() * &j)
+            .cholesky()
+            .map(|c| c.solve(&(-(j.transpose() * &r))))
+        else {
+            break;
+        };
+        let mut z_new: Vec<f64> = (0..m)
+            .map(|k| (z[k] + step[k]).clamp(z_lo[k], z_hi[k]))
+            .collect();
+        lm::Residuals::project(sharp, &mut z_new);
+        match lm::evaluate(sharp, &z_new) {
+            Ok(r_new) if r_new.norm_squared() < r.norm_squared() => {
+                (z, r) = (z_new, r_new);
+                j = polish_jacobian(sharp, &z, opts.lm.threads)?;
+                if step.amax() < 1e-8 {
+                    break;
+                }
+            }
+            _ => break,
+        }
+    }
+    Ok(Polished {
+        z,
+        residuals: r,
+        jacobian: j,
+    })
+}
+
+/// Where the polish ended: the point, its residuals and its Jacobian.
+struct Polished {
+    z: Vec<f64>,
+    residuals: DVector<f64>,
+    jacobian: DMatrix<f64>,
+}
+
+/// JᵀJ and the covariance of the unweighted least-squares estimate with per-channel noise
+/// levels σ_c from the residuals: the sandwich (JᵀJ)⁻¹ JᵀΣJ (JᵀJ)⁻¹ in the reduced coordinates
+/// (`None` where JᵀJ is singular).
+fn sandwich_covariance(
+    j: &DMatrix<f64>,
+    residuals: &DVector<f64>,
+    experiments: &[Experiment],
+    channels: &[Channel],
+) -> (DMatrix<f64>, Option<DMatrix<f64>>) {
+    let m = j.ncols();
+    let mut sigma2 = Vec::with_capacity(j.nrows());
+    let mut k = 0;
+    for e in experiments {
+        for &c in channels {
+            if e.measured(c).is_some() {
+                let rows = e.t.len();
+                let var = residuals.rows(k, rows).norm_squared() / rows as f64;
+                sigma2.extend(std::iter::repeat_n(var, rows));
+                k += rows;
+            }
+        }
+    }
+    let jtj = j.transpose() * j;
+    let cov_z = jtj.clone().try_inverse().map(|inv| {
+        let mut meat = DMatrix::zeros(m, m);
+        for (row, s2) in j.row_iter().zip(&sigma2) {
+            meat += row.transpose() * row * *s2;
+        }
+        &inv * meat * &inv
+    });
+    (jtj, cov_z)
+}
+
+/// The worst-determined direction, if its 95 % interval is wider than ×/÷ 1.5, with the reason
+/// it is held. Weights of a series are not held for a wide interval: neighbours of a spectrum
+/// share what the data tell of them, the sum is what is judged, and 0 is a value a weight may
+/// take (book/src/identify.md, "Parameters the data do not determine"); the other parameters
+/// are judged on their marginal covariance.
+fn worst_direction(
+    cov_z: Option<&DMatrix<f64>>,
+    jtj: DMatrix<f64>,
+    basis: &DMatrix<f64>,
+    coords: &[Coordinate],
+) -> Option<(DVector<f64>, String)> {
+    let n = coords.len();
+    match cov_z {
+        None => {
+            let eig = jtj.symmetric_eigen();
+            let (kmin, _) = eig.eigenvalues.argmin();
+            Some((
+                basis * eig.eigenvectors.column(kmin),
+                "the measured outputs do not depend on it".to_string(),
+            ))
+        }
+        Some(cov) => {
+            let judged: Vec<usize> = (0..n)
+                .filter(|&i| coords[i].def.rule != Rule::Weight)
+                .collect();
+            let cov_x = basis * cov * basis.transpose();
+            let eig = (!judged.is_empty()).then(|| {
+                cov_x
+                    .select_rows(&judged)
+                    .select_columns(&judged)
+                    .symmetric_eigen()
+            });
+            eig.as_ref()
+                .map(|eig| eig.eigenvalues.argmax())
+                .map(|(kmax, var)| (kmax, 1.96 * var.max(0.0).sqrt()))
+                .filter(|&(_, half)| half > MAX_LOG_HALF_WIDTH)
+                .map(|(kmax, half)| {
+                    let vectors = &eig.as_ref().expect("judged above").eigenvectors;
+                    let mut v = DVector::zeros(n);
+                    for (k, &i) in judged.iter().enumerate() {
+                        v[i] = vectors[(k, kmax)];
+                    }
+                    (
+                        v,
+                        format!(
+                            "its 95 % interval would span a factor of {:.3e}",
+                            (2.0 * half).exp()
+                        ),
+                    )
+                })
+        }
+    }
+}
+
+/// The held directions as a group's result reports them.
+struct HeldReport {
+    /// Each held direction in words, with the reason it is held.
+    not_identifiable: Vec<(String, String)>,
+    /// The weights of each held combination of several parameters.
+    held_combinations: Vec<Vec<(String, f64)>>,
+    /// The names of the single parameters held.
+    fixed: Vec<String>,
+}
+
+/// The held directions in words, the held combinations' weights, and the single parameters held.
+fn held_report(
+    held: &[DVector<f64>],
+    reasons: &[String],
+    coords: &[Coordinate],
+    hold: Hold,
+) -> HeldReport {
+    let mut not_identifiable = Vec::new();
+    let mut held_combinations = Vec::new();
+    let mut fixed = Vec::new();
+    for (v, r) in held.iter().zip(reasons) {
+        let (single, text) = describe(v, coords);
+        if let Some(name) = single {
+            fixed.push(name.clone());
+            not_identifiable.push((name, r.clone()));
+        } else {
+            held_combinations.push(
+                coords
+                    .iter()
+                    .zip(v.iter())
+                    .map(|(c, w)| (c.def.name.to_string(), *w))
+                    .collect(),
+            );
+            not_identifiable.push((
+                format!("combination {text}"),
+                format!(
+                    "{r}; held {}, so the parameters in it are estimated relative to that",
+                    hold.at()
+                ),
+            ));
+        }
+    }
+    HeldReport {
+        not_identifiable,
+        held_combinations,
+        fixed,
+    }
+}
+
+/// `base` with the fit's values set: a parameter held at the start keeps its start value
+/// exactly (not exp(ln(value))); one held where the fit had taken it takes that value.
+fn fitted_params(
+    base: &Params,
+    coords: &[Coordinate],
+    bounds: &[(f64, f64)],
+    x: &[f64],
+    active: &[usize],
+    hold: Hold,
+) -> Result<Params, Error> {
+    let mut fitted = base.clone();
+    for c in (0..coords.len()).filter(|c| hold == Hold::Reached || active.contains(c)) {
+        fitted.set(coords[c].def.name, value_at(coords, bounds, c, x[c]))?;
+    }
+    Ok(fitted)
+}
+
+/// Each `active` parameter's name, value, standard error and 95 % interval from the covariance
+/// `cov_x` in the fit's coordinates (an interval ×/÷ in log space, ± otherwise).
+fn estimates(
+    coords: &[Coordinate],
+    bounds: &[(f64, f64)],
+    x: &[f64],
+    cov_x: &DMatrix<f64>,
+    active: &[usize],
+) -> Vec<(String, f64, f64, (f64, f64))> {
+    active
+        .iter()
+        .map(|&c| {
+            let coord = coords[c];
+            let value = value_at(coords, bounds, c, x[c]);
+            let se_x = cov_x[(c, c)].max(0.0).sqrt();
+            let (se, ci) = if coord.log {
+                (
+                    value * se_x,
+                    (value * (-1.96 * se_x).exp(), value * (1.96 * se_x).exp()),
+                )
+            } else {
+                let se = se_x * coord.scale;
+                (se, (value - 1.96 * se, value + 1.96 * se))
+            };
+            (coord.def.name.to_string(), value, se, ci)
+        })
+        .collect()
 }

@@ -315,17 +315,8 @@ pub fn identify(
     Ok(id)
 }
 
-/// Fits the free parameters on `estimation` from `start` under the experiments' conditions.
-fn fit(
-    start: &Params,
-    estimation: &[Experiment],
-    validation: &[Experiment],
-    opts: &Options,
-) -> Result<Identification, Error> {
-    let began = Instant::now();
-    if estimation.is_empty() {
-        return Err(Error::NoEstimationExperiment);
-    }
+/// The free parameters named in `opts`, each once.
+fn free_params(opts: &Options) -> Result<Vec<&'static ParamDef>, Error> {
     let mut free: Vec<&'static ParamDef> = Vec::new();
     for name in &opts.free {
         let d = parameter(name).ok_or_else(|| Error::UnknownFree(name.clone()))?;
@@ -333,6 +324,11 @@ fn fit(
             free.push(d);
         }
     }
+    Ok(free)
+}
+
+/// Each bound in `opts` a proper interval holding the start value.
+fn check_bounds(start: &Params, opts: &Options) -> Result<(), Error> {
     for (name, (lo, hi)) in &opts.bounds {
         let prior = start.get(name)?;
         if !(lo < hi && (*lo..=*hi).contains(&prior)) {
@@ -344,6 +340,76 @@ fn fit(
             });
         }
     }
+    Ok(())
+}
+
+/// A group's estimated parameters, their fit's coordinates and their covariance in them.
+type Block = (Vec<String>, Vec<group::Coordinate>, DMatrix<f64>);
+
+/// The names, correlation and covariance over all estimated parameters from the groups'
+/// `blocks` (zero between separately fitted groups).
+fn joined_covariance(blocks: &[Block]) -> (Vec<String>, DMatrix<f64>, Covariance) {
+    let names: Vec<String> = blocks.iter().flat_map(|(n, _, _)| n.clone()).collect();
+    let mut corr = DMatrix::zeros(names.len(), names.len());
+    let mut covariance = Covariance {
+        names: names.clone(),
+        log: Vec::with_capacity(names.len()),
+        matrix: DMatrix::zeros(names.len(), names.len()),
+    };
+    let mut o = 0;
+    for (n, coords, cov) in blocks {
+        // the fit's coordinate of each parameter: ln p, or p over a scale (scaled back to p)
+        let unit = |c: &group::Coordinate| if c.log { 1.0 } else { c.scale };
+        for a in 0..n.len() {
+            for b in 0..n.len() {
+                corr[(o + a, o + b)] = cov[(a, b)] / (cov[(a, a)] * cov[(b, b)]).sqrt();
+                covariance.matrix[(o + a, o + b)] =
+                    cov[(a, b)] * unit(&coords[a]) * unit(&coords[b]);
+            }
+        }
+        covariance.log.extend(coords.iter().map(|c| c.log));
+        o += n.len();
+    }
+    (names, corr, covariance)
+}
+
+/// Every parameter of the model at `params` beside its `start`: whether free, and the
+/// standard error and interval of those `estimated`.
+fn estimates(
+    params: &Params,
+    start: &Params,
+    free: &[&'static ParamDef],
+    estimated: &[(String, f64, f64, (f64, f64))],
+) -> Vec<Estimate> {
+    crate::model::params::parameters()
+        .map(|d| {
+            let found = estimated.iter().find(|e| e.0 == d.name);
+            Estimate {
+                name: d.name.to_string(),
+                value: (d.get)(params),
+                prior: (d.get)(start),
+                free: free.iter().any(|f| f.name == d.name),
+                estimated: found.is_some(),
+                std_error: found.map(|e| e.2),
+                ci95: found.map(|e| e.3),
+            }
+        })
+        .collect()
+}
+
+/// Fits the free parameters on `estimation` from `start` under the experiments' conditions.
+fn fit(
+    start: &Params,
+    estimation: &[Experiment],
+    validation: &[Experiment],
+    opts: &Options,
+) -> Result<Identification, Error> {
+    let began = Instant::now();
+    if estimation.is_empty() {
+        return Err(Error::NoEstimationExperiment);
+    }
+    let free = free_params(opts)?;
+    check_bounds(start, opts)?;
     let estimation_before = fits_at(start, estimation, opts.rtol)?;
 
     let mut params = start.clone();
@@ -352,7 +418,7 @@ fn fit(
     let mut estimated: Vec<(String, f64, f64, (f64, f64))> = Vec::new();
     let mut not_identifiable = Vec::new();
     let mut held_combinations = Vec::new();
-    let mut blocks: Vec<(Vec<String>, Vec<group::Coordinate>, DMatrix<f64>)> = Vec::new();
+    let mut blocks: Vec<Block> = Vec::new();
     let groups = groups(&free, estimation);
     // each group is fitted from `start` on its own: side by side, in threads
     let fitted_groups: Vec<_> = std::thread::scope(|s| {
@@ -379,43 +445,8 @@ fn fit(
         blocks.push((r.names, r.coords, r.covariance));
     }
 
-    // correlation over all estimated parameters (zero between separately fitted groups)
-    let names: Vec<String> = blocks.iter().flat_map(|(n, _, _)| n.clone()).collect();
-    let mut corr = DMatrix::zeros(names.len(), names.len());
-    let mut covariance = Covariance {
-        names: names.clone(),
-        log: Vec::with_capacity(names.len()),
-        matrix: DMatrix::zeros(names.len(), names.len()),
-    };
-    let mut o = 0;
-    for (n, coords, cov) in &blocks {
-        // the fit's coordinate of each parameter: ln p, or p over a scale (scaled back to p)
-        let unit = |c: &group::Coordinate| if c.log { 1.0 } else { c.scale };
-        for a in 0..n.len() {
-            for b in 0..n.len() {
-                corr[(o + a, o + b)] = cov[(a, b)] / (cov[(a, a)] * cov[(b, b)]).sqrt();
-                covariance.matrix[(o + a, o + b)] =
-                    cov[(a, b)] * unit(&coords[a]) * unit(&coords[b]);
-            }
-        }
-        covariance.log.extend(coords.iter().map(|c| c.log));
-        o += n.len();
-    }
-
-    let estimates = crate::model::params::parameters()
-        .map(|d| {
-            let found = estimated.iter().find(|e| e.0 == d.name);
-            Estimate {
-                name: d.name.to_string(),
-                value: (d.get)(&params),
-                prior: (d.get)(start),
-                free: free.iter().any(|f| f.name == d.name),
-                estimated: found.is_some(),
-                std_error: found.map(|e| e.2),
-                ci95: found.map(|e| e.3),
-            }
-        })
-        .collect();
+    let (names, corr, covariance) = joined_covariance(&blocks);
+    let estimates = estimates(&params, start, &free, &estimated);
     let mut simulated = Vec::new();
     let mut fit_all = |exps: &[Experiment]| -> Result<Vec<ExperimentFit>, Error> {
         exps.iter()

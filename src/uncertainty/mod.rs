@@ -133,57 +133,8 @@ impl Posterior {
             path: path.to_path_buf(),
             message: m,
         };
-        let number = |v: Option<&Value>, what: &str| -> Result<f64, UncertaintyError> {
-            v.and_then(Value::as_f64)
-                .filter(|x| x.is_finite())
-                .ok_or_else(|| fail(format!("{what}: expected a finite number")))
-        };
-        let params = json
-            .get("parameters")
-            .and_then(Value::as_object)
-            .ok_or_else(|| {
-                fail("no \"parameters\" object: expected the identification.json of `hasel identify`".into())
-            })?;
-        let mut center = Params::default();
-        let mut estimated = Vec::new();
-        for (name, entry) in params {
-            parameter(name).ok_or_else(|| fail(format!("parameters.{name}: unknown parameter")))?;
-            let value = number(entry.get("value"), &format!("parameters.{name}.value"))?;
-            center
-                .set(name, value)
-                .map_err(|e| fail(format!("parameters.{name}: {e}")))?;
-            if entry.get("estimated").and_then(Value::as_bool) == Some(true) {
-                estimated.push(name.clone());
-            }
-        }
-        center
-            .validate()
-            .map_err(|e| fail(format!("parameters: {e}")))?;
-
-        let held: Vec<Vec<(String, f64)>> = match json.get("held_combinations") {
-            None | Some(Value::Null) => Vec::new(),
-            Some(Value::Array(list)) => list
-                .iter()
-                .enumerate()
-                .map(|(k, c)| {
-                    let o = c.as_object().ok_or_else(|| {
-                        fail(format!("held_combinations[{k}]: expected {{name: weight}}"))
-                    })?;
-                    o.iter()
-                        .map(|(n, w)| {
-                            parameter(n).ok_or_else(|| {
-                                fail(format!("held_combinations[{k}]: unknown parameter {n}"))
-                            })?;
-                            Ok((
-                                n.clone(),
-                                number(Some(w), &format!("held_combinations[{k}].{n}"))?,
-                            ))
-                        })
-                        .collect()
-                })
-                .collect::<Result<_, _>>()?,
-            Some(_) => return Err(fail("held_combinations: expected a list".into())),
-        };
+        let (center, estimated) = read_parameters(json, &fail)?;
+        let held = read_held(json, &fail)?;
 
         let (names, log, cov, exact) = match json.get("covariance") {
             Some(c) => {
@@ -217,68 +168,8 @@ impl Posterior {
             })
             .collect();
 
-        // the held combinations, as unit vectors over the estimated parameters
-        let n = names.len();
-        let directions: Vec<DVector<f64>> = held
-            .iter()
-            .map(|c| {
-                let v = DVector::from_fn(n, |i, _| {
-                    c.iter()
-                        .find(|(name, _)| *name == names[i])
-                        .map_or(0.0, |(_, w)| *w)
-                });
-                let norm = v.norm();
-                if norm > 0.0 { v / norm } else { v }
-            })
-            .collect();
-
-        let eig = cov.clone().symmetric_eigen();
-        let top = eig.eigenvalues.iter().fold(0.0_f64, |a, &b| a.max(b));
-        if let Some(low) = eig
-            .eigenvalues
-            .iter()
-            .copied()
-            .find(|&l| l < -1e-9 * top.max(f64::MIN_POSITIVE))
-        {
-            return Err(fail(format!(
-                "covariance: not positive semi-definite (eigenvalue {low:e}, largest {top:e})"
-            )));
-        }
-        let keep: Vec<usize> = (0..n)
-            .filter(|&k| eig.eigenvalues[k] > RANK_TOLERANCE * top)
-            .collect();
-        let mut factor = DMatrix::from_fn(n, keep.len(), |i, c| {
-            eig.eigenvectors[(i, keep[c])] * eig.eigenvalues[keep[c]].sqrt()
-        });
-        if exact {
-            // the covariance `hasel identify` wrote is singular along what it held
-            for (k, v) in directions.iter().enumerate() {
-                if v.norm() > 0.0 {
-                    let along = (v.transpose() * &cov * v)[(0, 0)];
-                    if along > HELD_TOLERANCE * top {
-                        return Err(fail(format!(
-                            "covariance: variance {along:e} along held_combinations[{k}], which must be held (largest eigenvalue {top:e})"
-                        )));
-                    }
-                }
-            }
-        } else {
-            // from rounded correlations: take the held directions out explicitly
-            let mut ortho: Vec<DVector<f64>> = Vec::new();
-            for v in &directions {
-                let mut w = v.clone();
-                for q in &ortho {
-                    w -= q * q.dot(v);
-                }
-                if w.norm() > 1e-9 {
-                    ortho.push(w.normalize());
-                }
-            }
-            for q in &ortho {
-                let along = q.transpose() * &factor;
-                factor -= q * along;
-            }
-        }
+        let directions = held_directions(&held, &names);
+        let factor = factor(&cov, &directions, exact, &fail)?;
         Ok(Posterior {
             path: path.to_path_buf(),
             center,
@@ -333,6 +224,160 @@ impl Posterior {
 
 /// A covariance as read: parameter names, per name drawn in `ln p`, the matrix.
 type Block = (Vec<String>, Vec<bool>, DMatrix<f64>);
+
+/// The number `v` as `what` must be: present and finite.
+fn number(
+    v: Option<&Value>,
+    what: &str,
+    fail: &dyn Fn(String) -> UncertaintyError,
+) -> Result<f64, UncertaintyError> {
+    v.and_then(Value::as_f64)
+        .filter(|x| x.is_finite())
+        .ok_or_else(|| fail(format!("{what}: expected a finite number")))
+}
+
+/// The parameters of `json` (each known, each value valid) and the names of those estimated.
+fn read_parameters(
+    json: &Value,
+    fail: &dyn Fn(String) -> UncertaintyError,
+) -> Result<(Params, Vec<String>), UncertaintyError> {
+    let params = json
+        .get("parameters")
+        .and_then(Value::as_object)
+        .ok_or_else(|| {
+            fail(
+                "no \"parameters\" object: expected the identification.json of `hasel identify`"
+                    .into(),
+            )
+        })?;
+    let mut center = Params::default();
+    let mut estimated = Vec::new();
+    for (name, entry) in params {
+        parameter(name).ok_or_else(|| fail(format!("parameters.{name}: unknown parameter")))?;
+        let value = number(
+            entry.get("value"),
+            &format!("parameters.{name}.value"),
+            fail,
+        )?;
+        center
+            .set(name, value)
+            .map_err(|e| fail(format!("parameters.{name}: {e}")))?;
+        if entry.get("estimated").and_then(Value::as_bool) == Some(true) {
+            estimated.push(name.clone());
+        }
+    }
+    center
+        .validate()
+        .map_err(|e| fail(format!("parameters: {e}")))?;
+    Ok((center, estimated))
+}
+
+/// The held combinations of `json`, each as its parameters' weights (none if absent).
+fn read_held(
+    json: &Value,
+    fail: &dyn Fn(String) -> UncertaintyError,
+) -> Result<Vec<Vec<(String, f64)>>, UncertaintyError> {
+    Ok(match json.get("held_combinations") {
+        None | Some(Value::Null) => Vec::new(),
+        Some(Value::Array(list)) => list
+            .iter()
+            .enumerate()
+            .map(|(k, c)| {
+                let o = c.as_object().ok_or_else(|| {
+                    fail(format!("held_combinations[{k}]: expected {{name: weight}}"))
+                })?;
+                o.iter()
+                    .map(|(n, w)| {
+                        parameter(n).ok_or_else(|| {
+                            fail(format!("held_combinations[{k}]: unknown parameter {n}"))
+                        })?;
+                        Ok((
+                            n.clone(),
+                            number(Some(w), &format!("held_combinations[{k}].{n}"), fail)?,
+                        ))
+                    })
+                    .collect()
+            })
+            .collect::<Result<_, _>>()?,
+        Some(_) => return Err(fail("held_combinations: expected a list".into())),
+    })
+}
+
+/// The held combinations, as unit vectors over the estimated parameters `names`.
+fn held_directions(held: &[Vec<(String, f64)>], names: &[String]) -> Vec<DVector<f64>> {
+    let n = names.len();
+    held.iter()
+        .map(|c| {
+            let v = DVector::from_fn(n, |i, _| {
+                c.iter()
+                    .find(|(name, _)| *name == names[i])
+                    .map_or(0.0, |(_, w)| *w)
+            });
+            let norm = v.norm();
+            if norm > 0.0 { v / norm } else { v }
+        })
+        .collect()
+}
+
+/// A factor L of the covariance (L Lᵀ = cov over its numerical rank), checked positive
+/// semi-definite; an `exact` one (as `hasel identify` wrote it) checked singular along the held
+/// `directions`, one from rounded correlations with them taken out.
+fn factor(
+    cov: &DMatrix<f64>,
+    directions: &[DVector<f64>],
+    exact: bool,
+    fail: &dyn Fn(String) -> UncertaintyError,
+) -> Result<DMatrix<f64>, UncertaintyError> {
+    let n = cov.nrows();
+    let eig = cov.clone().symmetric_eigen();
+    let top = eig.eigenvalues.iter().fold(0.0_f64, |a, &b| a.max(b));
+    if let Some(low) = eig
+        .eigenvalues
+        .iter()
+        .copied()
+        .find(|&l| l < -1e-9 * top.max(f64::MIN_POSITIVE))
+    {
+        return Err(fail(format!(
+            "covariance: not positive semi-definite (eigenvalue {low:e}, largest {top:e})"
+        )));
+    }
+    let keep: Vec<usize> = (0..n)
+        .filter(|&k| eig.eigenvalues[k] > RANK_TOLERANCE * top)
+        .collect();
+    let mut factor = DMatrix::from_fn(n, keep.len(), |i, c| {
+        eig.eigenvectors[(i, keep[c])] * eig.eigenvalues[keep[c]].sqrt()
+    });
+    if exact {
+        // the covariance `hasel identify` wrote is singular along what it held
+        for (k, v) in directions.iter().enumerate() {
+            if v.norm() > 0.0 {
+                let along = (v.transpose() * cov * v)[(0, 0)];
+                if along > HELD_TOLERANCE * top {
+                    return Err(fail(format!(
+                        "covariance: variance {along:e} along held_combinations[{k}], which must be held (largest eigenvalue {top:e})"
+                    )));
+                }
+            }
+        }
+    } else {
+        // from rounded correlations: take the held directions out explicitly
+        let mut ortho: Vec<DVector<f64>> = Vec::new();
+        for v in directions {
+            let mut w = v.clone();
+            for q in &ortho {
+                w -= q * q.dot(v);
+            }
+            if w.norm() > 1e-9 {
+                ortho.push(w.normalize());
+            }
+        }
+        for q in &ortho {
+            let along = q.transpose() * &factor;
+            factor -= q * along;
+        }
+    }
+    Ok(factor)
+}
 
 /// The `covariance` block: names, coordinates, and a symmetric matrix of finite numbers.
 fn read_covariance(

@@ -83,52 +83,11 @@ fn without_delay(params: &Params) -> Result<Platform, Error> {
 }
 
 pub fn run(a: Args) -> Result<(), Error> {
-    if !(a.rtol.is_finite() && a.rtol > 0.0 && a.rtol < 0.1) {
-        return Err(Error::Usage(format!(
-            "--rtol {}: must be in (0, 0.1)",
-            a.rtol
-        )));
-    }
-    if !(a.step.is_finite() && a.step != 0.0) {
-        return Err(Error::Usage(format!(
-            "--step {}: must be a nonzero voltage",
-            a.step
-        )));
-    }
+    check_tolerance_and_step(&a)?;
     let params = load_params(&a.params)?;
     let model =
         Platform::new(params.clone()).map_err(|e| Error::Control(ControlError::Param(e)))?;
-
-    // the point: an equilibrium, or the state of a simulation at --at-time
-    let (lin, start, u_command, sine_model) = match (&a.u, a.at_time) {
-        (Some(text), _) => {
-            let u = parse_voltages(text)?;
-            let lin = linearize_equilibrium(&model, u)?;
-            let plain = without_delay(&params)?;
-            let start = Simulator::from_state(plain.clone(), 0.0, &lin.x0, a.rtol)
-                .map_err(ControlError::from)?;
-            (lin, start, u, Some(plain))
-        }
-        (None, Some(t)) => {
-            if !(t.is_finite() && t > 0.0) {
-                return Err(Error::Usage(format!("--at-time {t}: must be > 0")));
-            }
-            let (input, _) = a.input.input()?;
-            let mut sim = Simulator::new(model.clone(), 0.0, a.rtol).map_err(ControlError::from)?;
-            sim.run(&input, t, t, |_| {}).map_err(ControlError::from)?;
-            // the voltages the model sees at t: the command, late by the delay effect's τ_d
-            // (0 V before the first command arrives)
-            let tau_d = params.effects.delay.tau_d;
-            let seen = if t >= tau_d {
-                input.value(t - tau_d)
-            } else {
-                [0.0; 3]
-            };
-            let lin = linearize_at(&model, sim.state(), seen, t)?;
-            (lin, sim, input.value(t), None)
-        }
-        (None, None) => return Err(Error::Usage("give --u U1,U2,U3 or --at-time T".into())),
-    };
+    let (lin, start, u_command, sine_model) = point(&a, &params, &model)?;
 
     let ph = port_hamiltonian::decompose(&model, &lin);
     let reduced = reduce::reduce(&lin, a.reduce_tol);
@@ -138,37 +97,8 @@ pub fn run(a: Args) -> Result<(), Error> {
             a.reduce_tol
         )));
     }
-    // the checks against the nonlinear model are reported, not required: a simulation that
-    // fails there (an unstable linearization, a parameter set the solver cannot follow) leaves
-    // the linearization itself standing
-    let (sine, sine_error): (Vec<SineCheck>, Option<String>) = match &sine_model {
-        Some(m) => {
-            match frequency::sine_check(m, &lin, SINE_AMPLITUDE, &SINE_FREQUENCIES, a.rtol) {
-                Ok(s) => (s, None),
-                Err(e) => (Vec::new(), Some(e.to_string())),
-            }
-        }
-        None => (Vec::new(), None),
-    };
-    let slowest = lin
-        .minimal_eigenvalues
-        .iter()
-        .map(|e| -e.re)
-        .filter(|r| *r > 0.0)
-        .fold(f64::INFINITY, f64::min);
-    let step_time = a
-        .step_time
-        .unwrap_or(if slowest.is_finite() {
-            5.0 / slowest
-        } else {
-            1.0
-        })
-        .clamp(1e-3, 100.0);
-    if let Some(t) = a.step_time
-        && !(t.is_finite() && t > 0.0)
-    {
-        return Err(Error::Usage(format!("--step-time {t}: must be > 0")));
-    }
+    let (sine, sine_error) = sine_check(sine_model.as_ref(), &lin, a.rtol);
+    let step_time = step_time(&a, &lin)?;
     let step = frequency::step_comparison(&start, &lin, u_command, [a.step; 3], step_time, 200)?;
     let bode = report::bode_data(&lin)?;
 
@@ -193,10 +123,111 @@ pub fn run(a: Args) -> Result<(), Error> {
     Ok(())
 }
 
+/// The tolerance in (0, 0.1) and a nonzero step, checked before anything is computed.
+fn check_tolerance_and_step(a: &Args) -> Result<(), Error> {
+    if !(a.rtol.is_finite() && a.rtol > 0.0 && a.rtol < 0.1) {
+        return Err(Error::Usage(format!(
+            "--rtol {}: must be in (0, 0.1)",
+            a.rtol
+        )));
+    }
+    if !(a.step.is_finite() && a.step != 0.0) {
+        return Err(Error::Usage(format!(
+            "--step {}: must be a nonzero voltage",
+            a.step
+        )));
+    }
+    Ok(())
+}
+
+/// The point: an equilibrium, or the state of a simulation at --at-time. Returns the
+/// linearization, a simulator standing there, the command there, and the model the small-sine
+/// check runs on (at an equilibrium only).
+fn point(
+    a: &Args,
+    params: &Params,
+    model: &Platform,
+) -> Result<(Linearization, Simulator, [f64; 3], Option<Platform>), Error> {
+    Ok(match (&a.u, a.at_time) {
+        (Some(text), _) => {
+            let u = parse_voltages(text)?;
+            let lin = linearize_equilibrium(model, u)?;
+            let plain = without_delay(params)?;
+            let start = Simulator::from_state(plain.clone(), 0.0, &lin.x0, a.rtol)
+                .map_err(ControlError::from)?;
+            (lin, start, u, Some(plain))
+        }
+        (None, Some(t)) => {
+            if !(t.is_finite() && t > 0.0) {
+                return Err(Error::Usage(format!("--at-time {t}: must be > 0")));
+            }
+            let (input, _) = a.input.input()?;
+            let mut sim = Simulator::new(model.clone(), 0.0, a.rtol).map_err(ControlError::from)?;
+            sim.run(&input, t, t, |_| {}).map_err(ControlError::from)?;
+            // the voltages the model sees at t: the command, late by the delay effect's τ_d
+            // (0 V before the first command arrives)
+            let tau_d = params.effects.delay.tau_d;
+            let seen = if t >= tau_d {
+                input.value(t - tau_d)
+            } else {
+                [0.0; 3]
+            };
+            let lin = linearize_at(model, sim.state(), seen, t)?;
+            (lin, sim, input.value(t), None)
+        }
+        (None, None) => return Err(Error::Usage("give --u U1,U2,U3 or --at-time T".into())),
+    })
+}
+
+/// The small-sine check on `sine_model` (none without one), or why it failed. The checks
+/// against the nonlinear model are reported, not required: a simulation that fails there (an
+/// unstable linearization, a parameter set the solver cannot follow) leaves the linearization
+/// itself standing.
+fn sine_check(
+    sine_model: Option<&Platform>,
+    lin: &Linearization,
+    rtol: f64,
+) -> (Vec<SineCheck>, Option<String>) {
+    match sine_model {
+        Some(m) => match frequency::sine_check(m, lin, SINE_AMPLITUDE, &SINE_FREQUENCIES, rtol) {
+            Ok(s) => (s, None),
+            Err(e) => (Vec::new(), Some(e.to_string())),
+        },
+        None => (Vec::new(), None),
+    }
+}
+
+/// The step's length: --step-time, or five times the slowest mode's time constant (1 s
+/// without a stable mode), within 1 ms .. 100 s.
+fn step_time(a: &Args, lin: &Linearization) -> Result<f64, Error> {
+    let slowest = lin
+        .minimal_eigenvalues
+        .iter()
+        .map(|e| -e.re)
+        .filter(|r| *r > 0.0)
+        .fold(f64::INFINITY, f64::min);
+    let step_time = a
+        .step_time
+        .unwrap_or(if slowest.is_finite() {
+            5.0 / slowest
+        } else {
+            1.0
+        })
+        .clamp(1e-3, 100.0);
+    if let Some(t) = a.step_time
+        && !(t.is_finite() && t > 0.0)
+    {
+        return Err(Error::Usage(format!("--step-time {t}: must be > 0")));
+    }
+    Ok(step_time)
+}
+
 fn um(v: f64) -> String {
     format!("{:.3}", v * 1e6)
 }
 
+/// Prints the linearization's summary: the point, the eigenvalues, the port-Hamiltonian checks,
+/// the small-signal and step checks, and the reduced model.
 fn summary(
     lin: &Linearization,
     ph: &Result<port_hamiltonian::PortHamiltonian, ControlError>,
@@ -204,6 +235,18 @@ fn summary(
     sine: &[SineCheck],
     step: &frequency::StepComparison,
 ) {
+    say_point(lin);
+    say_eigenvalues(lin);
+    say_effect_notes(lin);
+    say_port_hamiltonian(ph);
+    say_sine_check(sine);
+    say_step_check(step);
+    say_reduced(lin, reduced);
+}
+
+/// The point linearized at: an equilibrium with its outputs and how it was found, or a state
+/// of a trajectory with how fast it moves.
+fn say_point(lin: &Linearization) {
     let y = lin.y0;
     let u = lin.u0;
     match &lin.point {
@@ -233,6 +276,10 @@ fn summary(
             rate
         ),
     }
+}
+
+/// The eigenvalues of the minimal model by class, after the three Casimir zeros it leaves out.
+fn say_eigenvalues(lin: &Linearization) {
     let zeros = lin
         .casimirs
         .eigenvalues
@@ -263,6 +310,10 @@ fn summary(
             .collect();
         say!("  {class:>10}: {}", list.join(", "));
     }
+}
+
+/// What each effect contributes at the point, flagged where it is not smooth there.
+fn say_effect_notes(lin: &Linearization) {
     for n in &lin.notes {
         say!(
             "  effect {}{}: {}{}",
@@ -274,6 +325,10 @@ fn summary(
             n.text
         );
     }
+}
+
+/// The port-Hamiltonian decomposition's checks and the voltage port's passivity.
+fn say_port_hamiltonian(ph: &Result<port_hamiltonian::PortHamiltonian, ControlError>) {
     match ph {
         Ok(ph) => {
             let c = &ph.checks;
@@ -321,6 +376,10 @@ fn summary(
         }
         Err(e) => say!("port-Hamiltonian decomposition: {e}"),
     }
+}
+
+/// How far the nonlinear model's small-sine responses are from the linear model's.
+fn say_sine_check(sine: &[SineCheck]) {
     if !sine.is_empty() {
         let gain = sine
             .iter()
@@ -338,6 +397,10 @@ fn summary(
             phase
         );
     }
+}
+
+/// How far the nonlinear model's step response is from the linear model's.
+fn say_step_check(step: &frequency::StepComparison) {
     match (&step.nonlinear, step.relative_errors()) {
         (Ok(_), Some(errs)) => say!(
             "step of {} V: linear vs nonlinear, largest difference per output (relative to its response; 1 where the linear response is zero): {}",
@@ -355,6 +418,10 @@ fn summary(
             }
         }
     }
+}
+
+/// The reduced model's order, error bound and measured error.
+fn say_reduced(lin: &Linearization, reduced: &Result<reduce::Reduced, ControlError>) {
     match reduced {
         Ok(r) => say!(
             "reduced model: order {} of {} (bound 2 sum sigma = {:.2e} m/V = {:.2e} of the peak gain {:.3e} m/V); error up to {} Hz: {:.2e} m/V ({:.2e} of the peak gain)",

@@ -97,20 +97,7 @@ pub fn run(
             "two 6 s experiments at 1 ms (3pi and 11 rad/s)"
         }
     );
-    let mut times = Vec::new();
-    let mut spurious = 0;
-    // effect cases named exactly: (worst held-out gap to the noise floor, case)
-    let mut gaps: Vec<(f64, String)> = Vec::new();
-    let mut matrix: BTreeMap<(String, String), usize> = BTreeMap::new();
-    // the right family's evidence weight on each single-mechanism case
-    let mut confidences: Vec<f64> = Vec::new();
-    let (mut right_cases, mut effect_cases, mut effect_right) = (0, 0, 0);
-    let (mut pair_cases, mut pair_right) = (0, 0);
-    let mut total = 0;
-    let mut slowest: f64 = 0.0;
-    let mut stages: BTreeMap<String, f64> = BTreeMap::new();
-    // per protocol (its drive, and whether recorded mid-run): (right, cases)
-    let mut by_protocol: BTreeMap<String, (usize, usize)> = BTreeMap::new();
+    let mut tally = Tally::default();
     for truth in Truth::all() {
         // `--only coupling` runs every single case of the family, `--only coupling_tilt` one,
         // `--only two` every two-mechanism case
@@ -140,34 +127,8 @@ pub fn run(
             let got = d.answer();
             let ok = right(truth, &d);
             let seconds = d.timing.last().map_or(0.0, |t| t.1);
-            slowest = slowest.max(seconds);
-            times.push(seconds);
             let gap = worst_gap(&d);
-            let mut weight = String::new();
-            if let Some(e) = truth.effect() {
-                spurious += (d.effects.len() > 1 && d.effects[0] == e) as usize;
-                confidences.push(confidence(e, &d));
-                weight = format!(" | weight {:.3}", confidence(e, &d));
-            }
-            if ok && !truth.effects().is_empty() {
-                gaps.push((gap, format!("{} seed {seed}", truth.name())));
-            }
-            for (stage, s) in &d.timing {
-                let key = stage.split(" (round").next().unwrap_or(stage).to_string();
-                *stages.entry(key).or_default() += s;
-            }
-            total += 1;
-            right_cases += ok as usize;
-            let score = by_protocol.entry(protocol.clone()).or_default();
-            score.0 += ok as usize;
-            score.1 += 1;
-            if pair {
-                pair_cases += 1;
-                pair_right += ok as usize;
-            } else if truth.effect().is_some() {
-                effect_cases += 1;
-                effect_right += ok as usize;
-            }
+            let weight = tally.count(truth, seed, &d, &protocol, (ok, seconds, gap));
             let (before, after) = (&d.fits.before, &d.fits.after);
             let single = d.after.len() == 1;
             let floor: Vec<String> = d
@@ -189,105 +150,152 @@ pub fn run(
                 d.outliers.iter().map(|o| o.times.len()).sum::<usize>(),
                 case.description
             );
-            for r in &d.rounds {
-                for c in &r.candidates {
-                    if let Some(f) = &c.refit {
-                        say!(
-                            "      {:<13} {:<17} score {:.3} dBIC {:9.1} gain {:6.2} gap {:5.2} {}",
-                            c.effect.name(),
-                            diagnose::report::forms_cell(c),
-                            c.score,
-                            f.delta_bic,
-                            f.fit_gain,
-                            f.gap_closed,
-                            if f.passes() {
-                                "passes".to_string()
-                            } else {
-                                f.failed.join("; ")
-                            }
-                        );
-                    } else {
-                        say!(
-                            "      {:<13} {:<17} score {:.3}{}",
-                            c.effect.name(),
-                            c.form.name,
-                            c.score,
-                            c.refit_error
-                                .as_ref()
-                                .map(|e| format!(" refit failed: {e}"))
-                                .unwrap_or_default()
-                        );
-                    }
-                }
-                for v in &r.revisits {
-                    say!(
-                        "      revisit {} against {}: {}",
-                        v.replaced.name(),
-                        v.by.map_or("nothing".into(), |f| format!(
-                            "{} [{}]",
-                            f.effect.name(),
-                            f.name
-                        )),
-                        match (&v.delta_bic, v.swapped) {
-                            (Ok(b), s) =>
-                                format!("dBIC {b:.1}, {}", if s { "swapped" } else { "kept" }),
-                            (Err(e), _) => format!("refit failed: {e}"),
-                        }
-                    );
-                }
-            }
-            *matrix.entry((hidden_families(truth), got)).or_default() += 1;
+            say_rounds(&d);
+            *tally
+                .matrix
+                .entry((hidden_families(truth), got))
+                .or_default() += 1;
         }
     }
-    say!("confusion by family (hidden -> answer: count)");
-    for ((t, a), n) in &matrix {
-        say!("  {t:<26} -> {a:<28} {n}");
-    }
-    confidences.sort_by(f64::total_cmp);
-    if let (Some(low), Some(median)) = (confidences.first(), confidences.get(confidences.len() / 2))
-    {
-        say!(
-            "evidence weight of the hidden family (single mechanisms): median {median:.3}, lowest {low:.3}, >= 0.95 in {}/{}",
-            confidences.iter().filter(|&&w| w >= 0.95).count(),
-            confidences.len()
-        );
-    }
-    times.sort_by(f64::total_cmp);
-    let typical = times.get(times.len() / 2).copied().unwrap_or(0.0);
-    say!(
-        "right: {right_cases}/{total}; effect named exactly: {effect_right}/{effect_cases} (target >= 95 %); spurious second effects: {spurious} (target 0)"
-    );
-    if pair_cases > 0 {
-        say!(
-            "two mechanisms, both named: {pair_right}/{pair_cases} ({:.0} %, target >= 85 %)",
-            100.0 * pair_right as f64 / pair_cases as f64
-        );
-    }
-    gaps.sort_by(|a, b| b.0.total_cmp(&a.0));
-    let within = gaps.iter().filter(|g| g.0 <= 0.5).count();
-    say!(
-        "held-out fit after the right effect(s) within 0.5 points of the noise floor: {within}/{}{}",
-        gaps.len(),
-        gaps.first()
-            .map(|(g, c)| format!("; farthest {g:.2} points below ({c})"))
-            .unwrap_or_default()
-    );
-    say!(
-        "time per diagnosis: median {typical:.1} s ({}), slowest {slowest:.1} s ({})",
-        if typical <= 5.0 { "met" } else { "MISSED" },
-        if slowest <= 30.0 { "met" } else { "MISSED" }
-    );
-    if protocols {
-        say!("right per protocol:");
-        for (p, (ok, n)) in &by_protocol {
-            say!("  {p:<24} {ok}/{n}");
-        }
-    }
-    say!("time by stage over all cases:");
-    for (stage, s) in &stages {
-        say!("  {stage:<40} {s:8.1} s");
-    }
+    tally.say(protocols);
     Ok(())
+}
+
+/// What the cases so far came to, for the closing lines.
+#[derive(Default)]
+struct Tally {
+    times: Vec<f64>,
+    spurious: usize,
+    /// Effect cases named exactly: (worst held-out gap to the noise floor, case).
+    gaps: Vec<(f64, String)>,
+    matrix: BTreeMap<(String, String), usize>,
+    /// The right family's evidence weight on each single-mechanism case.
+    confidences: Vec<f64>,
+    right_cases: usize,
+    effect_cases: usize,
+    effect_right: usize,
+    pair_cases: usize,
+    pair_right: usize,
+    total: usize,
+    slowest: f64,
+    stages: BTreeMap<String, f64>,
+    /// Per protocol (its drive, and whether recorded mid-run): (right, cases).
+    by_protocol: BTreeMap<String, (usize, usize)>,
+}
+
+impl Tally {
+    /// Counts the diagnosis `d` of the case hiding `truth` (drawn from `seed`, recorded in
+    /// `protocol`): whether it is right, its time and its worst held-out gap; returns the hidden
+    /// family's evidence weight as the case's line shows it, if any.
+    fn count(
+        &mut self,
+        truth: Truth,
+        seed: u64,
+        d: &diagnose::Diagnosis,
+        protocol: &str,
+        (ok, seconds, gap): (bool, f64, f64),
+    ) -> String {
+        let pair = matches!(truth, Truth::Two(_));
+        self.slowest = self.slowest.max(seconds);
+        self.times.push(seconds);
+        let mut weight = String::new();
+        if let Some(e) = truth.effect() {
+            self.spurious += (d.effects.len() > 1 && d.effects[0] == e) as usize;
+            self.confidences.push(confidence(e, d));
+            weight = format!(" | weight {:.3}", confidence(e, d));
+        }
+        if ok && !truth.effects().is_empty() {
+            self.gaps
+                .push((gap, format!("{} seed {seed}", truth.name())));
+        }
+        for (stage, s) in &d.timing {
+            let key = stage.split(" (round").next().unwrap_or(stage).to_string();
+            *self.stages.entry(key).or_default() += s;
+        }
+        self.total += 1;
+        self.right_cases += ok as usize;
+        let score = self.by_protocol.entry(protocol.to_string()).or_default();
+        score.0 += ok as usize;
+        score.1 += 1;
+        if pair {
+            self.pair_cases += 1;
+            self.pair_right += ok as usize;
+        } else if truth.effect().is_some() {
+            self.effect_cases += 1;
+            self.effect_right += ok as usize;
+        }
+        weight
+    }
+
+    /// The closing lines: the confusion matrix, the evidence weights, the scores against
+    /// their targets, the times, and with `protocols` the score per protocol.
+    fn say(self, protocols: bool) {
+        let Tally {
+            mut times,
+            spurious,
+            mut gaps,
+            matrix,
+            mut confidences,
+            right_cases,
+            effect_cases,
+            effect_right,
+            pair_cases,
+            pair_right,
+            total,
+            slowest,
+            stages,
+            by_protocol,
+        } = self;
+        say!("confusion by family (hidden -> answer: count)");
+        for ((t, a), n) in &matrix {
+            say!("  {t:<26} -> {a:<28} {n}");
+        }
+        confidences.sort_by(f64::total_cmp);
+        if let (Some(low), Some(median)) =
+            (confidences.first(), confidences.get(confidences.len() / 2))
+        {
+            say!(
+                "evidence weight of the hidden family (single mechanisms): median {median:.3}, lowest {low:.3}, >= 0.95 in {}/{}",
+                confidences.iter().filter(|&&w| w >= 0.95).count(),
+                confidences.len()
+            );
+        }
+        times.sort_by(f64::total_cmp);
+        let typical = times.get(times.len() / 2).copied().unwrap_or(0.0);
+        say!(
+            "right: {right_cases}/{total}; effect named exactly: {effect_right}/{effect_cases} (target >= 95 %); spurious second effects: {spurious} (target 0)"
+        );
+        if pair_cases > 0 {
+            say!(
+                "two mechanisms, both named: {pair_right}/{pair_cases} ({:.0} %, target >= 85 %)",
+                100.0 * pair_right as f64 / pair_cases as f64
+            );
+        }
+        gaps.sort_by(|a, b| b.0.total_cmp(&a.0));
+        let within = gaps.iter().filter(|g| g.0 <= 0.5).count();
+        say!(
+            "held-out fit after the right effect(s) within 0.5 points of the noise floor: {within}/{}{}",
+            gaps.len(),
+            gaps.first()
+                .map(|(g, c)| format!("; farthest {g:.2} points below ({c})"))
+                .unwrap_or_default()
+        );
+        say!(
+            "time per diagnosis: median {typical:.1} s ({}), slowest {slowest:.1} s ({})",
+            if typical <= 5.0 { "met" } else { "MISSED" },
+            if slowest <= 30.0 { "met" } else { "MISSED" }
+        );
+        if protocols {
+            say!("right per protocol:");
+            for (p, (ok, n)) in &by_protocol {
+                say!("  {p:<24} {ok}/{n}");
+            }
+        }
+        say!("time by stage over all cases:");
+        for (stage, s) in &stages {
+            say!("  {stage:<40} {s:8.1} s");
+        }
+    }
 }
 
 fn fmt_fits(f: &BTreeMap<String, f64>) -> String {
@@ -295,4 +303,55 @@ fn fmt_fits(f: &BTreeMap<String, f64>) -> String {
         .map(|(k, v)| format!("{k} {v:.1}"))
         .collect::<Vec<_>>()
         .join(", ")
+}
+
+/// Each round's candidates (the refitted with their evidence, the others with their score)
+/// and the revisits of earlier effects.
+fn say_rounds(d: &diagnose::Diagnosis) {
+    for r in &d.rounds {
+        for c in &r.candidates {
+            if let Some(f) = &c.refit {
+                say!(
+                    "      {:<13} {:<17} score {:.3} dBIC {:9.1} gain {:6.2} gap {:5.2} {}",
+                    c.effect.name(),
+                    diagnose::report::forms_cell(c),
+                    c.score,
+                    f.delta_bic,
+                    f.fit_gain,
+                    f.gap_closed,
+                    if f.passes() {
+                        "passes".to_string()
+                    } else {
+                        f.failed.join("; ")
+                    }
+                );
+            } else {
+                say!(
+                    "      {:<13} {:<17} score {:.3}{}",
+                    c.effect.name(),
+                    c.form.name,
+                    c.score,
+                    c.refit_error
+                        .as_ref()
+                        .map(|e| format!(" refit failed: {e}"))
+                        .unwrap_or_default()
+                );
+            }
+        }
+        for v in &r.revisits {
+            say!(
+                "      revisit {} against {}: {}",
+                v.replaced.name(),
+                v.by.map_or("nothing".into(), |f| format!(
+                    "{} [{}]",
+                    f.effect.name(),
+                    f.name
+                )),
+                match (&v.delta_bic, v.swapped) {
+                    (Ok(b), s) => format!("dBIC {b:.1}, {}", if s { "swapped" } else { "kept" }),
+                    (Err(e), _) => format!("refit failed: {e}"),
+                }
+            );
+        }
+    }
 }
