@@ -30,7 +30,7 @@ pub enum Truth {
     /// The effect in its further hidden form k (`Family::variants[k]`).
     Variant(Effect, usize),
     /// A floor vibration at a frequency unrelated to the drive, added to the measurements: more
-    /// than two frequency resolutions of a [`RECORD_S`] record from every harmonic of both
+    /// than two frequency resolutions of a `RECORD_S` record from every harmonic of both
     /// drive frequencies.
     Outside,
     /// The amplifier's supply rippling: its gain modulated at a frequency unrelated to the
@@ -125,7 +125,7 @@ impl Truth {
 
 /// The drive frequencies of the paper [rad/s]: identification, then validation (records after
 /// the second repeat them, as a lab repeats a run).
-pub const OMEGAS: [f64; 2] = [3.0 * PI, 11.0];
+const OMEGAS: [f64; 2] = [3.0 * PI, 11.0];
 
 /// The amplitudes of the `levels` protocol's sines [V], record after record (repeated likewise).
 const LEVELS: [f64; 2] = [60.0, 35.0];
@@ -252,7 +252,7 @@ fn planted(
 
 /// Length of the records the generator's cases are drawn for (the benchmark's and the tests'
 /// experiments) \[s\]: their frequency resolution is 1 / RECORD_S \[Hz\].
-pub const RECORD_S: f64 = 6.0;
+const RECORD_S: f64 = 6.0;
 
 /// Clearance of the floor vibration from every harmonic of either drive frequency, in units of
 /// the record's frequency resolution. A sine Δf away from k·ω/2π leaves |sinc(π Δf T)| of its

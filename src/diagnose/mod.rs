@@ -50,12 +50,12 @@ pub const GAP_CLOSED: f64 = 0.5;
 pub const MIN_GAIN: f64 = 0.2;
 /// Residual variance beyond the noise, as a fraction of it, below which a model is at the
 /// noise floor.
-pub const NOISE_FLOOR_EXCESS: f64 = 0.05;
+const NOISE_FLOOR_EXCESS: f64 = 0.05;
 /// Points of held-out fit within which a model with its effects is at the noise floor: a
 /// further effect is looked for only beyond it, and the report says what remains beyond it.
-pub const AT_FLOOR: f64 = 0.5;
+const AT_FLOOR: f64 = 0.5;
 /// Points of held-out fit within which a later effect (or a revisit's swap) must bring every
-/// held-out output to its noise floor: looser than [`AT_FLOOR`], as the library's term is
+/// held-out output to its noise floor: looser than `AT_FLOOR`, as the library's term is
 /// rarely the data's exact form.
 pub const FIT_TOLERANCE: f64 = 1.0;
 /// Share of the held-out gap to the noise floor a first effect must close to be added
@@ -67,14 +67,14 @@ pub const PARTIAL_GAP: f64 = 0.25;
 
 /// A family's other forms are refitted beside its best when the screening gives them at least
 /// this share of the best form's worth (book/src/diagnose.md, "Families of forms").
-pub const FORM_RUNNER_UP: f64 = 0.8;
+const FORM_RUNNER_UP: f64 = 0.8;
 
 /// Levenberg–Marquardt iterations a refit may take in all (`identify::Options::
 /// iteration_budget`): a bound on the competition, not on the effect taken on, which is fitted
 /// on to convergence (book/src/diagnose.md, "The workflow"). On the hidden-mechanism suite
 /// the right form converged within 45 beside right effects and needed more than 60 beside a
 /// stand-in (a delay for an amplifier lag).
-pub const REFIT_ITERATIONS: usize = 100;
+const REFIT_ITERATIONS: usize = 100;
 
 /// Settings of a diagnosis.
 #[derive(Clone, Debug)]
@@ -91,7 +91,7 @@ pub struct Options {
     /// Wall time a candidate's refit may take, if any; a refit that runs out of it fails the
     /// candidate. None by default: the verdict must not depend on the machine's load (on a
     /// shared machine a creep recorded on four sines was named `creep` where, idle, it was
-    /// `hysteresis`: the plays' refit had run out of 120 s). [`REFIT_ITERATIONS`] bounds a refit.
+    /// `hysteresis`: the plays' refit had run out of 120 s). `REFIT_ITERATIONS` bounds a refit.
     pub refit_budget: Option<Duration>,
     /// What to estimate of the records' conditions (their start, the sensor's lag) beside the
     /// paper's model; every candidate is refitted under the conditions found there.
@@ -143,7 +143,7 @@ pub struct Candidate {
     /// Start values of its parameters from the screening.
     pub start: Vec<(&'static str, f64)>,
     /// The other forms and their start values, refitted too when the screening cannot tell
-    /// them from the best ([`FORM_RUNNER_UP`]), best first.
+    /// them from the best (`FORM_RUNNER_UP`), best first.
     pub alternatives: Vec<(&'static Form, Vec<(&'static str, f64)>)>,
     /// Every form refitted, with its ΔBIC or why its refit failed.
     pub forms_tried: Vec<(&'static str, Result<f64, String>)>,
@@ -267,7 +267,7 @@ pub struct Fits {
     pub floor: Vec<BTreeMap<String, f64>>,
     /// The same on the held-out experiments, averaged over them [%].
     pub held_out_floor: BTreeMap<String, f64>,
-    /// The held-out outputs the final model leaves more than [`AT_FLOOR`] below the noise
+    /// The held-out outputs the final model leaves more than `AT_FLOOR` below the noise
     /// floor (book/src/diagnose.md, "diagnosis.json").
     pub remaining: Vec<Remaining>,
 }
@@ -586,7 +586,7 @@ fn worst_gap_to_floor(held: &[Experiment], id: &Identification) -> f64 {
     worst
 }
 
-/// What the final model leaves on one held-out output that lies more than [`AT_FLOOR`]
+/// What the final model leaves on one held-out output that lies more than `AT_FLOOR`
 /// below its noise floor: how far, and where (the disagreement's worst window, largest
 /// harmonic and drift).
 #[derive(Clone, Debug)]
