@@ -318,11 +318,11 @@ fn polish_jacobian(
     }
 }
 
-/// An orthonormal basis of the complement of the directions `held` in Rⁿ.
-fn complement(n: usize, held: &[DVector<f64>]) -> DMatrix<f64> {
-    // Gram–Schmidt on the held directions, then the projector onto what is left
+/// An orthonormal basis of the span of `directions` (Gram–Schmidt; a direction already in the
+/// span of those before it is left out).
+pub fn orthonormal(directions: &[DVector<f64>]) -> Vec<DVector<f64>> {
     let mut ortho: Vec<DVector<f64>> = Vec::new();
-    for v in held {
+    for v in directions {
         let mut w = v.clone();
         for q in &ortho {
             w -= q * q.dot(v);
@@ -331,6 +331,13 @@ fn complement(n: usize, held: &[DVector<f64>]) -> DMatrix<f64> {
             ortho.push(w.normalize());
         }
     }
+    ortho
+}
+
+/// An orthonormal basis of the complement of the directions `held` in Rⁿ.
+fn complement(n: usize, held: &[DVector<f64>]) -> DMatrix<f64> {
+    // the projector onto what the held directions leave
+    let ortho = orthonormal(held);
     let mut p = DMatrix::<f64>::identity(n, n);
     for v in &ortho {
         p -= v * v.transpose();

@@ -26,6 +26,7 @@ use crate::model::{Params, Platform};
 use crate::simulation::{DEFAULT_RTOL, Sample, Simulator};
 pub use error::Error;
 pub use experiment::{Channel, Conditions, Experiment};
+pub use group::orthonormal;
 use group::{fit_group, groups};
 
 /// The parameters practically identifiable from h or tip data (book/src/model.md, "Facts that

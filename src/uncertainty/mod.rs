@@ -19,6 +19,7 @@ use std::path::{Path, PathBuf};
 use nalgebra::{DMatrix, DVector};
 use serde_json::Value;
 
+use crate::identify::orthonormal;
 use crate::identify::synth::Normal;
 use crate::model::Params;
 use crate::model::params::{ParamError, parameter};
@@ -361,17 +362,7 @@ fn factor(
         }
     } else {
         // from rounded correlations: take the held directions out explicitly
-        let mut ortho: Vec<DVector<f64>> = Vec::new();
-        for v in directions {
-            let mut w = v.clone();
-            for q in &ortho {
-                w -= q * q.dot(v);
-            }
-            if w.norm() > 1e-9 {
-                ortho.push(w.normalize());
-            }
-        }
-        for q in &ortho {
+        for q in &orthonormal(directions) {
             let along = q.transpose() * &factor;
             factor -= q * along;
         }
