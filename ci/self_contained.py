@@ -16,6 +16,9 @@ of the build machine. Checked in every tracked text file:
 
 Usage: ci/self_contained.py [REPO]   (default: the repository this script lives in)
 Prints each finding as path:line: text, and exits 1 if there is any.
+       ci/self_contained.py --drop DIR   (ci/fuzz.sh, after minimizing a corpus: deletes each file
+                                         of DIR the check would refuse, such as fuzz inputs whose
+                                         bytes spell `../..`, and says how many)
 """
 import os
 import re
@@ -47,11 +50,12 @@ def inside(repo, path):
     return os.path.commonpath([repo, os.path.normpath(path)]) == repo
 
 
-def findings(repo):
+def findings(repo, files=None):
+    """Each finding in `files` (paths relative to `repo`; default: every tracked file)."""
     me = os.path.relpath(os.path.realpath(__file__), os.path.realpath(repo))
     # this file and its test name, on purpose, the patterns it looks for
     own = {me, os.path.join("tests", "python", "test_self_contained.py")}
-    for rel in tracked_files(repo):
+    for rel in tracked_files(repo) if files is None else files:
         if rel in own:
             continue
         path = os.path.join(repo, rel)
@@ -85,7 +89,24 @@ def findings(repo):
                 yield f"{rel}:{no}: {w}: {line.strip()[:160]}"
 
 
+def drop_refused(folder):
+    """Deletes the files of `folder` that `findings` refuses; returns how many."""
+    repo = subprocess.run(
+        ["git", "-C", folder, "rev-parse", "--show-toplevel"], check=True, capture_output=True,
+        text=True,
+    ).stdout.strip()
+    rels = [os.path.relpath(os.path.join(folder, f), repo) for f in os.listdir(folder)]
+    refused = {f.split(":", 1)[0] for f in findings(repo, rels)}
+    for rel in refused:
+        os.remove(os.path.join(repo, rel))
+    return len(refused)
+
+
 def main():
+    if sys.argv[1:2] == ["--drop"]:
+        folder = sys.argv[2]
+        print(f"{folder}: {drop_refused(folder)} file(s) that name paths outside the repository dropped")
+        return 0
     repo = sys.argv[1] if len(sys.argv) > 1 else os.path.join(os.path.dirname(__file__), "..")
     found = list(findings(repo))
     for f in found:

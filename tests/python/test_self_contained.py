@@ -65,3 +65,18 @@ def test_paths_that_stay_inside_are_accepted(tmp_path):
     )
     result = run_check(repo)
     assert result.returncode == 0, result.stdout + result.stderr
+
+
+def test_a_fuzz_corpus_keeps_only_inputs_the_check_accepts(tmp_path):
+    repo = make_repo(tmp_path, {"README.md": "# r\n"})
+    corpus = repo / "tests" / "fuzz" / "corpus" / "params_toml"
+    corpus.mkdir(parents=True)
+    (corpus / "climbs").write_bytes(b'k = "../../../x"\n')
+    (corpus / "plain").write_bytes(b"k = 1\n")
+    (corpus / "binary").write_bytes(b"\xff\xfe../../..\x00")
+    result = subprocess.run(
+        [sys.executable, str(CHECK), "--drop", str(corpus)], capture_output=True, text=True
+    )
+    assert result.returncode == 0, result.stdout + result.stderr
+    assert "1 file(s)" in result.stdout, result.stdout
+    assert sorted(p.name for p in corpus.iterdir()) == ["binary", "plain"]
