@@ -105,10 +105,10 @@ impl Problem<'_> {
             .collect::<Result<Vec<_>, Error>>()?;
         let mut jac = DMatrix::zeros(self.len, x.len());
         let mut row = 0;
+        let loose = self.rtol * SENSITIVITY_RTOL_FACTOR;
         for exp in self.experiments {
             let times = exp.sensed_times();
             let start = &exp.conditions.start;
-            let loose = self.rtol * SENSITIVITY_RTOL_FACTOR;
             let run = simulate_sensitive(&p, &directions, start, &exp.input, &times, loose)
                 .map_err(|source| Error::Experiment {
                     experiment: exp.name.clone(),

@@ -323,7 +323,7 @@ pub fn identify(
 }
 
 /// The held-out records `val` judged under conditions found at the fitted parameters
-/// (book/src/identify.md, "Records that start mid-run"): the last fit moved the parameters
+/// (book/src/identify.md, "The order of estimation", step 5): the last fit moved the parameters
 /// after their conditions were found, and a start mid-run found for other parameters (a
 /// creep's loaded branches, the angles) would charge the model with its stale start.
 fn validated_under_fit(
