@@ -147,6 +147,12 @@ impl Posterior {
                 (names, log, cov, false)
             }
         };
+        // found by fuzzing (tests/fuzz, identification_json): an empty matrix has no factor
+        if names.is_empty() {
+            return Err(fail(
+                "covariance: no parameter to draw (a study draws the estimated parameters)".into(),
+            ));
+        }
         for (name, &l) in names.iter().zip(&log) {
             if !estimated.contains(name) {
                 return Err(fail(format!(

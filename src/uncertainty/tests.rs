@@ -147,6 +147,12 @@ fn bad_files_are_refused_with_the_file_and_the_reason() {
     let mut v = identification(false);
     v["parameters"]["b_1"]["estimated"] = json!(false);
     assert!(msg(v).contains("covariance: b_1 is not an estimated parameter"));
+    let mut v = identification(false);
+    v["covariance"] = json!({"parameters": [], "coordinates": [], "matrix": []});
+    assert!(msg(v).contains("covariance: no parameter to draw"));
+    // as a fuzz campaign found it: rounded correlations over no parameter, nothing estimated
+    let v = json!({"correlation": {"matrix": [], "parameters": []}, "parameters": {}});
+    assert!(msg(v).contains("covariance: no parameter to draw"));
     let e = Posterior::read(Path::new("/nonexistent/identification.json")).unwrap_err();
     assert!(
         e.to_string()
