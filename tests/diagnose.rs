@@ -529,6 +529,7 @@ fn a_sensor_lag_neither_names_an_effect_nor_leaves_unexplained() {
 /// while the generator ran such a record 1.3 s past the drive it had made, then `amplifier_lag`
 /// while a refit without states kept the start the model without the delay had found.
 #[test]
+#[ignore = "long (113 s on one core): ci/bench.sh runs it"]
 fn a_delay_on_a_tip_chirp_recorded_mid_run_is_named_delay() {
     let protocol = hidden::Protocol::draw(6 * 7919 + 1);
     assert!(
@@ -580,6 +581,7 @@ fn a_hysteresis_close_to_the_noise_floor_is_named() {
 /// where its refit estimates them. (Named in its `rate_independent` form, the model is left
 /// 3.4 points below the floor on a held-out record: the plays' form is not refitted.)
 #[test]
+#[ignore = "long (197 s on one core): ci/bench.sh runs it"]
 fn a_hysteresis_on_a_staircase_recorded_mid_run_is_named() {
     let d = diagnose_drawn("hysteresis_plays", 1);
     assert_eq!(d.verdict, Verdict::Effect, "{}", d.answer());

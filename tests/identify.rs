@@ -341,13 +341,13 @@ fn a_spectrum_s_weights_reach_zero_where_the_data_want_none() {
 /// A held-out record is judged from a start found at the parameters the fit ended at
 /// (book/src/identify.md, "The order of estimation"). A diagnosis's refit finds the records'
 /// starts with the effect's states among the unknowns and fits again, in rounds that end on a
-/// fit: before, the
-/// held-out record kept the start found before that last fit, a creep's branches loaded for
-/// other weights, and the true family lost held-out fit it had earned (the protocols' benchmark,
-/// `creep_two_times` on sines at 2 ms mid-run: −2.19 points, then +7.40 with the start found
-/// again). Creep in two branches at 1 and 3 s, both 4 s records from 1.3 s into the drive, the
-/// spectrum's weights started at a quarter of them; finding the held-out start again at the
-/// fitted parameters must gain it nothing (with the stale start it gained h1 0.24 points).
+/// fit: before, the held-out record kept the start found before that last fit, a creep's
+/// branches loaded for other weights, and the true family lost held-out fit it had earned (the
+/// protocols' benchmark, `creep_two_times` on sines at 2 ms mid-run: −2.19 points, then +7.40
+/// with the start found again). Creep in two branches at 1 and 3 s, both 4 s records from 1.3 s
+/// into the drive, the spectrum's weights started at a quarter of them; finding the held-out
+/// start again at the fitted parameters must gain it nothing (with the stale start it gained h1
+/// 0.24 points).
 #[test]
 fn a_held_out_start_is_found_at_the_fitted_parameters() {
     use hasel_fmu::identify::conditions::{self, Choice, LagChoice, StartChoice};
