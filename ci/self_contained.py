@@ -51,7 +51,8 @@ def inside(repo, path):
 
 
 def findings(repo, files=None):
-    """Each finding in `files` (paths relative to `repo`; default: every tracked file)."""
+    """Each finding (path, line number, why, text) in `files` (paths relative to `repo`;
+    default: every tracked file)."""
     me = os.path.relpath(os.path.realpath(__file__), os.path.realpath(repo))
     # this file and its test name, on purpose, the patterns it looks for
     own = {me, os.path.join("tests", "python", "test_self_contained.py")}
@@ -86,7 +87,7 @@ def findings(repo, files=None):
                 ):
                     why.append(f"'{target}' leads outside the repository")
             for w in why:
-                yield f"{rel}:{no}: {w}: {line.strip()[:160]}"
+                yield rel, no, w, line.strip()[:160]
 
 
 def drop_refused(folder):
@@ -96,7 +97,7 @@ def drop_refused(folder):
         text=True,
     ).stdout.strip()
     rels = [os.path.relpath(os.path.join(folder, f), repo) for f in os.listdir(folder)]
-    refused = {f.split(":", 1)[0] for f in findings(repo, rels)}
+    refused = {rel for rel, *_ in findings(repo, rels)}
     for rel in refused:
         os.remove(os.path.join(repo, rel))
     return len(refused)
@@ -109,8 +110,8 @@ def main():
         return 0
     repo = sys.argv[1] if len(sys.argv) > 1 else os.path.join(os.path.dirname(__file__), "..")
     found = list(findings(repo))
-    for f in found:
-        print(f)
+    for rel, no, why, text in found:
+        print(f"{rel}:{no}: {why}: {text}")
     if found:
         print(f"{len(found)} reference(s) to paths outside the repository", file=sys.stderr)
         return 1
