@@ -11,7 +11,7 @@ cargo clippy -q --release --features compare --bin hasel -- -D warnings
 step "solver: hasel bench, with the library solvers beside it (diffsol, native SUNDIALS CVODE)"
 cargo run -q --release --features compare --bin hasel -- bench
 step "the diagnosis's long cases, kept out of ci/test.sh for its time (tests/diagnose.rs, ignored there)"
-cargo test -q --release --test diagnose -- --ignored
+cargo test -q --profile release-tests --test diagnose -- --ignored
 step "identification: hasel bench --identify"
 ./target/release/hasel bench --identify
 step "FMUs (FMI 2.0 and 3.0) through the Rust fmi crate (Co-Simulation; Model Exchange derivatives and Jacobian)"

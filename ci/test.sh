@@ -22,12 +22,12 @@ ensure_wine
 # readers' files, the FMI call sequences of all five FMUs) through the targets' own code, in about a
 # second; only the sanitizer's findings need a campaign (ci/fuzz.sh)
 step "Rust tests (tests/fuzz_replay.rs replays every fuzz target's committed corpus)"
-cargo test --release --all-targets
+cargo test --profile release-tests --all-targets
 step "the book (mdbook build book; tests/docs.rs above checked its links and the code's citations), the API documentation without a warning, its examples"
 ensure_mdbook
 mdbook build book
 RUSTDOCFLAGS="-D warnings" cargo doc -q --no-deps --lib
-cargo test -q --release --doc
+cargo test -q --profile release-tests --doc
 ensure_fmi_sim
 step "Python tests of the packed FMUs, the other platforms' among them"
 HASEL_PLATFORMS=required python -m pytest tests/python -q -p no:cacheprovider
