@@ -18,6 +18,12 @@ REDUCED_TARGET_DIR="$ROOT/target/reduced"
 REDUCED_LIB="$REDUCED_TARGET_DIR/$FMU_TARGET/release/libhasel_fmu.so"
 REDUCED3_TARGET_DIR="$ROOT/target/reduced-fmi3"
 REDUCED3_LIB="$REDUCED3_TARGET_DIR/$FMU_TARGET/release/libhasel_fmu.so"
+# the cargo profile of this machine's hasel command and of the Linux wheel that bundles it:
+# release, what ships; ci/test.sh sets release-tests, the profile of its Rust suite, which then
+# finds the dependencies and the library built (compiling them at both profiles cost about two
+# minutes of a fresh run)
+HOST_PROFILE="${HOST_PROFILE:-release}"
+HASEL="$ROOT/target/$HOST_PROFILE/hasel"
 
 step() { printf '\n== [%d s] %s\n' "$SECONDS" "$*"; }
 
@@ -118,20 +124,20 @@ build_fmu() {
     step "build the FMI 3.0 library against glibc 2.17 (cargo zigbuild --features fmi3)"
     seed_target_dir "$FMU3_TARGET_DIR"
     zigbuild_fmu_lib --features fmi3 --target-dir "$FMU3_TARGET_DIR"
-    step "build the hasel command"
-    cargo build --release --bin hasel
+    step "build the hasel command ($HOST_PROFILE)"
+    cargo build --profile "$HOST_PROFILE" --bin hasel
     step "pack fmu/HaselPlatform.fmu and fmu/HaselPlatform-fmi3.fmu"
-    ./target/release/hasel fmu --lib "$FMU_LIB" --lib-fmi3 "$FMU3_LIB"
+    "$HASEL" fmu --lib "$FMU_LIB" --lib-fmi3 "$FMU3_LIB"
     step "build the inverse FMU's library (feature inverse-fmu) and pack fmu/HaselInverse.fmu"
     seed_target_dir "$INVERSE_TARGET_DIR"
     zigbuild_fmu_lib --features inverse-fmu --target-dir "$INVERSE_TARGET_DIR"
-    ./target/release/hasel fmu --model inverse --lib "$INVERSE_LIB"
+    "$HASEL" fmu --model inverse --lib "$INVERSE_LIB"
     step "build the slow model's libraries (feature reduced-fmu, FMI 2.0 and 3.0) and pack fmu/HaselPlatformReduced.fmu and -fmi3.fmu"
     seed_target_dir "$REDUCED_TARGET_DIR"
     zigbuild_fmu_lib --features reduced-fmu --target-dir "$REDUCED_TARGET_DIR"
     seed_target_dir "$REDUCED3_TARGET_DIR"
     zigbuild_fmu_lib --features reduced-fmu,fmi3 --target-dir "$REDUCED3_TARGET_DIR"
-    ./target/release/hasel fmu --model reduced --lib "$REDUCED_LIB" --lib-fmi3 "$REDUCED3_LIB"
+    "$HASEL" fmu --model reduced --lib "$REDUCED_LIB" --lib-fmi3 "$REDUCED3_LIB"
 }
 
 # ---- the other platforms' libraries and commands (ci/platforms.sh; ci/test.sh builds some) ----
@@ -312,17 +318,17 @@ pack_platforms() {
     mapfile -t reduced3 < <(cross_libs reduced-fmi3 --lib-fmi3)
     mapfile -t inverse < <(cross_libs inverse --lib)
     step "pack fmu/HaselPlatform.fmu and fmu/HaselPlatform-fmi3.fmu with every platform's library built"
-    ./target/release/hasel fmu --lib "$FMU_LIB" "${v2[@]}" --lib-fmi3 "$FMU3_LIB" "${v3[@]}"
+    "$HASEL" fmu --lib "$FMU_LIB" "${v2[@]}" --lib-fmi3 "$FMU3_LIB" "${v3[@]}"
     step "pack fmu/HaselPlatformReduced.fmu and fmu/HaselPlatformReduced-fmi3.fmu with every platform's library built"
-    ./target/release/hasel fmu --model reduced --lib "$REDUCED_LIB" "${reduced[@]}" \
+    "$HASEL" fmu --model reduced --lib "$REDUCED_LIB" "${reduced[@]}" \
         --lib-fmi3 "$REDUCED3_LIB" "${reduced3[@]}"
     step "pack fmu/HaselInverse.fmu with every platform's library built"
-    ./target/release/hasel fmu --model inverse --lib "$INVERSE_LIB" "${inverse[@]}"
+    "$HASEL" fmu --model inverse --lib "$INVERSE_LIB" "${inverse[@]}"
 }
 
 # build_wheel [TRIPLE]: the Python wheel (python/pyproject.toml, maturin) of the hasel command and
 # the FMUs in fmu/, into target/wheels: for Linux from build_fmu's build of the command (cargo finds
-# it fresh), for TRIPLE from cross_build's (cli, the same profile and environment).
+# it fresh, HOST_PROFILE), for TRIPLE from cross_build's (cli, the same profile and environment).
 build_wheel() {
     local args=() env=()
     ensure_venv
@@ -331,7 +337,7 @@ build_wheel() {
         mapfile -t env < <(cross_env "$1")
         args=(--target "$1" -Z build-std=std,panic_unwind --target-dir "$CROSS_BUILD_DIR" --profile "$CROSS_PROFILE")
     else
-        args=(--release)
+        args=(--profile "$HOST_PROFILE")
     fi
     mkdir -p python/hasel_fmu/fmu
     cp fmu/HaselPlatform.fmu fmu/HaselPlatform-fmi3.fmu fmu/HaselPlatformReduced.fmu \

@@ -7,6 +7,9 @@
 # profile cross-test (Cargo.toml says why; CROSS_PROFILE=release tests the shipping build), the
 # Windows ones run under Wine, the macOS ones checked, the Linux wheel installed.
 CROSS_PROFILE="${CROSS_PROFILE:-cross-test}"
+# the hasel command (and the Linux wheel) at the Rust suite's profile, so that the suite builds on
+# them (ci/lib.sh, HOST_PROFILE); the Python tests run that command (HASEL)
+HOST_PROFILE="${HOST_PROFILE:-release-tests}"
 source "$(dirname "${BASH_SOURCE[0]}")/lib.sh"
 step "the repository refers to nothing outside it (ci/self_contained.py)"
 python3 ci/self_contained.py
@@ -30,4 +33,4 @@ RUSTDOCFLAGS="-D warnings" cargo doc -q --no-deps --lib
 cargo test -q --profile release-tests --doc
 ensure_fmi_sim
 step "Python tests of the packed FMUs, the other platforms' among them"
-HASEL_PLATFORMS=required python -m pytest tests/python -q -p no:cacheprovider
+HASEL="$HASEL" HASEL_PLATFORMS=required python -m pytest tests/python -q -p no:cacheprovider

@@ -39,12 +39,10 @@ def client():
 
 
 @pytest.fixture(scope="module")
-def identification(tmp_path_factory):
+def identification(tmp_path_factory, hasel_path):
     """A small synthetic identification: 2 s of the paper's sine at 10 ms, 1 % noise, the twelve
     default parameters estimated (two combinations held) from the true (default) values."""
-    hasel = pathlib.Path(os.environ.get("HASEL_BIN", ROOT / "target" / "release" / "hasel"))
-    if not hasel.exists():
-        pytest.fail(f"{hasel} is missing: build it with `cargo build --release` first")
+    hasel = hasel_path
     d = tmp_path_factory.mktemp("identification")
     for args in (["synth", "--t-end", "2", "--dt", "1e-2", "--noise", "0.01", "--seed", "3", "--out", str(d / "est.csv")],
                  ["identify", str(d / "est.csv"), "--out", str(d / "fit")]):
