@@ -89,8 +89,8 @@ struct Follower<'a> {
     same_map: Vec<bool>,
     sens: Sensitivities,
     s: Vec<f64>,
-    /// ∂g/∂x, 6 × n.
-    dg: Vec<f64>,
+    /// ∂g/∂x as its entries (output, state, value): a dozen of 6 × n, the heights' angles
+    dg: Vec<(usize, usize, f64)>,
     out: Sensitive,
 }
 
@@ -116,12 +116,16 @@ impl Observer for Follower<'_> {
         let n = x.len();
         self.sens.interpolate(sample.t, &mut self.s);
         // ∂y/∂θ = ∂g/∂x s + ∂g/∂θ (the outputs' own dependence, for a geometric parameter)
-        self.base.output_jacobian(x, &mut self.dg);
+        self.dg.clear();
+        self.base
+            .output_jacobian_entries(x, |o, c, v| self.dg.push((o, c, v)));
         let y = self.base.outputs(x);
         for (j, (model, step)) in self.models.iter().zip(self.steps).enumerate() {
             let s = &self.s[j * n..(j + 1) * n];
-            let mut d: [f64; 6] =
-                std::array::from_fn(|o| (0..n).map(|c| self.dg[c * 6 + o] * s[c]).sum::<f64>());
+            let mut d = [0.0; 6];
+            for &(o, c, v) in &self.dg {
+                d[o] += v * s[c];
+            }
             if !self.same_map[j] {
                 let yj = model.outputs(x);
                 for o in 0..6 {
@@ -187,7 +191,7 @@ pub fn simulate_sensitive(
         same_map: models.iter().map(|m| base.same_output_map(m)).collect(),
         sens: Sensitivities::new(n, models.len(), t0, &s0),
         s: vec![0.0; n * models.len()],
-        dg: vec![0.0; 6 * n],
+        dg: Vec::new(),
         out: Sensitive {
             samples: Vec::with_capacity(times.len()),
             directions: models.len(),
