@@ -77,6 +77,39 @@ pub struct Samples {
     steps: Vec<usize>,
 }
 
+impl Samples {
+    /// The number of samples at or before `t`, as `t.partition_point(|tk| tk <= t)`, searched
+    /// outward from where even sampling puts `t`: the solver asks at every stage, and bisecting a
+    /// long record there took a twentieth of a diagnosis.
+    fn count_until(&self, t: f64) -> usize {
+        let ts = &self.t;
+        let n = ts.len();
+        let (Some(&first), Some(&last)) = (ts.first(), ts.last()) else {
+            return 0;
+        };
+        // `as` saturates: a time before the record (or NaN) guesses 0, after it n − 1
+        let g = ((t - first) / (last - first) * (n - 1) as f64) as usize;
+        let g = g.min(n - 1);
+        // widen by doubling steps to an interval that holds the answer, then bisect it
+        let (lo, hi) = if ts[g] <= t {
+            let (mut lo, mut step) = (g + 1, 1);
+            while lo + step <= n && ts[lo + step - 1] <= t {
+                lo += step;
+                step *= 2;
+            }
+            (lo, (lo + step).min(n))
+        } else {
+            let (mut hi, mut step) = (g, 1);
+            while hi >= step && ts[hi - step] > t {
+                hi -= step;
+                step *= 2;
+            }
+            (hi.saturating_sub(step), hi)
+        };
+        lo + ts[lo..hi].partition_point(|&tk| tk <= t)
+    }
+}
+
 /// The three actuator voltages over time \[V\].
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub enum Input {
@@ -223,7 +256,7 @@ impl Input {
         };
         let (ts, u) = (&s.t, &s.u);
         // index of the sample interval [t_k, t_{k+1}) containing t
-        let k = ts.partition_point(|&tk| tk <= t);
+        let k = s.count_until(t);
         if k == 0 {
             return (Piece::Constant(u[0]), ts[0]);
         }
@@ -403,7 +436,7 @@ impl Piece<'_> {
                 m1,
             } => hermite((t - t0) / h, h, u0, u1, m0, m1),
             Piece::Spline(s) => {
-                let k = s.t.partition_point(|&tk| tk <= t).clamp(1, s.t.len() - 1) - 1;
+                let k = s.count_until(t).clamp(1, s.t.len() - 1) - 1;
                 let h = s.t[k + 1] - s.t[k];
                 hermite(
                     (t - s.t[k]) / h,
@@ -421,6 +454,37 @@ impl Piece<'_> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The search from the guess finds what bisection finds: on even and uneven sampling
+    /// (rows dropped, a jitter), at, between, before and after the samples.
+    #[test]
+    fn a_sample_is_found_as_bisection_finds_it() {
+        let even: Vec<f64> = (0..1000).map(|k| 1.62 + k as f64 * 1e-3).collect();
+        let uneven: Vec<f64> = (0..1000)
+            .filter(|k| k % 7 != 3 && !(400..460).contains(k))
+            .map(|k| k as f64 * 1e-3 + 3e-4 * ((k * k) % 5) as f64 / 5.0)
+            .collect();
+        for t in [even, uneven] {
+            let u = vec![[0.0; 3]; t.len()];
+            let Input::Sampled(s) = Input::sampled(t.clone(), u, Interpolation::Linear).unwrap()
+            else {
+                unreachable!()
+            };
+            let (a, b) = (t[0] - 0.1, t[t.len() - 1] + 0.1);
+            let probes = (0..=20_000).map(|k| a + (b - a) * k as f64 / 20_000.0);
+            for x in
+                probes
+                    .chain(t.iter().copied())
+                    .chain([f64::NAN, f64::INFINITY, f64::NEG_INFINITY])
+            {
+                assert_eq!(
+                    s.count_until(x),
+                    t.partition_point(|&tk| tk <= x),
+                    "t = {x}"
+                );
+            }
+        }
+    }
 
     /// A measured staircase replays as steps: held across each, the integrator stopping at the
     /// sample after it; a sine sampled the same way stays one spline.
