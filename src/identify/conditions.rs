@@ -275,7 +275,7 @@ pub fn estimate(
         };
         let sol = lm::minimize(&problem, &z0, &lo, &hi, &opts)?;
         let lag_se = estimate_lag
-            .then(|| lag_standard_error(&problem, &sol.x, sol.cost, opts.threads))
+            .then(|| lag_standard_error(&problem, &sol.x, sol.cost, lm::share()))
             .transpose()?
             .flatten();
         (problem.conditions(&sol.x), lag_se)

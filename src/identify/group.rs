@@ -8,7 +8,7 @@ use super::experiment::{Channel, Experiment};
 use super::{Error, Hold, Options, lm, simulate};
 use crate::model::Params;
 use crate::model::params::{ParamDef, Rule};
-use crate::simulation::sensitivity::{Direction, simulate_sensitive};
+use crate::simulation::sensitivity::{Direction, Sensitive, simulate_sensitive};
 
 /// How a parameter is moved by the optimiser: in log space when it must be positive.
 #[derive(Clone, Copy)]
@@ -105,15 +105,11 @@ impl Problem<'_> {
             .collect::<Result<Vec<_>, Error>>()?;
         let mut jac = DMatrix::zeros(self.len, x.len());
         let mut row = 0;
-        let loose = self.rtol * SENSITIVITY_RTOL_FACTOR;
+        // the directions in as many parts as the cores this fit may take now, a run each: each
+        // direction's sensitivities are the same whichever run carries it
+        let part = directions.len().div_ceil(lm::share()).max(1);
         for exp in self.experiments {
-            let times = exp.sensed_times();
-            let start = &exp.conditions.start;
-            let run = simulate_sensitive(&p, &directions, start, &exp.input, &times, loose)
-                .map_err(|source| Error::Experiment {
-                    experiment: exp.name.clone(),
-                    source,
-                })?;
+            let runs = self.sensitive_runs(&p, &directions, part, exp)?;
             self.counter
                 .fetch_add(1, std::sync::atomic::Ordering::Relaxed);
             for &c in &self.channels {
@@ -124,7 +120,7 @@ impl Problem<'_> {
                     };
                     for k in 0..exp.t.len() {
                         for j in 0..x.len() {
-                            jac[(row, j)] = run.output(k, j)[o];
+                            jac[(row, j)] = runs[j / part].output(k, j % part)[o];
                         }
                         row += 1;
                     }
@@ -132,6 +128,39 @@ impl Problem<'_> {
             }
         }
         Ok(jac)
+    }
+
+    /// The sensitive simulations of `exp` at `p`, one per `part` directions, side by side.
+    fn sensitive_runs(
+        &self,
+        p: &Params,
+        directions: &[Direction],
+        part: usize,
+        exp: &Experiment,
+    ) -> Result<Vec<Sensitive>, Error> {
+        let times = exp.sensed_times();
+        let run = |d: &[Direction]| {
+            let loose = self.rtol * SENSITIVITY_RTOL_FACTOR;
+            simulate_sensitive(p, d, &exp.conditions.start, &exp.input, &times, loose).map_err(
+                |source| Error::Experiment {
+                    experiment: exp.name.clone(),
+                    source,
+                },
+            )
+        };
+        if part >= directions.len() {
+            return Ok(vec![run(directions)?]);
+        }
+        std::thread::scope(|s| {
+            let handles: Vec<_> = directions
+                .chunks(part)
+                .map(|d| s.spawn(move || run(d)))
+                .collect();
+            handles
+                .into_iter()
+                .map(|h| h.join().expect("a sensitive simulation does not panic"))
+                .collect()
+        })
     }
 }
 
@@ -399,6 +428,8 @@ pub(super) fn fit_group(
     let n = defs.len();
     let len = residual_count(group, experiments);
     let coords = Coordinate::of(defs, base);
+    // counted among the fits running while it runs: their Jacobians share the cores
+    let _running = lm::running();
     let problem = Problem::new(base, &coords, group, experiments, opts.rtol, len);
     // for the covariance: tighter simulations (see `polish`)
     let precise = Problem::new(
@@ -711,7 +742,7 @@ fn polish(
 ) -> Result<Polished, Error> {
     let m = z.len();
     let mut r = lm::evaluate(sharp, &z)?;
-    let mut j = polish_jacobian(sharp, &z, opts.lm.threads)?;
+    let mut j = polish_jacobian(sharp, &z, lm::share())?;
     for _ in 0..GN_POLISH {
         lm::check_deadline(opts.lm.deadline)?;
         let Some(step) = (j.transpose() * &j)
@@ -727,7 +758,7 @@ fn polish(
         match lm::evaluate(sharp, &z_new) {
             Ok(r_new) if r_new.norm_squared() < r.norm_squared() => {
                 (z, r) = (z_new, r_new);
-                j = polish_jacobian(sharp, &z, opts.lm.threads)?;
+                j = polish_jacobian(sharp, &z, lm::share())?;
                 if step.amax() < 1e-8 {
                     break;
                 }

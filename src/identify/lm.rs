@@ -4,6 +4,7 @@
 //! held at its bound while the descent pushes it outward (an active set), so the others are not
 //! solved for a move it cannot make.
 
+use std::sync::atomic::{AtomicUsize, Ordering};
 use std::time::Instant;
 
 use nalgebra::{DMatrix, DVector};
@@ -35,7 +36,6 @@ pub struct Options {
     pub xtol: f64,
     /// Forward-difference step in x.
     pub fd_step: f64,
-    pub threads: usize,
     /// Give up with [`Error::TimeBudget`] when an iteration would begin after this instant.
     pub deadline: Option<Instant>,
 }
@@ -47,10 +47,37 @@ impl Default for Options {
             ftol: 1e-10,
             xtol: 1e-8,
             fd_step: 1e-6,
-            threads: std::thread::available_parallelism().map_or(1, |n| n.get()),
             deadline: None,
         }
     }
+}
+
+/// Fits running in this process (see [`running`]).
+static RUNNING: AtomicUsize = AtomicUsize::new(0);
+
+/// Counts a fit as running while the guard lives: the Jacobians of the fits running at once
+/// share the machine's cores (see [`share`]).
+pub fn running() -> Running {
+    RUNNING.fetch_add(1, Ordering::Relaxed);
+    Running
+}
+
+/// A fit counted as running (see [`running`]).
+pub struct Running;
+
+impl Drop for Running {
+    fn drop(&mut self) {
+        RUNNING.fetch_sub(1, Ordering::Relaxed);
+    }
+}
+
+/// Threads a Jacobian may use now: the machine's cores over the fits running in this process,
+/// at least one. A diagnosis refits its candidates side by side, one core each, and the last
+/// left takes every core; two diagnoses at once (the test suite's threads) keep to one each.
+/// How many threads compute a Jacobian changes when it is ready, never its values.
+pub fn share() -> usize {
+    let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+    (cores / RUNNING.load(Ordering::Relaxed).max(1)).max(1)
 }
 
 /// The minimiser's result: the point, its residuals, and the work done.
@@ -134,7 +161,7 @@ pub fn jacobian(
     hi: &[f64],
     opts: &Options,
 ) -> Result<DMatrix<f64>, Error> {
-    assemble(r.len(), x.len(), opts.threads, |j| {
+    assemble(r.len(), x.len(), share(), |j| {
         let h = opts.fd_step * x[j].abs().max(1.0);
         let mut xp = x.to_vec();
         let forward = x[j] + h <= hi[j];
