@@ -139,8 +139,8 @@ impl Problem<'_> {
         exp: &Experiment,
     ) -> Result<Vec<Sensitive>, Error> {
         let times = exp.sensed_times();
+        let loose = self.rtol * SENSITIVITY_RTOL_FACTOR;
         let run = |d: &[Direction]| {
-            let loose = self.rtol * SENSITIVITY_RTOL_FACTOR;
             simulate_sensitive(p, d, &exp.conditions.start, &exp.input, &times, loose).map_err(
                 |source| Error::Experiment {
                     experiment: exp.name.clone(),

@@ -4,6 +4,7 @@
 //! held at its bound while the descent pushes it outward (an active set), so the others are not
 //! solved for a move it cannot make.
 
+use std::sync::OnceLock;
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::time::Instant;
 
@@ -59,11 +60,11 @@ static RUNNING: AtomicUsize = AtomicUsize::new(0);
 /// share the machine's cores (see [`share`]).
 pub fn running() -> Running {
     RUNNING.fetch_add(1, Ordering::Relaxed);
-    Running
+    Running(())
 }
 
-/// A fit counted as running (see [`running`]).
-pub struct Running;
+/// A fit counted as running (see [`running`]); made only there, so that every drop undoes a count.
+pub struct Running(());
 
 impl Drop for Running {
     fn drop(&mut self) {
@@ -76,7 +77,9 @@ impl Drop for Running {
 /// left takes every core; two diagnoses at once (the test suite's threads) keep to one each.
 /// How many threads compute a Jacobian changes when it is ready, never its values.
 pub fn share() -> usize {
-    let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+    // asked once: on Linux the answer reads the cgroup's files, and every Jacobian asks
+    static CORES: OnceLock<usize> = OnceLock::new();
+    let cores = *CORES.get_or_init(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
     (cores / RUNNING.load(Ordering::Relaxed).max(1)).max(1)
 }
 
