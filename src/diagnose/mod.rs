@@ -76,10 +76,18 @@ const FORM_RUNNER_UP: f64 = 0.8;
 /// stand-in (a delay for an amplifier lag).
 const REFIT_ITERATIONS: usize = 100;
 
+/// The screening is blind below this share of the disagreement beyond the noise ([`refit_plan`]).
+const BLIND_SCREENING: f64 = 0.2;
+
+/// Where the screening is blind, the score relative to the best that a candidate needs to be
+/// refitted beyond the usual number.
+const BLIND_RUNNER_UP: f64 = 0.5;
+
 /// Settings of a diagnosis.
 #[derive(Clone, Debug)]
 pub struct Options {
-    /// Candidates refitted in each round, the best scores of the screening.
+    /// Candidates refitted in each round, the best scores of the screening (more where the
+    /// screening is blind: `refit_plan`).
     pub refits: usize,
     /// Effects added at most.
     pub max_effects: usize,
@@ -688,11 +696,18 @@ type PlannedRefit = (usize, &'static Form, Vec<(&'static str, f64)>);
 /// `refits` best candidates and, for the best candidate, each other form the screening could
 /// not tell from its best (the family that most likely wins is the one whose form is reported;
 /// the others' forms only compete for second place).
-fn refit_plan(candidates: &[Candidate], refits: usize) -> Vec<PlannedRefit> {
+/// Where the screening is blind (its best score is less than [`BLIND_SCREENING`] of the
+/// residual's share beyond the noise, `excess_share`), every candidate scoring at least
+/// [`BLIND_RUNNER_UP`] of the best: scores that see almost none of a large disagreement do not
+/// rank the families (a load a refit finds at a base parameter's bound scores as low as those
+/// that explain nothing).
+fn refit_plan(candidates: &[Candidate], refits: usize, excess_share: f64) -> Vec<PlannedRefit> {
+    let best = candidates.first().map_or(0.0, |c| c.score);
+    let blind = best < BLIND_SCREENING * excess_share;
     let mut plan: Vec<_> = candidates
         .iter()
         .enumerate()
-        .take(refits)
+        .take_while(|(k, c)| *k < refits || (blind && c.score >= BLIND_RUNNER_UP * best))
         .map(|(k, c)| (k, c.form, c.start.clone()))
         .collect();
     if let Some(c) = candidates.first() {
@@ -921,7 +936,8 @@ impl Search {
             t0.elapsed().as_secs_f64(),
         ));
         let t0 = Instant::now();
-        let plan = refit_plan(&candidates, opts.refits);
+        let excess = pooled_excess(&now);
+        let plan = refit_plan(&candidates, opts.refits, excess / (1.0 + excess));
         let refits = refit_all(
             &plan,
             &self.forms,
@@ -1633,6 +1649,45 @@ mod tests {
             ]),
             Decision::Tie(1, 0)
         );
+    }
+
+    /// A screening that sees a large disagreement refits the usual best; one that sees almost
+    /// none of it (the scores of `preload` seed 2 of the suite) refits every score near the best.
+    #[test]
+    fn a_blind_screening_refits_every_score_near_the_best() {
+        let scored = |effect: Effect, score: f64| Candidate {
+            effect,
+            form: Form::library(effect),
+            score,
+            start: Vec::new(),
+            alternatives: Vec::new(),
+            forms_tried: Vec::new(),
+            refit: None,
+            refit_error: None,
+        };
+        let scores = [
+            (Effect::Hysteresis, 0.013),
+            (Effect::Coupling, 0.010),
+            (Effect::Creep, 0.010),
+            (Effect::Preload, 0.008),
+            (Effect::ChargeDrift, 0.005),
+            (Effect::Stiffening, 0.002),
+        ];
+        let candidates: Vec<_> = scores.iter().map(|&(e, s)| scored(e, s)).collect();
+        let planned = |excess_share| -> Vec<usize> {
+            refit_plan(&candidates, 3, excess_share)
+                .iter()
+                .map(|p| p.0)
+                .collect()
+        };
+        // excess over the noise of 33 %: a share of 0.25, of which the best score sees 5 %
+        assert_eq!(planned(0.25), [0, 1, 2, 3]);
+        // a disagreement the best score sees a quarter of
+        assert_eq!(planned(0.052), [0, 1, 2]);
+        // a clear best is not blind, however small the scores below it
+        let mut clear = candidates;
+        clear[0].score = 0.2;
+        assert_eq!(refit_plan(&clear, 3, 0.25).len(), 3);
     }
 
     /// Near the noise floor a first effect is asked half the gap, a later one [`MIN_GAIN`].

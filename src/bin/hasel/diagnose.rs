@@ -26,7 +26,8 @@ pub struct Args {
     /// How far the base parameters Kb, b, gamma1, gamma2 may move from the start (a factor)
     #[arg(long, default_value_t = 2.0)]
     base_range: f64,
-    /// Candidates refitted in each round (the best screening scores)
+    /// Candidates refitted in each round (the best screening scores; more where the scores see
+    /// almost none of the disagreement)
     #[arg(long, default_value_t = 3)]
     refits: usize,
     /// Seconds one candidate's refit may take; a refit that runs out of time fails the
