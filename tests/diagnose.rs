@@ -203,8 +203,8 @@ fn preload_is_named() {
     named(Effect::Preload, 1);
 }
 
-/// The suite's `preload` seed 2: the base fit took the load up with two parameters at a bound
-/// of their range, and the screening scores it fourth, at 1 % of a residual 33 % over the noise;
+/// The suite's `preload` seed 2: the base fit took the load up with four parameters at a bound
+/// of their range, and the screening scores it fourth (0.008) on a residual 33 % over the noise;
 /// a screening that blind refits every score near its best (book/src/diagnose.md, "Screening").
 #[test]
 fn a_load_the_screening_hardly_sees_is_named() {
