@@ -66,12 +66,12 @@ for target in "${TARGETS[@]}"; do
       echo "$status" >"out/fuzz-$target.status"; } | tee "out/fuzz-$target.log" |
         grep -E '^(#[0-9]+.*(DONE|pulse)|stat::|==[0-9]+==ERROR|SUMMARY|artifact_prefix|Test unit written)' || true
     fuzz_status="$(cat "out/fuzz-$target.status")"
+    bin="tests/fuzz/target/x86_64-unknown-linux-gnu/release/$target"
     # a slow unit (libFuzzer writes one above 10 s) is no finding: the bound is -timeout, and on a
     # shared core a 0.3 s sequence took that long; each is replayed here, its time printed
     for slow in "tests/fuzz/artifacts/$target"/slow-unit-*; do
         [ -e "$slow" ] || continue
-        took="$( { TIMEFORMAT=%R; time "tests/fuzz/target/x86_64-unknown-linux-gnu/release/$target" \
-            -runs=1 "$slow" >/dev/null 2>&1; } 2>&1)"
+        took="$( { TIMEFORMAT=%R; time "$bin" -runs=1 "$slow" >/dev/null 2>&1; } 2>&1)"
         echo "fuzz $target: slow unit $slow replays in $took s (the bound is $timeout s)"
     done
     if grep -qE '==[0-9]+==ERROR|^SUMMARY|Test unit written to [^ ]*/(crash|leak|timeout|oom)-|deadly signal|panicked at' "out/fuzz-$target.log"; then
@@ -85,7 +85,6 @@ for target in "${TARGETS[@]}"; do
     echo "fuzz $target: no crash, no broken promise, no memory error, no leak, no hang in $SECONDS_TO_RUN s"
     # minimized by the binary just run (libFuzzer's -merge=1, what `cargo fuzz cmin` does):
     # `cargo fuzz cmin` builds with other settings than `run` and rebuilt the library each time
-    bin="tests/fuzz/target/x86_64-unknown-linux-gnu/release/$target"
     rm -rf "$corpus.min" && mkdir "$corpus.min"
     nice -n 19 "$bin" -merge=1 -timeout="$timeout" -rss_limit_mb=1024 "$corpus.min" "$corpus" \
         >"out/cmin-$target.log" 2>&1

@@ -696,6 +696,7 @@ type PlannedRefit = (usize, &'static Form, Vec<(&'static str, f64)>);
 /// `refits` best candidates and, for the best candidate, each other form the screening could
 /// not tell from its best (the family that most likely wins is the one whose form is reported;
 /// the others' forms only compete for second place).
+///
 /// Where the screening is blind (its best score is less than [`BLIND_SCREENING`] of the
 /// residual's share beyond the noise, `excess_share`), every candidate scoring at least
 /// [`BLIND_RUNNER_UP`] of the best: scores that see almost none of a large disagreement do not
@@ -923,7 +924,8 @@ impl Search {
     ) -> Result<bool, Error> {
         let (estimation, held) = ordered.split_at(1);
         let now = disagreements(ordered, &self.current)?;
-        if pooled_excess(&now) < NOISE_FLOOR_EXCESS {
+        let excess = pooled_excess(&now);
+        if excess < NOISE_FLOOR_EXCESS {
             return Ok(false);
         }
         if !self.effects.is_empty() && worst_gap_to_floor(held, &self.current) <= AT_FLOOR {
@@ -936,7 +938,6 @@ impl Search {
             t0.elapsed().as_secs_f64(),
         ));
         let t0 = Instant::now();
-        let excess = pooled_excess(&now);
         let plan = refit_plan(&candidates, opts.refits, excess / (1.0 + excess));
         let refits = refit_all(
             &plan,
