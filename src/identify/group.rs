@@ -493,17 +493,26 @@ pub(super) fn fit_group(
         };
         let polished = polish(&sharp, sol.x.clone(), (&z_lo, &z_hi), opts)?;
         let x = sharp.x_of(&polished.z);
-        let (jtj, cov_z) = sandwich_covariance(
-            &polished.jacobian,
-            &polished.residuals,
-            experiments,
-            &group.channels,
-        );
-        if let Some((v, reason)) = worst_direction(cov_z.as_ref(), jtj, &basis, &coords) {
-            held.push(snapped_to_single(v).normalize());
-            reasons.push(reason);
-            if opts.hold == Hold::Reached {
-                anchor = x.clone();
+        let covariance = |j: &DMatrix<f64>| {
+            sandwich_covariance(j, &polished.residuals, experiments, &group.channels)
+        };
+        let (jtj, cov_z) = covariance(&polished.jacobian);
+        if let Some(worst) = worst_direction(cov_z.as_ref(), jtj, &basis, &coords) {
+            let first = (snapped_to_single(worst.0).normalize(), worst.1);
+            // held where the fit reached, the point stays: what the data leave undetermined
+            // beside it is judged there at once; held at the start, the point moves back
+            // along it, and the next is judged after a fit from there
+            let found = match opts.hold {
+                Hold::Reached => {
+                    anchor = x.clone();
+                    let at = (&polished.jacobian, &basis, held.as_slice());
+                    hold_undetermined(first, at, &coords, covariance)
+                }
+                Hold::Start => vec![first],
+            };
+            for (v, reason) in found {
+                held.push(v);
+                reasons.push(reason);
             }
             x_last = x;
             continue;
@@ -543,6 +552,37 @@ fn optimise(
     *iterations += sol.iterations;
     *out_of_budget |= !sol.converged && left < lm_opts.max_iterations && sol.iterations == left;
     Ok(sol)
+}
+
+/// The directions to hold where a fit reached, `first` (the worst-determined, with its reason)
+/// and each one the data then leave undetermined in turn, judged on the conditional covariance
+/// at the same point: the Jacobian `j` (in the coordinates of `basis`, beside the directions
+/// `held` before) restricted to what the directions held so far leave (book/src/identify.md,
+/// "Parameters the data do not determine"). Holding one at a time, a fit and a polish ran
+/// before each next, and moved the point by a few iterations at most.
+fn hold_undetermined(
+    first: (DVector<f64>, String),
+    (j, basis, held): (&DMatrix<f64>, &DMatrix<f64>, &[DVector<f64>]),
+    coords: &[Coordinate],
+    covariance: impl Fn(&DMatrix<f64>) -> (DMatrix<f64>, Option<DMatrix<f64>>),
+) -> Vec<(DVector<f64>, String)> {
+    // the Jacobian in the parameters' coordinates, on the span of `basis` (orthonormal columns)
+    let j_x = j * basis.transpose();
+    let mut found = vec![first];
+    loop {
+        let all: Vec<DVector<f64>> = (held.iter().cloned())
+            .chain(found.iter().map(|f| f.0.clone()))
+            .collect();
+        let rest = complement(coords.len(), &all);
+        if rest.ncols() == 0 {
+            return found;
+        }
+        let (jtj, cov) = covariance(&(&j_x * &rest));
+        match worst_direction(cov.as_ref(), jtj, &rest, coords) {
+            Some((v, reason)) => found.push((snapped_to_single(v).normalize(), reason)),
+            None => return found,
+        }
+    }
 }
 
 /// `v`, or where it lies mostly along one parameter exactly that parameter's axis: it holds
