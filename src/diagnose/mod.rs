@@ -35,7 +35,7 @@ use std::collections::BTreeMap;
 use std::time::{Duration, Instant};
 
 use crate::identify::conditions::{Choice, LagChoice, StartChoice};
-use crate::identify::{self, Experiment, FIT_RTOL, Hold, Identification, Options as IdOptions};
+use crate::identify::{self, Experiment, FIT_RTOL, Hold, Identification, Options as IdOptions, lm};
 use crate::model::effects::{FittedLaw, Form, Magnitude, Probe};
 use crate::model::params::{Rule, parameter};
 use crate::model::{Effect, Params};
@@ -778,6 +778,12 @@ pub fn diagnose(
         // what the fit had gained along it (book/src/identify.md)
         hold: Hold::Reached,
         conditions: Some(refit_conditions(forms)),
+        // a refit competes: the polish after its fit, on the sensitivities of tighter
+        // simulations, confirms where it stopped well enough to rank it (book/src/identify.md)
+        lm: lm::Options {
+            confirm: false,
+            ..IdOptions::default().lm
+        },
         ..IdOptions::default()
     };
     // the paper's model fitted to convergence: every candidate is judged against it
@@ -790,6 +796,7 @@ pub fn diagnose(
             // as `hasel identify` fits it: what the data leave open stays at the prior
             hold: Hold::Start,
             conditions: Some(opts.conditions),
+            lm: IdOptions::default().lm,
             ..id_opts(&[])
         },
     )?;

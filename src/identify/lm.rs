@@ -39,6 +39,10 @@ pub struct Options {
     pub fd_step: f64,
     /// Give up with [`Error::TimeBudget`] when an iteration would begin after this instant.
     pub deadline: Option<Instant>,
+    /// Whether convergence on the problem's own Jacobian is confirmed on differences of the
+    /// residuals (a simulation per parameter). A fit that only competes (a diagnosis's refit)
+    /// does without: the polish after it goes on along the sensitivities of tighter simulations.
+    pub confirm: bool,
 }
 
 impl Default for Options {
@@ -49,6 +53,7 @@ impl Default for Options {
             xtol: 1e-8,
             fd_step: 1e-6,
             deadline: None,
+            confirm: true,
         }
     }
 }
@@ -237,7 +242,7 @@ pub fn minimize(
     evaluations += spent;
     while iterations < opts.max_iterations {
         if converged {
-            if !own {
+            if !own || !opts.confirm {
                 break;
             }
             // convergence is confirmed on differences of the residuals themselves: the
