@@ -784,7 +784,6 @@ pub fn diagnose(
             confirm: false,
             ..IdOptions::default().lm
         },
-        ..IdOptions::default()
     };
     // the paper's model fitted to convergence: every candidate is judged against it
     let base = identify::identify(
