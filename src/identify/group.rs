@@ -236,6 +236,10 @@ const COVARIANCE_FD_STEP: f64 = 1e-3;
 /// which no decision drawn from the fit can see (a BIC moves by 0.01).
 const NOISE_TELL: f64 = 0.01;
 
+/// A parameter's axis is held when the basis of what the held directions leave reaches it by
+/// less than this.
+const HELD: f64 = 1e-9;
+
 /// Gauss–Newton iterations at most in the polish.
 const GN_POLISH: usize = 10;
 
@@ -579,7 +583,14 @@ fn hold_undetermined(
         }
         let (jtj, cov) = covariance(&(&j_x * &rest));
         match worst_direction(cov.as_ref(), jtj, &rest, coords) {
-            Some((v, reason)) => found.push((snapped_to_single(v).normalize(), reason)),
+            // one held already but for rounding: judged again after the next fit
+            Some((v, reason)) => {
+                let v = snapped_to_single(v).normalize();
+                if (rest.transpose() * &v).norm() <= HELD {
+                    return found;
+                }
+                found.push((v, reason));
+            }
             None => return found,
         }
     }
@@ -875,8 +886,10 @@ fn worst_direction(
             ))
         }
         Some(cov) => {
+            // a parameter held alone has no variance but the rounding of `basis`, which a
+            // direction the data leave undetermined beside it would lend it
             let judged: Vec<usize> = (0..n)
-                .filter(|&i| coords[i].def.rule != Rule::Weight)
+                .filter(|&i| coords[i].def.rule != Rule::Weight && basis.row(i).norm() > HELD)
                 .collect();
             let cov_x = basis * cov * basis.transpose();
             let eig = (!judged.is_empty()).then(|| {
