@@ -501,8 +501,7 @@ pub(super) fn fit_group(
             sandwich_covariance(j, &polished.residuals, experiments, &group.channels)
         };
         let (jtj, cov_z) = covariance(&polished.jacobian);
-        if let Some(worst) = worst_direction(cov_z.as_ref(), jtj, &basis, &coords) {
-            let first = (snapped_to_single(worst.0).normalize(), worst.1);
+        if let Some(first) = next_to_hold(cov_z.as_ref(), jtj, &basis, &coords) {
             // held where the fit reached, the point stays: what the data leave undetermined
             // beside it is judged there at once; held at the start, the point moves back
             // along it, and the next is judged after a fit from there
@@ -521,6 +520,7 @@ pub(super) fn fit_group(
             x_last = x;
             continue;
         }
+        // (where JᵀJ is singular, its weakest direction lies in what `basis` spans: held above)
         let cov = cov_z.expect("checked above");
         let cov_x = &basis * cov * basis.transpose();
         let report = held_report(&held, &reasons, &coords, opts.hold);
@@ -582,18 +582,25 @@ fn hold_undetermined(
             return found;
         }
         let (jtj, cov) = covariance(&(&j_x * &rest));
-        match worst_direction(cov.as_ref(), jtj, &rest, coords) {
-            // one held already but for rounding: judged again after the next fit
-            Some((v, reason)) => {
-                let v = snapped_to_single(v).normalize();
-                if (rest.transpose() * &v).norm() <= HELD {
-                    return found;
-                }
-                found.push((v, reason));
-            }
+        match next_to_hold(cov.as_ref(), jtj, &rest, coords) {
+            Some(next) => found.push(next),
             None => return found,
         }
     }
+}
+
+/// The worst-determined direction (see [`worst_direction`]) as it is held, with its reason, unless
+/// it is held already but for rounding (what `basis` spans reaches it by less than [`HELD`]): a
+/// direction held again would change nothing, and the fit would hold it without end.
+fn next_to_hold(
+    cov_z: Option<&DMatrix<f64>>,
+    jtj: DMatrix<f64>,
+    basis: &DMatrix<f64>,
+    coords: &[Coordinate],
+) -> Option<(DVector<f64>, String)> {
+    worst_direction(cov_z, jtj, basis, coords)
+        .map(|(v, reason)| (snapped_to_single(v).normalize(), reason))
+        .filter(|(v, _)| (basis.transpose() * v).norm() > HELD)
 }
 
 /// `v`, or where it lies mostly along one parameter exactly that parameter's axis: it holds
