@@ -73,8 +73,8 @@ pub fn run(a: Args) -> Result<(), Error> {
     } else {
         say!("verdict: {} ({})", d.verdict.name(), d.answer());
         say!(
-            "wrote {}/diagnosis.json, report.md, fitted.toml ({:.1} s)",
-            a.out.display(),
+            "wrote {}, report.md, fitted.toml ({:.1} s)",
+            a.out.join("diagnosis.json").display(),
             d.timing.last().map_or(0.0, |t| t.1)
         );
     }

@@ -160,8 +160,8 @@ pub fn run(a: Args) -> Result<(), Error> {
         }
     }
     say!(
-        "wrote {}/identification.json, fitted.toml, report.md",
-        a.out.display()
+        "wrote {}, fitted.toml, report.md",
+        a.out.join("identification.json").display()
     );
     Ok(())
 }

@@ -119,7 +119,8 @@ pub fn run(a: Args) -> Result<(), Error> {
         .iter()
         .filter_map(|p| p.file_name().map(|n| n.to_string_lossy().into_owned()))
         .collect();
-    say!("wrote {}/{{{}}}", a.out.display(), names.join(", "));
+    let listed = a.out.join(format!("{{{}}}", names.join(", ")));
+    say!("wrote {}", listed.display());
     Ok(())
 }
 
