@@ -195,8 +195,9 @@ fn saturation_is_named() {
 
 /// The suite's `saturation_unequal` seed 2: a refit holds a parameter alone, and the rounding of
 /// what the held directions leave lends it the variance of one the data leave undetermined
-/// beside it; found again, it was held again without end (`hold_undetermined` in
-/// src/identify/group.rs stops there).
+/// beside it; found again, it was held again without end (`worst_direction` in
+/// src/identify/group.rs no longer judges a parameter held alone, and `next_to_hold` holds
+/// nothing already held).
 #[test]
 fn unequal_limits_whose_refit_holds_parameters_in_turn_are_named() {
     named_in_form(Effect::Saturation, 0, &["unequal", "shaped"], 2);
