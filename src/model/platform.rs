@@ -238,18 +238,50 @@ impl Platform {
         u: [f64; 3],
         dx: &mut [f64],
     ) -> Result<(), ModelError> {
-        let (n, nb) = (actuator::N, self.nb);
+        let nb = self.nb;
+        self.each(|i, _| self.full_actuator_rhs(i, x, u, &mut dx[nb * i..nb * (i + 1)]))?;
+        Ok(())
+    }
 
+    /// Actuator i's block of the full model's ẋ = f(x, U) into `dxi`: the actuator at the
+    /// voltage its port receives, then the effects' terms.
+    fn full_actuator_rhs(
+        &self,
+        i: usize,
+        x: &[f64],
+        u: [f64; 3],
+        dxi: &mut [f64],
+    ) -> Result<(), DomainError> {
+        let n = actuator::N;
         let xs = self.full_blocks(x);
-        let refs = self.refs();
-        self.each(|i, a| {
-            let dxi = &mut dx[nb * i..nb * (i + 1)];
-            a.rhs(&xs[i][..n], self.port_voltage(xs[i], u[i]), &mut dxi[..n])?;
-            if self.terms.neutral {
-                return Ok(());
-            }
-            self.terms.add_rhs(&refs, xs, u[i], i, dxi)
-        })?;
+        self.actuators[i].rhs(&xs[i][..n], self.port_voltage(xs[i], u[i]), &mut dxi[..n])?;
+        if self.terms.neutral {
+            return Ok(());
+        }
+        self.terms.add_rhs(&self.refs(), xs, u[i], i, dxi)
+    }
+
+    /// Actuator i's block of ẋ = f(x, U) into `dxi`, for a model whose Jacobian's blocks are
+    /// the actuators' ([`Platform::jacobian_blocks`]): only actuator i's states and its own and
+    /// the common parameters enter it, so a parameter of actuator i moves no other block.
+    pub fn actuator_rhs(
+        &self,
+        i: usize,
+        x: &[f64],
+        u: [f64; 3],
+        dxi: &mut [f64],
+    ) -> Result<(), ModelError> {
+        if self.is_full() {
+            return self
+                .full_actuator_rhs(i, x, u, dxi)
+                .map_err(|cause| ModelError {
+                    actuator: i + 1,
+                    cause,
+                });
+        }
+        let mut dx = vec![0.0; x.len()];
+        self.rhs(x, u, &mut dx)?;
+        dxi.copy_from_slice(self.block(&dx, i));
         Ok(())
     }
 

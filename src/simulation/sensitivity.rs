@@ -42,6 +42,8 @@ struct Parametric<'a, 'd> {
     driven: &'a Driven<'d>,
     models: &'a [Platform],
     steps: &'a [f64],
+    /// Per direction, the one actuator it moves (see [`own_actuator`]).
+    own: &'a [Option<usize>],
 }
 
 impl OdeSystem for Parametric<'_, '_> {
@@ -64,15 +66,35 @@ impl ParametricSystem for Parametric<'_, '_> {
         self.models.len()
     }
     fn rhs_params(&self, t: f64, y: &[f64], fp: &mut [f64]) -> Result<(), RhsError> {
-        let n = y.len();
+        let (n, nb) = (y.len(), y.len() / 3);
         let u = self.driven.piece.value(t);
         let mut base = vec![0.0; n];
         self.driven.rhs(t, y, &mut base)?;
-        for ((model, step), column) in self.models.iter().zip(self.steps).zip(fp.chunks_mut(n)) {
-            model
-                .rhs(y, u, column)
-                .map_err(|e| RhsError(e.to_string()))?;
-            for (c, b) in column.iter_mut().zip(&base) {
+        let columns = fp.chunks_mut(n);
+        for (((model, step), own), column) in self
+            .models
+            .iter()
+            .zip(self.steps)
+            .zip(self.own)
+            .zip(columns)
+        {
+            let fail = |e: crate::model::ModelError| RhsError(e.to_string());
+            // an actuator's own parameter: its block alone, the others' are exactly zero
+            let rows = match *own {
+                Some(i) => {
+                    column.fill(0.0);
+                    let rows = nb * i..nb * (i + 1);
+                    model
+                        .actuator_rhs(i, y, u, &mut column[rows.clone()])
+                        .map_err(fail)?;
+                    rows
+                }
+                None => {
+                    model.rhs(y, u, column).map_err(fail)?;
+                    0..n
+                }
+            };
+            for (c, b) in column[rows.clone()].iter_mut().zip(&base[rows]) {
                 *c = (*c - b) / step;
             }
         }
@@ -87,6 +109,8 @@ struct Follower<'a> {
     steps: &'a [f64],
     /// Per direction: the outputs' map is the base model's (no ∂g/∂θ).
     same_map: Vec<bool>,
+    /// Per direction, the one actuator it moves (see [`own_actuator`]).
+    own: Vec<Option<usize>>,
     sens: Sensitivities,
     s: Vec<f64>,
     /// ∂g/∂x as its entries (output, state, value): a dozen of 6 × n, the heights' angles
@@ -106,6 +130,7 @@ impl Observer for Follower<'_> {
             driven: sys,
             models: self.models,
             steps: self.steps,
+            own: &self.own,
         };
         self.sens
             .follow(solver, &sys)
@@ -189,6 +214,10 @@ pub fn simulate_sensitive(
         models: &models,
         steps: &steps,
         same_map: models.iter().map(|m| base.same_output_map(m)).collect(),
+        own: directions
+            .iter()
+            .map(|d| own_actuator(&base, &d.params))
+            .collect(),
         sens: Sensitivities::new(n, models.len(), t0, &s0),
         s: vec![0.0; n * models.len()],
         dg: Vec::new(),
@@ -201,6 +230,29 @@ pub fn simulate_sensitive(
     let mut sim = Simulator::starting(base.clone(), start, input, t0, rtol)?;
     sim.run_observed(input, times, &mut follower)?;
     Ok(follower.out)
+}
+
+/// The one actuator whose own parameters alone `moved` changes from `base`'s, where `base`'s
+/// Jacobian's blocks are the actuators' (none links them): f changes only on that block.
+fn own_actuator(base: &Platform, moved: &Params) -> Option<usize> {
+    if base.jacobian_blocks().len() != 3 {
+        return None;
+    }
+    let (params, mut rest, mut own) = (base.params(), moved.clone(), None);
+    for def in crate::model::params::parameters() {
+        let (Some(i), v) = (def.actuator, (def.get)(params)) else {
+            continue;
+        };
+        if (def.get)(&rest) != v {
+            if own.is_some_and(|k| k != i) {
+                return None;
+            }
+            own = Some(i);
+            (def.set)(&mut rest, v);
+        }
+    }
+    // nothing else moved: not a common parameter, nor a state of anything outside the table
+    (rest == *params).then_some(own).flatten()
 }
 
 #[cfg(test)]
@@ -271,5 +323,31 @@ mod tests {
                 }
             }
         }
+    }
+
+    /// A direction that moves one actuator's own parameters names that actuator; a common
+    /// parameter, two actuators' or a model whose effects link the actuators name none.
+    #[test]
+    fn a_direction_names_the_one_actuator_it_moves() {
+        let p = Params::default();
+        let base = Platform::new(p.clone()).unwrap();
+        let moved = |names: &[&str], from: &Params| {
+            let mut q = from.clone();
+            for n in names {
+                q.set(n, from.get(n).unwrap() * 1.001).unwrap();
+            }
+            q
+        };
+        assert_eq!(own_actuator(&base, &moved(&["Kb_1"], &p)), Some(0));
+        assert_eq!(
+            own_actuator(&base, &moved(&["gamma1_2", "b_2"], &p)),
+            Some(1)
+        );
+        assert_eq!(own_actuator(&base, &moved(&["Kb_1", "b_3"], &p)), None);
+        assert_eq!(own_actuator(&base, &moved(&["m"], &p)), None);
+        let mut coupled = p.clone();
+        coupled.set("k_c", 1000.0).unwrap();
+        let linked = Platform::new(coupled.clone()).unwrap();
+        assert_eq!(own_actuator(&linked, &moved(&["Kb_1"], &coupled)), None);
     }
 }

@@ -142,6 +142,13 @@ impl Sensitivities {
             lu::factor(mat, &mut self.piv[..dim])
                 .map_err(|lu::Singular(row)| SensitivityError::Singular { t: t_end, row })?;
             for j in 0..m {
+                let untouched = self.untouched(j, o..o + mb);
+                let b = &mut self.sigma[j * 3 * n + 3 * o..j * 3 * n + 3 * o + dim];
+                if untouched {
+                    // a parameter of another block: its σ here solves a zero right-hand side
+                    b.fill(0.0);
+                    continue;
+                }
                 // g_l = J_l s + ∂f/∂θ_j (Y_l) on this block; right-hand side h Σ_l a_kl g_l
                 let g = &mut self.g[..mb];
                 for l in 0..3 {
@@ -153,7 +160,6 @@ impl Sensitivities {
                         gr[l] = v;
                     }
                 }
-                let b = &mut self.sigma[j * 3 * n + 3 * o..j * 3 * n + 3 * o + dim];
                 for k in 0..3 {
                     for (r, gr) in g.iter().enumerate() {
                         b[k * mb + r] = h * (A[k][0] * gr[0] + A[k][1] * gr[1] + A[k][2] * gr[2]);
@@ -189,6 +195,19 @@ impl Sensitivities {
         self.h_old = h;
         self.have_poly = true;
         Ok(())
+    }
+
+    /// Do the sensitivities to parameter `j` stay zero on the states `block` over this step: are
+    /// they zero there and is ∂f/∂θ_j zero there at every stage? (Each actuator's own
+    /// parameters leave the others' blocks at exactly zero.)
+    fn untouched(&self, j: usize, block: std::ops::Range<usize>) -> bool {
+        let (n, m) = (self.n, self.m);
+        let zero = |v: &[f64]| v.iter().all(|&x| x == 0.0);
+        zero(&self.s[j * n + block.start..j * n + block.end])
+            && (0..3).all(|l| {
+                let at = l * n * m + j * n;
+                zero(&self.stage_fp[at + block.start..at + block.end])
+            })
     }
 
     /// ∂y/∂θ at `t` in the last step (dense output, as the state's), column-major n × m.

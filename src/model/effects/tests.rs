@@ -496,3 +496,39 @@ fn each_family_describes_itself_whole() {
         "a name twice among the families and their hidden forms"
     );
 }
+
+/// Where no effect links the actuators, an actuator's own parameter moves its own block of f
+/// and no other, and [`Platform::actuator_rhs`] is that block of f (what the sensitivities'
+/// ∂f/∂θ computes alone for such a parameter).
+#[test]
+fn an_actuators_own_parameter_moves_only_its_block() {
+    for mut p in [all_on(false), all_on(true)] {
+        p.effects.switch_off(Effect::Coupling);
+        let m = Platform::new(p.clone()).unwrap();
+        assert_eq!(m.jacobian_blocks().len(), 3);
+        let (x, u) = (busy_state(&m), [40.0, 25.0, -30.0]);
+        let nb = x.len() / 3;
+        let mut f = vec![0.0; x.len()];
+        m.rhs(&x, u, &mut f).unwrap();
+        let own = crate::model::params::parameters().filter(|d| d.actuator.is_some());
+        for def in own {
+            let i = def.actuator.unwrap();
+            let mut q = p.clone();
+            let v = (def.get)(&p);
+            q.set_param(def, if v == 0.0 { 1e-3 } else { 1.01 * v })
+                .unwrap();
+            let moved = Platform::new(q).unwrap();
+            if moved.n_states() != m.n_states() {
+                continue; // switched an effect's states on: no derivative to take
+            }
+            let mut g = vec![0.0; x.len()];
+            moved.rhs(&x, u, &mut g).unwrap();
+            for k in (0..x.len()).filter(|k| k / nb != i) {
+                assert_eq!(f[k], g[k], "{}: state {k} of another block", def.name);
+            }
+            let mut block = vec![0.0; nb];
+            moved.actuator_rhs(i, &x, u, &mut block).unwrap();
+            assert_eq!(block, g[nb * i..nb * (i + 1)], "{}", def.name);
+        }
+    }
+}
