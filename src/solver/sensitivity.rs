@@ -51,10 +51,14 @@ pub struct Sensitivities {
     stage_jac: Vec<f64>,
     stage_fp: Vec<f64>,
     y_stage: Vec<f64>,
-    /// The stage equations of one block and their pivots; the increments σ (3 n per
-    /// parameter, block by block, each block stage by stage).
-    matrix: Vec<f64>,
-    piv: Vec<usize>,
+    /// The stage equations of one block, factored; the order of its states in them, and
+    /// each state's place in that order.
+    lu: lu::SparseLu,
+    order: Vec<usize>,
+    pos: Vec<usize>,
+    /// One parameter's stage increments of one block, in the order of the equations; the
+    /// increments σ (3 n per parameter, block by block, each block stage by stage).
+    x: Vec<f64>,
     sigma: Vec<f64>,
     /// J_l s + ∂f/∂θ_j (Y_l) of one block, per state (l = 0, 1, 2).
     g: Vec<[f64; 3]>,
@@ -79,8 +83,10 @@ impl Sensitivities {
             stage_jac: vec![0.0; 3 * n * n],
             stage_fp: vec![0.0; 3 * n * m],
             y_stage: vec![0.0; n],
-            matrix: vec![0.0; 9 * n * n],
-            piv: vec![0; 3 * n],
+            lu: lu::SparseLu::default(),
+            order: Vec::with_capacity(n),
+            pos: Vec::with_capacity(n),
+            x: vec![0.0; 3 * n],
             sigma: vec![0.0; 3 * n * m],
             g: vec![[0.0; 3]; n],
         }
@@ -120,26 +126,48 @@ impl Sensitivities {
             )
             .map_err(fail)?;
         }
-        // J is block diagonal: each block's states and stages form a system of their own,
-        // unknowns ordered (stage l, state c of the block)
+        // J is block diagonal: each block's states and stages form a system of their own
         let mut o = 0;
         for &mb in st.blocks {
             let dim = 3 * mb;
             let jac =
                 |l: usize, r: usize, c: usize| self.stage_jac[l * n * n + (o + c) * n + o + r];
-            let mat = &mut self.matrix[..dim * dim];
+            // unknown (stage l, state c) at 3 pos[c] + l: the states with the fewest couplings
+            // first (an effect's own, coupled only to the actuator's), whose elimination then
+            // fills in little, each state's three stages side by side
+            let degree = |c: usize| {
+                (0..mb)
+                    .filter(|&r| {
+                        r != c && (0..3).any(|l| jac(l, r, c) != 0.0 || jac(l, c, r) != 0.0)
+                    })
+                    .count()
+            };
+            let (order, pos) = (&mut self.order, &mut self.pos);
+            pos.clear();
+            pos.extend((0..mb).map(degree));
+            order.clear();
+            order.extend(0..mb);
+            order.sort_by_key(|&c| pos[c]);
+            for (q, &c) in order.iter().enumerate() {
+                pos[c] = q;
+            }
+            let mat = self.lu.matrix(dim);
             for l in 0..3 {
                 for c in 0..mb {
                     for k in 0..3 {
                         let ha = h * A[k][l];
                         for r in 0..mb {
+                            let v = ha * jac(l, r, c);
                             let unit = if k == l && r == c { 1.0 } else { 0.0 };
-                            mat[(l * mb + c) * dim + k * mb + r] = unit - ha * jac(l, r, c);
+                            if v != 0.0 || unit != 0.0 {
+                                mat[(3 * pos[c] + l) * dim + 3 * pos[r] + k] = unit - v;
+                            }
                         }
                     }
                 }
             }
-            lu::factor(mat, &mut self.piv[..dim])
+            self.lu
+                .factor()
                 .map_err(|lu::Singular(row)| SensitivityError::Singular { t: t_end, row })?;
             for j in 0..m {
                 let untouched = self.untouched(j, o..o + mb);
@@ -160,12 +188,20 @@ impl Sensitivities {
                         gr[l] = v;
                     }
                 }
-                for k in 0..3 {
-                    for (r, gr) in g.iter().enumerate() {
-                        b[k * mb + r] = h * (A[k][0] * gr[0] + A[k][1] * gr[1] + A[k][2] * gr[2]);
+                let x = &mut self.x[..dim];
+                for (r, gr) in g.iter().enumerate() {
+                    for k in 0..3 {
+                        x[3 * self.pos[r] + k] =
+                            h * (A[k][0] * gr[0] + A[k][1] * gr[1] + A[k][2] * gr[2]);
                     }
                 }
-                lu::solve(&self.matrix[..dim * dim], &self.piv[..dim], b);
+                self.lu.solve(x);
+                // σ block by block, each block stage by stage
+                for r in 0..mb {
+                    for k in 0..3 {
+                        b[k * mb + r] = x[3 * self.pos[r] + k];
+                    }
+                }
             }
             o += mb;
         }
