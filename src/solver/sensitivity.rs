@@ -181,11 +181,17 @@ impl Sensitivities {
                 let g = &mut self.g[..mb];
                 for l in 0..3 {
                     for (r, gr) in g.iter_mut().enumerate() {
-                        let mut v = self.stage_fp[l * n * m + j * n + o + r];
-                        for c in 0..mb {
-                            v += jac(l, r, c) * self.s[j * n + o + c];
+                        gr[l] = self.stage_fp[l * n * m + j * n + o + r];
+                    }
+                    // J_l s column by column: each column of J_l is contiguous
+                    for c in 0..mb {
+                        let sc = self.s[j * n + o + c];
+                        if sc != 0.0 {
+                            let col = &self.stage_jac[l * n * n + (o + c) * n + o..][..mb];
+                            for (gr, &jrc) in g.iter_mut().zip(col) {
+                                gr[l] += jrc * sc;
+                            }
                         }
-                        gr[l] = v;
                     }
                 }
                 let x = &mut self.x[..dim];
