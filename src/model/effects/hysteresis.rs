@@ -4,7 +4,7 @@
 //! a fixed logarithmic grid of angles (the plays).
 
 use super::family::{FittedLaw, TextbookForm, golden, mean_kb, sampled, scaled_to};
-use super::terms::{At, Law, States};
+use super::terms::{At, Law, States, torque_state_scale};
 use super::{
     Drive, Effect, Exposing, Family, Form, Magnitude, Planted, Probe, Scaling, log_between,
 };
@@ -393,8 +393,12 @@ impl Law for Terms {
         out.extend(self.elements.iter().map(|_| 0.0));
     }
 
-    fn scales(&self, _: &Actuator, theta_star: f64, out: &mut Vec<f64>) {
-        out.extend(self.elements.iter().map(|_| theta_star));
+    fn scales(&self, a: &Actuator, theta_star: f64, out: &mut Vec<f64>) {
+        out.extend(
+            self.elements
+                .iter()
+                .map(|&(_, k, _)| torque_state_scale(a, theta_star, k)),
+        );
     }
 }
 

@@ -192,6 +192,18 @@ pub trait Law: Sized {
     fn scales(&self, _a: &Actuator, _theta_star: f64, _out: &mut Vec<f64>) {}
 }
 
+/// How much looser than θ's own a state that acts on θ only through a torque may be kept.
+const LOOSEST_TORQUE_STATE: f64 = 10.0;
+
+/// The absolute-tolerance scale of a state x that acts on actuator `a`'s angle only through a
+/// torque −k x (book/src/solver.md, "States weighted by their effect on θ"): an error δx moves θ
+/// by about k δx / Kb, so θ's scale θ* times Kb/k, never tighter than θ*, at most
+/// [`LOOSEST_TORQUE_STATE`] times looser (at a weight near 0 the state still carries the
+/// weight's sensitivity).
+pub fn torque_state_scale(a: &Actuator, theta_star: f64, k: f64) -> f64 {
+    theta_star * (a.par.kb / k).clamp(1.0, LOOSEST_TORQUE_STATE)
+}
+
 /// The terms of the active families, derived once from the parameters.
 #[derive(Clone, Debug)]
 pub struct Terms {
