@@ -5,7 +5,7 @@
 use super::family::mean_kb;
 use super::log_between;
 use super::prony::{self, Branch, GRID, SPREAD};
-use super::terms::{At, Law, States};
+use super::terms::{At, Law, States, torque_state_scale};
 use super::{Drive, Effect, Exposing, Family, FittedLaw, Form, Magnitude, Planted, Probe, Scaling};
 use crate::model::Params;
 use crate::model::actuator::{Actuator, P, StateInfo, THETA};
@@ -263,7 +263,11 @@ impl Law for Terms {
         out.extend(self.branches.iter().map(|_| theta));
     }
 
-    fn scales(&self, _: &Actuator, theta_star: f64, out: &mut Vec<f64>) {
-        out.extend(self.branches.iter().map(|_| theta_star));
+    fn scales(&self, a: &Actuator, theta_star: f64, out: &mut Vec<f64>) {
+        out.extend(
+            self.branches
+                .iter()
+                .map(|&(_, k, _)| torque_state_scale(a, theta_star, k)),
+        );
     }
 }
