@@ -1,6 +1,7 @@
 //! LU factorisation with partial pivoting of small dense blocks, in place on preallocated
 //! column-major storage, for real and complex matrices (the Radau IIA iteration needs one of
-//! each per step size), and of block-diagonal matrices block by block ([`BlockLu`]).
+//! each per step size), of block-diagonal matrices block by block ([`BlockLu`]), and of the
+//! sensitivities' stage equations, mostly zeros, by a sparse elimination ([`SparseLu`]).
 //!
 //! Written here rather than taken from nalgebra because nalgebra's `LU` owns and reallocates
 //! its matrix, and the solver must not allocate per step. Blocks of up to `UNROLLED` rows are
@@ -69,14 +70,14 @@ macro_rules! by_size {
 
 /// Factors the m × m matrix `a` (column-major, m = `piv.len()`) into P A = L U in place;
 /// `piv[k]` is the row swapped with row k. The diagonal holds 1/U_kk, for [`solve`].
-pub fn factor<T: Entry>(a: &mut [T], piv: &mut [usize]) -> Result<(), Singular> {
+fn factor<T: Entry>(a: &mut [T], piv: &mut [usize]) -> Result<(), Singular> {
     by_size!(piv.len(), factor_m(a, piv))
 }
 
 // For the sizes up to UNROLLED the loops run over the whole block with the triangle as a
 // condition inside: with m a constant, the compiler then unrolls them all and drops the
-// conditions, which it does not do for loops that start at k + 1. Larger blocks start there
-// and skip the zeros of sparse columns (the sensitivities' stage systems are mostly zeros).
+// conditions, which it does not do for loops that start at k + 1. Larger blocks (an effect's
+// states beside the actuator's) start there and skip the zeros of sparse columns.
 #[inline(always)]
 fn factor_m<T: Entry>(m: usize, a: &mut [T], piv: &mut [usize]) -> Result<(), Singular> {
     let (a, piv) = (&mut a[..m * m], &mut piv[..m]);
@@ -122,7 +123,7 @@ fn factor_m<T: Entry>(m: usize, a: &mut [T], piv: &mut [usize]) -> Result<(), Si
 }
 
 /// Solves A x = b in place with the factors of [`factor`] (m = `b.len()`).
-pub fn solve<T: Entry>(lu: &[T], piv: &[usize], b: &mut [T]) {
+fn solve<T: Entry>(lu: &[T], piv: &[usize], b: &mut [T]) {
     by_size!(b.len(), solve_m(lu, piv, b))
 }
 

@@ -200,7 +200,7 @@ const LOOSEST_TORQUE_STATE: f64 = 10.0;
 /// by about k δx / Kb, so θ's scale θ* times Kb/k, never tighter than θ*, at most
 /// [`LOOSEST_TORQUE_STATE`] times looser (at a weight near 0 the state still carries the
 /// weight's sensitivity).
-pub fn torque_state_scale(a: &Actuator, theta_star: f64, k: f64) -> f64 {
+pub(super) fn torque_state_scale(a: &Actuator, theta_star: f64, k: f64) -> f64 {
     theta_star * (a.par.kb / k).clamp(1.0, LOOSEST_TORQUE_STATE)
 }
 
