@@ -531,4 +531,17 @@ fn an_actuators_own_parameter_moves_only_its_block() {
             assert_eq!(block, g[nb * i..nb * (i + 1)], "{}", def.name);
         }
     }
+    // a reduction's block is its f's, which comes from the lift of all of its state
+    for r in crate::model::Reduction::ALL {
+        let m = Platform::reduced(all_on(false), r).unwrap();
+        let (x, u) = (m.rest_state().unwrap(), [40.0, 25.0, -30.0]);
+        let nb = x.len() / 3;
+        let mut f = vec![0.0; x.len()];
+        m.rhs(&x, u, &mut f).unwrap();
+        for i in 0..3 {
+            let mut block = vec![0.0; nb];
+            m.actuator_rhs(i, &x, u, &mut block).unwrap();
+            assert_eq!(block, f[nb * i..nb * (i + 1)], "{r:?}, actuator {}", i + 1);
+        }
+    }
 }
