@@ -1,7 +1,7 @@
 //! LU factorisation with partial pivoting of small dense blocks, in place on preallocated
 //! column-major storage, for real and complex matrices (the Radau IIA iteration needs one of
 //! each per step size), of block-diagonal matrices block by block ([`BlockLu`]), and of the
-//! sensitivities' stage equations, mostly zeros, by a sparse elimination ([`SparseLu`]).
+//! sensitivities' stage equations, mostly zeros, by a sparse elimination (`SparseLu`).
 //!
 //! Written here rather than taken from nalgebra because nalgebra's `LU` owns and reallocates
 //! its matrix, and the solver must not allocate per step. Blocks of up to `UNROLLED` rows are
@@ -220,7 +220,7 @@ impl<T: Entry> BlockLu<T> {
 /// ordered with the sparsest first (an effect's own states in the sensitivities' stage
 /// equations) costs little more than its dense part.
 #[derive(Clone, Debug, Default)]
-pub struct SparseLu {
+pub(super) struct SparseLu {
     m: usize,
     /// Column-major; after [`SparseLu::factor`] L below the diagonal, U above, 1/U_kk on it.
     lu: Vec<f64>,
