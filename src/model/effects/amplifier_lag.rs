@@ -19,11 +19,14 @@ pub struct AmplifierLag {
     pub tau_a: f64,
     /// τ_a2 \[s\] of a second stage after the first; 0 (the default) is none.
     pub tau_a2: f64,
-    /// The first stage's slew rate S [V/s]: r(e) = S tanh(e / (S τ_a)); 0 is no limit, linear.
+    /// The first stage's slew rate S [V/s]: r(e) = S φ_p(e / (S τ_a)); 0 is no limit, linear.
     pub slew: f64,
+    /// Sharpness p > 0 of the slew's transition φ_p(x) = tanh(|x|^p)^(1/p) sgn x: 1 is the
+    /// tanh, p → ∞ the hard rate limit, p < 1 softer than the tanh.
+    pub sharpness: f64,
     /// For synthetic data only (no row of the table): when > 0, the slew's transition is the
     /// Rapp curve of this exponent, r(e) = S x (1 + |x|^p)^(−1/p) with x = e / (S τ_a),
-    /// instead of the tanh.
+    /// instead of φ_p.
     pub rapp_rate: f64,
 }
 
@@ -33,6 +36,7 @@ impl Default for AmplifierLag {
             tau_a: 0.0,
             tau_a2: 0.0,
             slew: 0.0,
+            sharpness: 1.0,
             rapp_rate: 0.0,
         }
     }
@@ -55,13 +59,31 @@ impl AmplifierLag {
         let width = (self.slew * tau).max(MIN_TRANSITION);
         let x = e / width;
         let (phi, slope) = if self.rapp_rate > 0.0 {
-            let (v, d) = rapp(x.abs(), self.rapp_rate);
-            (v.copysign(x), d)
+            rapp(x.abs(), self.rapp_rate)
         } else {
-            let t = x.tanh();
-            (t, 1.0 - t * t)
+            transition(x.abs(), self.sharpness)
         };
-        (self.slew * phi, self.slew * slope / width)
+        (self.slew * phi.copysign(x), self.slew * slope / width)
+    }
+}
+
+/// The slew's transition φ_p(x) = tanh(x^p)^(1/p) of an error x ≥ 0 relative to S τ_a, and its
+/// slope (effects.md, "amplifier_lag"): increasing, x − x^(2p+1)/(3p) + … at small x (slope 1),
+/// 1 − (2/p) e^(−2 x^p) + … at large x. Below y = x^p = 1 it is written x (tanh y / y)^(1/p),
+/// which keeps the small errors' digits for any p; sech² y in e^(−2y), which cannot overflow.
+fn transition(x: f64, p: f64) -> (f64, f64) {
+    let y = x.powf(p);
+    if y.is_infinite() {
+        return (1.0, 0.0);
+    }
+    let q = (-2.0 * y).exp();
+    let sech2 = 4.0 * q / ((1.0 + q) * (1.0 + q));
+    if y <= 1.0 {
+        let ratio = if y == 0.0 { 1.0 } else { y.tanh() / y };
+        (x * ratio.powf(p.recip()), ratio.powf(p.recip() - 1.0) * sech2)
+    } else {
+        let t = y.tanh();
+        (t.powf(p.recip()), t.powf(p.recip() - 1.0) * sech2 * y / x)
     }
 }
 
@@ -79,7 +101,12 @@ const FORMS: [Form; 3] = [
     // a slewing amplifier may hold its small-signal time τ_a undetermined: S is a magnitude too
     Form {
         magnitudes: &["tau_a", "slew"],
-        ..Form::new(Effect::AmplifierLag, "slew", &["tau_a", "slew"], &[])
+        ..Form::new(
+            Effect::AmplifierLag,
+            "slew",
+            &["tau_a", "slew", "slew_sharpness"],
+            &[],
+        )
     },
 ];
 
@@ -92,7 +119,8 @@ pub const FAMILY: Family = Family {
     rows: &common_rows! {
         "tau_a", "s", NonNegative, "amplifier_lag: time constant tau_a of the amplifier (0: off)", effects.amplifier_lag.tau_a;
         "tau_a2", "s", NonNegative, "amplifier_lag: time constant tau_a2 of a second stage (0: none)", effects.amplifier_lag.tau_a2;
-        "slew", "V/s", Limit, "amplifier_lag: slew rate S of the first stage, dU_amp/dt = S tanh((U - U_amp) / (S tau_a)) (0: no limit, linear)", effects.amplifier_lag.slew;
+        "slew", "V/s", Limit, "amplifier_lag: slew rate S of the first stage, dU_amp/dt = S phi((U - U_amp) / (S tau_a)) (0: no limit, linear)", effects.amplifier_lag.slew;
+        "slew_sharpness", "1", Positive, "amplifier_lag: sharpness p of the slew's transition, phi(x) = tanh(|x|^p)^(1/p) sgn(x) (1: tanh; large: the hard rate limit)", effects.amplifier_lag.sharpness;
     },
     choices: &[],
     state: Some(StateInfo {
@@ -106,6 +134,7 @@ pub const FAMILY: Family = Family {
         f.amplifier_lag.tau_a = 0.02;
         f.amplifier_lag.tau_a2 = 0.005;
         f.amplifier_lag.slew = 1000.0;
+        f.amplifier_lag.sharpness = 2.0;
     },
     structures: &[],
     delays_the_command: true,
@@ -193,8 +222,9 @@ fn slewing(params: &mut Params, between: &mut dyn FnMut(f64, f64) -> f64) -> Pla
 }
 
 /// The first stage's fitted rate law over errors up to the peak command, beside the textbook
-/// forms fitted to it (book/src/diagnose.md, "The fitted law"): the linear lag e/τ, and the
-/// hard rate limit clamp(e/τ_a, ±S) at the law's small-signal time.
+/// forms fitted to it (book/src/diagnose.md, "The fitted law"): the linear lag e/τ, and at the
+/// law's small-signal time τ_a the tanh slew S tanh(e/(S τ_a)) and the hard rate limit
+/// clamp(e/τ_a, ±S).
 fn law(params: &Params, u_peak: f64) -> FittedLaw {
     let a = params.effects.amplifier_lag;
     let curve = sampled(-u_peak, u_peak, |e| a.rate(e).0);
@@ -203,12 +233,14 @@ fn law(params: &Params, u_peak: f64) -> FittedLaw {
     let tau = golden(1e-5, 10.0, |t| sse(&|e| e / t));
     let tau_a = a.tau_a;
     let limit = move |s: f64, e: f64| (e / tau_a).clamp(-s, s);
-    let s = golden(1.0, 1e7, |s| sse(&|e| limit(s, e)));
+    let tanh = move |s: f64, e: f64| s * (e / (s * tau_a)).tanh();
+    let s_limit = golden(1.0, 1e7, |s| sse(&|e| limit(s, e)));
+    let s_tanh = golden(1.0, 1e7, |s| sse(&|e| tanh(s, e)));
     let text = format!(
         "dU_amp/dt from the error U - U_amp: tau_a {:.2} ms, slew rate {}{}",
         1000.0 * a.tau_a,
         if a.slew > 0.0 {
-            format!("{:.0} V/s", a.slew)
+            format!("{:.0} V/s, sharpness {:.2}", a.slew, a.sharpness)
         } else {
             "unlimited".into()
         },
@@ -223,19 +255,29 @@ fn law(params: &Params, u_peak: f64) -> FittedLaw {
         format!("tau {:.2} ms", 1000.0 * tau),
         Box::new(move |e| e / tau),
     );
+    let small_signal = format!("tau {:.2} ms for small errors", 1000.0 * tau_a);
     // a limit above the fastest rate the law reaches is the linear lag itself
-    let slew = (s * tau_a < u_peak).then(|| -> TextbookForm {
-        (
-            "hard slew limit",
-            format!("{s:.0} V/s, tau {:.2} ms for small errors", 1000.0 * tau_a),
-            Box::new(move |e| limit(s, e)),
-        )
+    let slewing = (s_limit * tau_a < u_peak).then(|| -> [TextbookForm; 2] {
+        [
+            (
+                "tanh slew",
+                format!("{s_tanh:.0} V/s, {small_signal}"),
+                Box::new(move |e| tanh(s_tanh, e)),
+            ),
+            (
+                "hard slew limit",
+                format!("{s_limit:.0} V/s, {small_signal}"),
+                Box::new(move |e| limit(s_limit, e)),
+            ),
+        ]
     });
     FittedLaw::of_curve(
         text,
         ["error U - U_amp [V]", "dU_amp/dt [V/s]"],
         curve,
-        std::iter::once(linear).chain(slew).collect(),
+        std::iter::once(linear)
+            .chain(slewing.into_iter().flatten())
+            .collect(),
     )
 }
 

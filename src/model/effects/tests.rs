@@ -53,6 +53,7 @@ fn all_on(other_forms: bool) -> Params {
         f.amplifier_lag.tau_a2 = 0.004;
         // slewing for errors beyond S tau_a = 20 V: the busy state's reach that far
         f.amplifier_lag.slew = 1000.0;
+        f.amplifier_lag.sharpness = 2.5;
         f.saturation.u_max_neg = 35.0;
         f.saturation.knee = 0.3;
         f.saturation.u_dead = 2.0;
@@ -226,9 +227,59 @@ fn a_textbook_law_is_nearest_itself() {
     p.effects.amplifier_lag.slew = 100.0;
     let law = (Effect::AmplifierLag.family().law)(&p, 60.0).unwrap();
     let nearest = &law.textbook[law.nearest];
+    assert_eq!(nearest.name, "tanh slew", "{law:?}");
+    assert!(nearest.values.starts_with("100 V/s"), "{law:?}");
+    assert!(nearest.distance < 1e-6, "{law:?}");
+    // …and as sharp a transition: nearest the hard slew limit
+    p.effects.amplifier_lag.sharpness = 20.0;
+    let law = (Effect::AmplifierLag.family().law)(&p, 60.0).unwrap();
+    let nearest = &law.textbook[law.nearest];
     assert_eq!(nearest.name, "hard slew limit", "{law:?}");
     assert!(nearest.values.starts_with("100 V/s"), "{law:?}");
     assert!(nearest.distance < 0.05, "{law:?}");
+}
+
+/// The slew's transition φ_p: the tanh at p = 1, the hard limit min(x, 1) as p grows, softer
+/// below 1, increasing with the slope its differences give at every p.
+#[test]
+fn the_slew_transition_spans_the_tanh_and_the_hard_limit() {
+    let mut a = super::amplifier_lag::AmplifierLag {
+        tau_a: 0.01,
+        slew: 100.0,
+        ..Default::default()
+    };
+    let x = |e: f64| e / (a.slew * a.tau_a);
+    for e in [0.0, 1e-9, 0.3, 1.0, 2.0, 7.0, 1e3] {
+        let tanh = a.slew * x(e).tanh();
+        assert!((a.rate(e).0 - tanh).abs() <= 1e-13 * a.slew, "at {e}");
+    }
+    a.sharpness = 60.0;
+    for e in [0.1, 0.5, 0.9, 1.0, 1.2, 3.0] {
+        let limit = a.slew * x(e).min(1.0);
+        assert!((a.rate(e).0 - limit).abs() < 0.01 * a.slew, "at {e}");
+    }
+    for p in [0.3, 1.0, 2.5, 8.0, 60.0] {
+        a.sharpness = p;
+        let mut last = f64::NEG_INFINITY;
+        for k in -400..=400 {
+            let e = 0.01 * f64::from(k) + 1e-4;
+            let (r, slope) = a.rate(e);
+            assert!(r >= last && slope >= 0.0, "p {p} at {e}");
+            last = r;
+            let h = 1e-7;
+            let fd = (a.rate(e + h).0 - a.rate(e - h).0) / (2.0 * h);
+            assert!((fd - slope).abs() < 1e-5 * slope.max(1.0), "p {p} at {e}: {slope} vs {fd}");
+        }
+        // linear at small errors with the slope 1/τ_a at every sharpness (1 − x^(2p)(2p + 1)/3p)
+        assert!((a.rate(1e-12).1 * a.tau_a - 1.0).abs() < 1e-6, "p {p}");
+    }
+    // a softer transition lies below the tanh, a sharper one above it
+    let at = |p: f64| {
+        let mut a = a;
+        a.sharpness = p;
+        a.rate(1.0).0
+    };
+    assert!(at(0.5) < at(1.0) && at(1.0) < at(3.0));
 }
 
 #[test]
