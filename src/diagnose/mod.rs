@@ -506,7 +506,8 @@ impl HeldOutGain {
     /// gap where the paper's model stood closer to the noise floor than twice that (no effect
     /// could gain [`MIN_GAIN`] there, however structured the residual). A later effect keeps the
     /// bar: near the floor it would stand in for what the earlier one's law does not contain (a
-    /// convex stiffening beside a slew whose transition is a Rapp curve, 0.18 points).
+    /// convex stiffening beside a slew whose transition was a Rapp curve and the law's a tanh,
+    /// 0.18 points).
     fn required(&self, first: bool) -> f64 {
         if first {
             MIN_GAIN.min(GAP_CLOSED * self.gap)

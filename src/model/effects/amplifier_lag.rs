@@ -80,7 +80,10 @@ fn transition(x: f64, p: f64) -> (f64, f64) {
     let sech2 = 4.0 * q / ((1.0 + q) * (1.0 + q));
     if y <= 1.0 {
         let ratio = if y == 0.0 { 1.0 } else { y.tanh() / y };
-        (x * ratio.powf(p.recip()), ratio.powf(p.recip() - 1.0) * sech2)
+        (
+            x * ratio.powf(p.recip()),
+            ratio.powf(p.recip() - 1.0) * sech2,
+        )
     } else {
         let t = y.tanh();
         (t.powf(p.recip()), t.powf(p.recip() - 1.0) * sech2 * y / x)
@@ -207,7 +210,8 @@ fn equal_stages(params: &mut Params, between: &mut dyn FnMut(f64, f64) -> f64) -
 
 /// A single stage slewing at S in [250, 450] V/s (the paper's 60 V sines need up to 660 V/s),
 /// with a small-signal time in [3, 10] ms (log), its transition from linear to slewing a Rapp
-/// curve of exponent p in [1.5, 6] (log): a shape the tanh of the fitted form does not contain.
+/// curve of exponent q in [1.5, 6] (log): a shape no sharpness of the fitted form's transition
+/// contains (it approaches the slew as a power of the error, φ_p exponentially).
 fn slewing(params: &mut Params, between: &mut dyn FnMut(f64, f64) -> f64) -> Planted {
     let a = &mut params.effects.amplifier_lag;
     a.tau_a = log_between(between, 0.003, 0.01);

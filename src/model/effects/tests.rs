@@ -268,7 +268,10 @@ fn the_slew_transition_spans_the_tanh_and_the_hard_limit() {
             last = r;
             let h = 1e-7;
             let fd = (a.rate(e + h).0 - a.rate(e - h).0) / (2.0 * h);
-            assert!((fd - slope).abs() < 1e-5 * slope.max(1.0), "p {p} at {e}: {slope} vs {fd}");
+            assert!(
+                (fd - slope).abs() < 1e-5 * slope.max(1.0),
+                "p {p} at {e}: {slope} vs {fd}"
+            );
         }
         // linear at small errors with the slope 1/τ_a at every sharpness (1 − x^(2p)(2p + 1)/3p)
         assert!((a.rate(1e-12).1 * a.tau_a - 1.0).abs() < 1e-6, "p {p}");
