@@ -184,8 +184,9 @@ pub const FAMILY: Family = Family {
 };
 
 /// Limits just below the peak command, kept as they are: equal (`hard`), unequal with either
-/// side below the other or not clipping at all (`unequal`), and a soft knee whose limits may lie
-/// above the peak, as a Rapp curve compresses before its limit (`shaped`).
+/// side below the other or not clipping at all (`unequal`), and a soft knee whose limits lie
+/// from a level below the hard ones' to above the peak, as a Rapp curve compresses before its
+/// limit (`shaped`; book/src/diagnose.md, "Screening").
 fn probes(_: &Params, u_peak: f64) -> Vec<Probe> {
     let fixed = Probe::fixed;
     let mut out: Vec<Probe> = [0.8, 0.9, 0.97]
@@ -199,7 +200,14 @@ fn probes(_: &Params, u_peak: f64) -> Vec<Probe> {
             out.push(fixed(&FORMS[1], limits));
         }
     }
-    for (a, b) in [(0.8, 0.8), (0.9, 0.9), (1.0, 1.0), (0.9, 1.15), (1.15, 0.9)] {
+    for (a, b) in [
+        (0.7, 0.7),
+        (0.8, 0.8),
+        (0.9, 0.9),
+        (1.0, 1.0),
+        (0.9, 1.15),
+        (1.15, 0.9),
+    ] {
         let shaped = vec![
             ("U_max", a * u_peak),
             ("U_max_neg", b * u_peak),
