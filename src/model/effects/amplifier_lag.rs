@@ -25,7 +25,7 @@ pub struct AmplifierLag {
     /// tanh, p → ∞ the hard rate limit, p < 1 softer than the tanh.
     pub sharpness: f64,
     /// For synthetic data only (no row of the table): when > 0, the slew's transition is the
-    /// Rapp curve of this exponent, r(e) = S x (1 + |x|^p)^(−1/p) with x = e / (S τ_a),
+    /// Rapp curve of this exponent q, r(e) = S x (1 + |x|^q)^(−1/q) with x = e / (S τ_a),
     /// instead of φ_p.
     pub rapp_rate: f64,
 }
