@@ -238,7 +238,7 @@ fn fmi_crate_drives_model_exchange_with_the_fmus_jacobian() {
     assert_eq!(me_interface.provides_directional_derivative, Some(true));
     let (states, derivatives) = states_and_derivatives(&import);
     let n = states.len();
-    assert_eq!((n, md.num_states()), (81, 81));
+    assert_eq!((n, md.num_states()), (99, 99));
     let (u_refs, y_refs) = (value_refs(&import, INPUTS), value_refs(&import, OUTPUTS));
     let rows = &reference()[..11];
     let cs = run(&import, "cs", rows);

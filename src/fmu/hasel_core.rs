@@ -634,6 +634,7 @@ mod tests {
                 ("r_h", 2.0),
                 ("k_h_2mrad", 0.02),
                 ("C3_300ms", 1e-9),
+                ("R3_1s", 1e4),
             ] {
                 core.set_real(vr(name), value).unwrap();
             }
@@ -700,7 +701,7 @@ mod tests {
                 states += 1;
             }
         }
-        assert_eq!(states, 3 * 27);
+        assert_eq!(states, 3 * 33);
     }
 
     #[test]
@@ -716,7 +717,7 @@ mod tests {
     #[test]
     fn the_state_vector_is_the_table_states_with_their_derivatives() {
         let structure = model_structure(Reduction::Full);
-        assert_eq!(structure.derivatives.len(), 3 * 27);
+        assert_eq!(structure.derivatives.len(), 3 * 33);
         for d in &structure.derivatives {
             let (state, der) = (&rows()[d.state as usize], &rows()[d.derivative as usize]);
             assert_eq!(der.name, format!("der({})", state.name));

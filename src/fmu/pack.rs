@@ -43,9 +43,9 @@ pub fn platform(params: &Params) -> Spec {
                 the antenna tip. In Co-Simulation the inputs are held constant over each \
                 communication step; the internal solver is a Radau IIA method of order 5 with \
                 error control (relative tolerance from fmi2SetupExperiment, else the parameter \
-                <code>rtol</code>). In Model Exchange the importer integrates the 27 states (the \
-                paper's five and four effect states per actuator, each with its der() variable; \
-                an effect that is off keeps its state at 0); the transport delay tau_d needs \
+                <code>rtol</code>). In Model Exchange the importer integrates the states (the \
+                paper's five per actuator and every state the effects' parameters can switch on, \
+                each with its der() variable; an effect that is off keeps its state at 0); the transport delay tau_d needs \
                 Co-Simulation. Directional derivatives (both interfaces) come from the model's \
                 analytic Jacobian. The simulation starts from the U = 0 equilibrium under gravity.",
     }

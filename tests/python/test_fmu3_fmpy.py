@@ -31,7 +31,7 @@ def test_same_variables_as_the_fmi2_fmu(fmu_path, fmu3_path):
     assert time.name == "time" and time.unit == "s"
     assert [u.variable.name for u in md3.outputs] == OUTPUTS
     states = [d.variable.derivative.name for d in md3.derivatives]
-    assert len(states) == 81 and states[:5] == ["theta_1", "l_p_1", "p_1", "Q1_1", "Q2_1"], states
+    assert len(states) == 99 and states[:5] == ["theta_1", "l_p_1", "p_1", "Q1_1", "Q2_1"], states
     with zipfile.ZipFile(fmu3_path) as z:  # fmpy 0.3 does not read the 3.0 capability flags
         xml = z.read("modelDescription.xml").decode()
     assert xml.count('providesDirectionalDerivatives="true"') == 2  # ME and CS

@@ -76,9 +76,9 @@ def test_interface_is_the_contract(fmu_path):
     assert md.modelExchange.modelIdentifier == "HaselPlatform"
     for interface in (md.modelExchange, md.coSimulation):
         assert interface.providesDirectionalDerivative
-    # 81 states: the paper's 5 and 22 effect states per actuator, each with its der() variable
+    # 99 states: the paper's 5 and 28 effect states per actuator, each with its der() variable
     states = [d.variable.derivative for d in md.derivatives]
-    assert len(states) == 81 and states[0].name == "theta_1" and states[-1].name == "U_amp2_3"
+    assert len(states) == 99 and states[0].name == "theta_1" and states[-1].name == "U_amp2_3"
     assert [d.variable.name for d in md.derivatives][:2] == ["der(theta_1)", "der(l_p_1)"]
     assert by_name["der(Q1_2)"].unit == "A" and by_name["der(theta_3)"].unit == "rad/s"
 

@@ -60,7 +60,7 @@ impl Cs {
 #[test]
 fn a_directional_derivative_is_the_slope_of_the_derivatives() {
     let (me, n) = continuous_time();
-    assert_eq!(n, 81, "the paper's 15 states and the 66 of the effects");
+    assert_eq!(n, 99, "the paper's 15 states and the 84 of the effects");
     // d der(p_2) / d Q2_2 by the shell, against central differences of the derivatives
     let structure = HaselCore::model_structure();
     let (unknown, known) = (vr("der(p_2)"), vr("Q2_2"));

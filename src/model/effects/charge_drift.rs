@@ -1,7 +1,9 @@
 //! `charge_drift` (book/src/effects.md, "charge_drift"): a slow charge-retention
 //! element, in series with the circuit or as an absorption branch across part of the film; and
-//! dielectric absorption as a Prony series of R–C branches across the film (Debye relaxations)
-//! with non-negative capacitances on a fixed logarithmic grid of times (the spectrum).
+//! the same two sites as Prony series on a fixed logarithmic grid of times: dielectric absorption
+//! as R–C branches across the film (Debye relaxations) of non-negative capacitances (the
+//! spectrum), and trapping as (C ∥ R) stages in series of non-negative resistances (the series
+//! spectrum).
 
 use super::prony::{self, Branch, GRID, SPREAD};
 use super::terms::{At, Law, States};
@@ -48,17 +50,26 @@ pub const GRID_NAMES: [&str; 6] = [
     "C3_30ms", "C3_100ms", "C3_300ms", "C3_1s", "C3_3s", "C3_10s",
 ];
 
+/// The series spectrum's resistances, rows of the parameter table, one per time of [`GRID`].
+pub const SERIES_NAMES: [&str; 6] = [
+    "R3_30ms", "R3_100ms", "R3_300ms", "R3_1s", "R3_3s", "R3_10s",
+];
+
 /// The stage of the first of the spectrum's states (`Q32` … `Q37`), after the element's.
 const GRID_STAGE: usize = 1;
-/// The stage of the synthetic second trap's state, after the spectrum's.
-const SECOND_TRAP_STAGE: usize = GRID_STAGE + GRID.len();
+/// The stage of the first of the series spectrum's states (`Q38` … `Q313`), after the
+/// spectrum's.
+const SERIES_STAGE: usize = GRID_STAGE + GRID.len();
+/// The stage of the synthetic second trap's state, after the series spectrum's.
+const SECOND_TRAP_STAGE: usize = SERIES_STAGE + GRID.len();
 /// The stage of the first synthetic branch's state.
 const SPREAD_STAGE: usize = SECOND_TRAP_STAGE + 1;
 
 /// A slow charge-retention element: in series (R3, τ3 = R3 C3, off at R3 = 0) or as an
-/// absorption branch across part of the film (C3, τ3 = R3 C3, off at C3 = 0); and absorption
+/// absorption branch across part of the film (C3, τ3 = R3 C3, off at C3 = 0); absorption
 /// branches across the film, (C_b, τ_b) with R_b = τ_b / C_b, on the grid (the spectrum) and,
-/// for synthetic data, at any times.
+/// for synthetic data, at any times; and stages in series, (R_k, τ_k) with C_k = τ_k / R_k, on
+/// the grid (the series spectrum).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ChargeDrift {
     /// R3 \[Ω\] of the series stage; 0 switches it off.
@@ -77,6 +88,9 @@ pub struct ChargeDrift {
     /// Absorption branches across the film at any times (weight C_b \[F\]), for synthetic data
     /// only (no row of the table reaches them): a kernel the grid does not contain.
     pub spread: [Branch; SPREAD],
+    /// The series spectrum: the resistance R_k \[Ω\] of the (C ∥ R) stage in series at each
+    /// time of [`GRID`].
+    pub series: [f64; 6],
 }
 
 impl Default for ChargeDrift {
@@ -89,6 +103,7 @@ impl Default for ChargeDrift {
             two_stages: false,
             grid: [0.0; 6],
             spread: [Branch::OFF; SPREAD],
+            series: [0.0; 6],
         }
     }
 }
@@ -106,9 +121,14 @@ impl ChargeDrift {
     fn spectrum_on(&self) -> bool {
         self.grid.iter().any(|&c| c > 0.0)
     }
+
+    /// Is the series spectrum on?
+    fn series_spectrum_on(&self) -> bool {
+        self.series.iter().any(|&r| r > 0.0)
+    }
 }
 
-const FORMS: [Form; 4] = [
+const FORMS: [Form; 5] = [
     Form::new(
         Effect::ChargeDrift,
         "series",
@@ -132,6 +152,11 @@ const FORMS: [Form; 4] = [
         magnitudes: &GRID_NAMES,
         ..Form::new(Effect::ChargeDrift, "spectrum", &GRID_NAMES, &[])
     },
+    // in series whatever `drift_site`: no setting
+    Form {
+        magnitudes: &SERIES_NAMES,
+        ..Form::new(Effect::ChargeDrift, "series_spectrum", &SERIES_NAMES, &[])
+    },
 ];
 
 pub const FAMILY: Family = Family {
@@ -144,6 +169,12 @@ pub const FAMILY: Family = Family {
         "R3", "Ohm", NonNegative, "charge_drift: resistance R3 of a (C3 || R3) stage in series (0: off; drift_site 0)", effects.charge_drift.r3;
         "tau3", "s", Positive, "charge_drift: time constant tau3 = R3 C3 of the drift element", effects.charge_drift.tau3;
         "C3", "F", NonNegative, "charge_drift: capacitance C3 of an R3-C3 absorption branch (0: off; drift_site 1 or 2)", effects.charge_drift.c3;
+        "R3_30ms", "Ohm", Weight, "charge_drift: resistance of the series spectrum's (C || R) stage at tau = 0.03 s (0: off)", effects.charge_drift.series[0];
+        "R3_100ms", "Ohm", Weight, "charge_drift: resistance of the series spectrum's (C || R) stage at tau = 0.1 s (0: off)", effects.charge_drift.series[1];
+        "R3_300ms", "Ohm", Weight, "charge_drift: resistance of the series spectrum's (C || R) stage at tau = 0.3 s (0: off)", effects.charge_drift.series[2];
+        "R3_1s", "Ohm", Weight, "charge_drift: resistance of the series spectrum's (C || R) stage at tau = 1 s (0: off)", effects.charge_drift.series[3];
+        "R3_3s", "Ohm", Weight, "charge_drift: resistance of the series spectrum's (C || R) stage at tau = 3 s (0: off)", effects.charge_drift.series[4];
+        "R3_10s", "Ohm", Weight, "charge_drift: resistance of the series spectrum's (C || R) stage at tau = 10 s (0: off)", effects.charge_drift.series[5];
         grid "C3", "F", "charge_drift: capacitance of the spectrum's absorption branch across the film", charge_drift;
     },
     choices: &[ParamDef {
@@ -160,13 +191,14 @@ pub const FAMILY: Family = Family {
         unit: "C",
         description: "charge Q3 of a drift stage's or an absorption branch's capacitor",
     }),
-    // the element and the grid's branches
-    table_stages: 1 + GRID.len(),
+    // the element, the grid's branches and the grid's series stages
+    table_stages: 1 + 2 * GRID.len(),
     is_active: |p| is_on(&p.charge_drift),
     on: |f| {
         f.charge_drift.r3 = 2e4;
         f.charge_drift.tau3 = 0.5;
         f.charge_drift.grid = [1e-9, 0.0, 2e-9, 0.0, 1e-9, 3e-9];
+        f.charge_drift.series = [0.0, 1e4, 0.0, 2e4, 0.0, 1e4];
     },
     structures: &[
         |f| {
@@ -191,17 +223,27 @@ pub const FAMILY: Family = Family {
         ("charge_drift_film", across_the_film),
         ("charge_drift_kernel", random_kernel),
     ],
-    law: |p, _| absorption_law(&p.effects.charge_drift),
+    law: |p, _| {
+        let cd = &p.effects.charge_drift;
+        absorption_law(cd).or_else(|| series_law(cd))
+    },
 };
 
 /// The element is on at its magnitude (R3 in series, C3 across the film), or an absorption
-/// branch of the spectrum or a synthetic one.
+/// branch of the spectrum or a synthetic one, or a stage of the series spectrum.
 fn is_on(cd: &ChargeDrift) -> bool {
-    cd.element_on() || cd.spectrum_on() || cd.spread.iter().any(|b| b.weight > 0.0)
+    cd.element_on()
+        || cd.spectrum_on()
+        || cd.series_spectrum_on()
+        || cd.spread.iter().any(|b| b.weight > 0.0)
 }
 
-/// Each site at three time constants; the spectrum, one column per capacitance
-/// (book/src/diagnose.md, "Screening").
+/// The series stage's resistance in the probes: a stage of it takes a visible share of the
+/// film's voltage at the paper's drive.
+const PROBE_R3: f64 = 3e4;
+
+/// Each site at three time constants; the spectra, one column per weight (book/src/diagnose.md,
+/// "Screening").
 fn probes(params: &Params, _: f64) -> Vec<Probe> {
     // the film's voltage is held by the source through R0 + R1: a branch across it shows
     // when its R3 = tau3 / C3 is a few times R0 + R1
@@ -210,7 +252,7 @@ fn probes(params: &Params, _: f64) -> Vec<Probe> {
     for form in &FORMS[..3] {
         for tau in [0.3, 1.0, 3.0] {
             let magnitude = if form.name == "series" {
-                ("R3", 3e4)
+                ("R3", PROBE_R3)
             } else {
                 ("C3", tau / (3.0 * r01))
             };
@@ -225,6 +267,12 @@ fn probes(params: &Params, _: f64) -> Vec<Probe> {
             .zip(GRID_NAMES)
             .map(|(&tau, n)| vec![(n, tau / (3.0 * r01))])
             .collect(),
+        scaling: Scaling::Weights,
+    });
+    // each stage of the series grid as the series stage is probed
+    out.push(Probe {
+        form: &FORMS[4],
+        columns: SERIES_NAMES.iter().map(|&n| vec![(n, PROBE_R3)]).collect(),
         scaling: Scaling::Weights,
     });
     out
@@ -305,6 +353,13 @@ const WEIGHT: prony::Weight = prony::Weight {
     axis: "C [F]",
 };
 
+/// The series spectrum's weights: resistances.
+const SERIES_WEIGHT: prony::Weight = prony::Weight {
+    symbol: "R",
+    unit: "Ohm",
+    axis: "R [Ohm]",
+};
+
 /// The absorption across the film and the electrode as a spectrum, with the textbook kernel
 /// it is nearest (effects.md, "charge_drift", "The fitted law"; [`prony::law`]): the branches
 /// (τ_b, C_b), the one branch if it is on and the spectrum's ([`prony::points`]); `None` for
@@ -324,6 +379,30 @@ fn absorption_law(cd: &ChargeDrift) -> Option<FittedLaw> {
     })
 }
 
+/// The series spectrum with the textbook kernel it is nearest (effects.md, "charge_drift", "The
+/// fitted law"; [`prony::law`]): the stages (τ_k, R_k), the voltage they hold after a unit step
+/// of current settling as Σ R_k (1 − exp(−t/τ_k)); `None` where it is off.
+fn series_law(cd: &ChargeDrift) -> Option<FittedLaw> {
+    let points: Vec<(f64, f64)> = prony::points(&cd.series, &[]).collect();
+    (!points.is_empty()).then(|| {
+        prony::law(
+            points,
+            "retention spectrum: the resistance of each (C || R) stage in series against its time R C".into(),
+            &SERIES_WEIGHT,
+        )
+    })
+}
+
+/// How a state's charge is scaled: a series stage's at the current i R through its time τ, a
+/// branch's at its capacitance's charge at 100 V.
+#[derive(Clone, Copy, Debug)]
+enum ChargeScale {
+    /// τ \[s\] of a series stage.
+    Series(f64),
+    /// C \[F\] of a branch.
+    Branch(f64),
+}
+
 /// The drift element's and the absorption branches' terms (effects.md, "charge_drift").
 #[derive(Clone, Debug)]
 pub struct Terms {
@@ -332,25 +411,23 @@ pub struct Terms {
     /// The absorption branches across part of the film: (index, C, τ, site), R = τ / C; a
     /// branch of the spectrum may have C = 0.
     branches: Vec<(usize, f64, f64, DriftSite)>,
-    /// Per state in block order, the capacitance whose charge at 100 V is its scale; `None`
-    /// for a series stage.
-    scales: Vec<Option<f64>>,
-    tau3: f64,
+    /// Per state in block order, how its charge is scaled.
+    scales: Vec<ChargeScale>,
 }
 
 impl Law for Terms {
     type Params = ChargeDrift;
 
-    /// Stage 0 is the element (a series stage or one branch), 1 … 6 the grid's branches, 7 the
-    /// synthetic second trap, the synthetic branches after it. The grid's branches come all
-    /// together, a capacitance of 0 among them included: a fit moves weights to and from 0, and
-    /// a state that came and went with its weight would have no sensitivity.
+    /// Stage 0 is the element (a series stage or one branch), 1 … 6 the grid's branches, 7 … 12
+    /// the grid's series stages, 13 the synthetic second trap, the synthetic branches after it.
+    /// The grid's branches (stages) come all together, a capacitance (resistance) of 0 among
+    /// them included: a fit moves weights to and from 0, and a state that came and went with
+    /// its weight would have no sensitivity.
     fn new(cd: &ChargeDrift, states: &mut States) -> Terms {
         let mut t = Terms {
             stages: Vec::new(),
             branches: Vec::new(),
             scales: Vec::new(),
-            tau3: cd.tau3,
         };
         let series = cd.element_on() && cd.site == DriftSite::Series;
         if series {
@@ -367,6 +444,11 @@ impl Law for Terms {
             let total = cd.grid.iter().sum();
             for (b, (&tau, c)) in GRID.iter().zip(cd.grid).enumerate() {
                 t.branch(states, GRID_STAGE + b, (c, tau, DriftSite::Film), total);
+            }
+        }
+        if cd.series_spectrum_on() {
+            for (k, (&tau, r)) in GRID.iter().zip(cd.series).enumerate() {
+                t.stage(states, SERIES_STAGE + k, r, tau);
             }
         }
         if series && cd.two_stages {
@@ -501,7 +583,8 @@ impl Law for Terms {
             let v = act.voltages(xi)?;
             let (vs, v3) = (v.v1 + v.v2, self.drift_voltage(xi));
             p += act.g0 * ((vs + v3).powi(2) - vs * vs);
-            for &(k, r, t) in &self.stages {
+            // a stage of R = 0 holds no voltage and dissipates nothing
+            for &(k, r, t) in self.stages.iter().filter(|s| s.1 > 0.0) {
                 let vk = r * xi[k] / t;
                 p += vk * vk / r;
             }
@@ -520,15 +603,15 @@ impl Law for Terms {
         out.extend(self.scales.iter().map(|_| 0.0));
     }
 
-    /// The charge at the stage's voltage i R3, with C3 = τ3 / R3; a branch's C at the film's
-    /// 100 V, a branch of the spectrum the spectrum's whole capacitance.
+    /// A stage's charge at the current i its voltage i R takes through C = τ / R, i τ; a
+    /// branch's C at the film's 100 V, a branch of the spectrum the spectrum's whole
+    /// capacitance.
     fn scales(&self, a: &Actuator, _: f64, out: &mut Vec<f64>) {
         let i_dc = a.par.gamma1 * 100.0 / (a.par.r0 + a.par.r1 + a.par.r2);
-        out.extend(
-            self.scales
-                .iter()
-                .map(|c| c.map_or(i_dc * self.tau3, |c| 100.0 * c)),
-        );
+        out.extend(self.scales.iter().map(|s| match *s {
+            ChargeScale::Series(tau) => i_dc * tau,
+            ChargeScale::Branch(c) => 100.0 * c,
+        }));
     }
 }
 
@@ -537,7 +620,7 @@ impl Terms {
     fn stage(&mut self, states: &mut States, stage: usize, r: f64, tau: f64) {
         self.stages
             .push((states.push(Effect::ChargeDrift, stage), r, tau));
-        self.scales.push(None);
+        self.scales.push(ChargeScale::Series(tau));
     }
 
     /// Adds an absorption branch (C, τ, site) with its state, stage `stage`, whose charge is
@@ -545,7 +628,7 @@ impl Terms {
     fn branch(&mut self, states: &mut States, stage: usize, b: (f64, f64, DriftSite), scale: f64) {
         let k = states.push(Effect::ChargeDrift, stage);
         self.branches.push((k, b.0, b.1, b.2));
-        self.scales.push(Some(scale));
+        self.scales.push(ChargeScale::Branch(scale));
     }
 
     /// Voltage over the drift stages, Σ R_k Q_k / τ_k [V].

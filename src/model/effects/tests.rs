@@ -36,6 +36,8 @@ fn all_on(other_forms: bool) -> Params {
             weight: 2e-9,
             tau: 0.7,
         };
+        // the series spectrum with resistances at 0 among its stages
+        f.charge_drift.series = [0.0, 1e4, 0.0, 3e4, 2e4, 0.0];
         // a spectrum with weights at 0 among its branches, and a synthetic branch
         f.creep.grid = [0.02, 0.0, 0.01, 0.0, 0.03, 0.01];
         f.creep.spread[3] = super::prony::Branch {
