@@ -116,6 +116,26 @@ fn charge_drift_is_named() {
     named(Effect::ChargeDrift, 1);
 }
 
+/// Two trapping stages in series (seed 3: at 0.13 and 1.1 s), which the one series stage held
+/// 0.51 points below the noise floor: the series spectrum, its stages' resistances summing to
+/// the truth's, within half a point of the floor.
+#[test]
+fn two_traps_in_series_are_charge_drift_in_its_series_spectrum() {
+    let d = named_from(Truth::Effect(Effect::ChargeDrift), Columns::Heights, 3);
+    assert_eq!(d.forms[0].name, "series_spectrum", "{}", d.answer());
+    near_the_noise_floor("charge_drift", &d, 0.5);
+    let fitted: f64 = d.last.params.effects.charge_drift.series.iter().sum();
+    let truth = hidden::hide(Truth::Effect(Effect::ChargeDrift), 3).unwrap();
+    let truth = truth.params.effects.charge_drift.r3;
+    assert!(
+        (fitted / truth).ln().abs() < 0.3f64.ln_1p(),
+        "fitted {fitted} Ohm in all, truly {truth} Ohm"
+    );
+    // measured: 1.12 times the truth's, spread over the grid's 0.1 … 3 s
+    let (law, _) = law_shown(&d);
+    assert!(law.what.starts_with("retention spectrum"), "{}", law.what);
+}
+
 #[test]
 fn creep_is_named() {
     named(Effect::Creep, 1);
