@@ -198,28 +198,23 @@ macro_rules! actuator_rows {
     };
 }
 
-/// After the rows, `grid PREFIX, UNIT, DESCRIPTION, MODULE;` adds the six weights of a Prony
+/// After the rows, each `grid PREFIX, UNIT, DESCRIPTION, FIELD;` adds the six weights of a Prony
 /// series' grid (book/src/effects.md, "Prony series"; `effects::prony::GRID`),
-/// `PREFIX_30ms` … `PREFIX_10s`, of rule `Weight`: `effects.MODULE.grid[0]` … `[5]`.
+/// `PREFIX_30ms` … `PREFIX_10s`, of rule `Weight`: `effects.FIELD[0]` … `[5]`.
 macro_rules! common_rows {
-    ($($name:literal, $unit:literal, $rule:ident, $desc:literal, $($field:ident).+ $([$idx:literal])?;)*) => {
-        // no grid: its six rows repeated over nothing
-        $crate::model::params::common_rows!(@grid
-            [$($name, $unit, $rule, $desc, $($field).+ $([$idx])?;)*]
-            "", "", "", no_grid;
-        )
+    (@weight $prefix:literal, $gunit:literal, $gdesc:literal, $suffix:literal, $tau:literal, $g:literal, $($gfield:ident).+) => {
+        $crate::model::params::ParamDef {
+            name: concat!($prefix, $suffix),
+            unit: $gunit,
+            description: concat!($gdesc, " at tau = ", $tau, " s (0: off)"),
+            rule: $crate::model::params::Rule::Weight,
+            actuator: None,
+            get: |p| p.effects.$($gfield).+[$g],
+            set: |p, v| p.effects.$($gfield).+[$g] = v,
+        }
     };
     ($($name:literal, $unit:literal, $rule:ident, $desc:literal, $($field:ident).+ $([$idx:literal])?;)*
-     grid $prefix:literal, $gunit:literal, $gdesc:literal, $module:ident;) => {
-        $crate::model::params::common_rows!(@grid
-            [$($name, $unit, $rule, $desc, $($field).+ $([$idx])?;)*]
-            $prefix, $gunit, $gdesc, $module;
-            0 "_30ms" "0.03", 1 "_100ms" "0.1", 2 "_300ms" "0.3", 3 "_1s" "1", 4 "_3s" "3", 5 "_10s" "10"
-        )
-    };
-    (@grid [$($name:literal, $unit:literal, $rule:ident, $desc:literal, $($field:ident).+ $([$idx:literal])?;)*]
-     $prefix:literal, $gunit:literal, $gdesc:literal, $module:ident;
-     $($g:literal $suffix:literal $tau:literal),*) => {
+     $(grid $prefix:literal, $gunit:literal, $gdesc:literal, $($gfield:ident).+;)*) => {
         [$(
             $crate::model::params::ParamDef {
                 name: $name,
@@ -232,15 +227,12 @@ macro_rules! common_rows {
             },
         )*
         $(
-            $crate::model::params::ParamDef {
-                name: concat!($prefix, $suffix),
-                unit: $gunit,
-                description: concat!($gdesc, " at tau = ", $tau, " s (0: off)"),
-                rule: $crate::model::params::Rule::Weight,
-                actuator: None,
-                get: |p| p.effects.$module.grid[$g],
-                set: |p, v| p.effects.$module.grid[$g] = v,
-            },
+            $crate::model::params::common_rows!(@weight $prefix, $gunit, $gdesc, "_30ms", "0.03", 0, $($gfield).+),
+            $crate::model::params::common_rows!(@weight $prefix, $gunit, $gdesc, "_100ms", "0.1", 1, $($gfield).+),
+            $crate::model::params::common_rows!(@weight $prefix, $gunit, $gdesc, "_300ms", "0.3", 2, $($gfield).+),
+            $crate::model::params::common_rows!(@weight $prefix, $gunit, $gdesc, "_1s", "1", 3, $($gfield).+),
+            $crate::model::params::common_rows!(@weight $prefix, $gunit, $gdesc, "_3s", "3", 4, $($gfield).+),
+            $crate::model::params::common_rows!(@weight $prefix, $gunit, $gdesc, "_10s", "10", 5, $($gfield).+),
         )*]
     };
 }

@@ -169,13 +169,8 @@ pub const FAMILY: Family = Family {
         "R3", "Ohm", NonNegative, "charge_drift: resistance R3 of a (C3 || R3) stage in series (0: off; drift_site 0)", effects.charge_drift.r3;
         "tau3", "s", Positive, "charge_drift: time constant tau3 = R3 C3 of the drift element", effects.charge_drift.tau3;
         "C3", "F", NonNegative, "charge_drift: capacitance C3 of an R3-C3 absorption branch (0: off; drift_site 1 or 2)", effects.charge_drift.c3;
-        "R3_30ms", "Ohm", Weight, "charge_drift: resistance of the series spectrum's (C || R) stage at tau = 0.03 s (0: off)", effects.charge_drift.series[0];
-        "R3_100ms", "Ohm", Weight, "charge_drift: resistance of the series spectrum's (C || R) stage at tau = 0.1 s (0: off)", effects.charge_drift.series[1];
-        "R3_300ms", "Ohm", Weight, "charge_drift: resistance of the series spectrum's (C || R) stage at tau = 0.3 s (0: off)", effects.charge_drift.series[2];
-        "R3_1s", "Ohm", Weight, "charge_drift: resistance of the series spectrum's (C || R) stage at tau = 1 s (0: off)", effects.charge_drift.series[3];
-        "R3_3s", "Ohm", Weight, "charge_drift: resistance of the series spectrum's (C || R) stage at tau = 3 s (0: off)", effects.charge_drift.series[4];
-        "R3_10s", "Ohm", Weight, "charge_drift: resistance of the series spectrum's (C || R) stage at tau = 10 s (0: off)", effects.charge_drift.series[5];
-        grid "C3", "F", "charge_drift: capacitance of the spectrum's absorption branch across the film", charge_drift;
+        grid "C3", "F", "charge_drift: capacitance of the spectrum's absorption branch across the film", charge_drift.grid;
+        grid "R3", "Ohm", "charge_drift: resistance of the series spectrum's (C || R) stage", charge_drift.series;
     },
     choices: &[ParamDef {
         name: "drift_site",

@@ -88,7 +88,7 @@ pub const FAMILY: Family = Family {
     rows: &common_rows! {
         "k_v", "N.m/rad", NonNegative, "creep: stiffness k_v of the branch at the free time tau_v (0: off)", effects.creep.k_v;
         "tau_v", "s", Positive, "creep: relaxation time tau_v = eta / k_v", effects.creep.tau_v;
-        grid "k_v", "N.m/rad", "creep: weight of the spectrum", creep;
+        grid "k_v", "N.m/rad", "creep: weight of the spectrum", creep.grid;
     },
     choices: &[],
     state: Some(StateInfo {
