@@ -91,6 +91,19 @@ fn named_in_form(effect: Effect, variant: usize, forms: &[&str], seed: u64) -> d
     );
     let json = diagnose::report::to_json(&d);
     assert_eq!(json["forms"][0], d.forms[0].name);
+    // the named candidate's refit says how far its fit went before it was judged
+    let named = d.rounds[0].candidates.iter().find(|c| c.effect == effect);
+    let refit = named
+        .and_then(|c| c.refit.as_ref())
+        .expect("the named family was refitted");
+    let shown = json["rounds"][0]["candidates"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|c| c["effect"] == effect.name())
+        .unwrap();
+    assert_eq!(shown["iterations"], refit.id.iterations);
+    assert_eq!(shown["stopped_at_budget"], refit.id.out_of_budget);
     d
 }
 

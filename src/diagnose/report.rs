@@ -7,7 +7,7 @@ use std::path::Path;
 use serde_json::{Map, Value, json};
 
 use super::analysis::Disagreement;
-use super::{Candidate, Diagnosis, Remaining, Round, Verdict};
+use super::{Candidate, Diagnosis, Refit, Remaining, Round, Verdict};
 use crate::identify::report::{
     conditions_json, conditions_section, fits_json, residual_series, round,
 };
@@ -40,6 +40,8 @@ fn candidate_json(c: &Candidate) -> Value {
         );
         v["passes"] = json!(r.passes());
         v["failed"] = json!(r.failed);
+        v["iterations"] = json!(r.id.iterations);
+        v["stopped_at_budget"] = json!(r.id.out_of_budget);
     } else if let Some(e) = &c.refit_error {
         v["refit_error"] = json!(e.to_string());
     } else {
@@ -318,6 +320,16 @@ pub fn forms_cell(c: &Candidate) -> String {
     format!("`{}` (of {})", c.form.name, tried.join(", "))
 }
 
+/// Where a refit was judged before it converged: its fit stopped at the iteration budget, so
+/// its ΔBIC bounds the form's from above.
+fn budget_note(r: &Refit) -> String {
+    if r.id.out_of_budget {
+        format!(" (stopped at the budget, {} iterations)", r.id.iterations)
+    } else {
+        String::new()
+    }
+}
+
 /// A round's evidence weights in words, the model without a further effect as "no effect".
 fn evidence_line(evidence: &[(Option<Effect>, f64)]) -> String {
     evidence
@@ -343,11 +355,12 @@ fn candidates_table(md: &mut String, cs: &[Candidate]) {
                     });
                 let _ = writeln!(
                     md,
-                    "| {} | {} | {:.3} | {:.1} | {:+.2} | {:.0} % | {} | {} |",
+                    "| {} | {} | {:.3} | {:.1}{} | {:+.2} | {:.0} % | {} | {} |",
                     c.effect.name(),
                     forms_cell(c),
                     c.score,
                     r.delta_bic,
+                    budget_note(r),
                     r.fit_gain,
                     100.0 * r.gap_closed,
                     interval,
