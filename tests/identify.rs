@@ -2,7 +2,9 @@
 //! parameter, estimate at 3π rad/s, validate at 11 rad/s, 1 % measurement noise.
 
 use hasel_fmu::identify::synth::{self, Columns, Spec};
-use hasel_fmu::identify::{Experiment, Identification, Options, fits, identify, simulate};
+use hasel_fmu::identify::{
+    Experiment, Identification, Options, Weighting, fits, identify, simulate,
+};
 use hasel_fmu::model::Params;
 use nalgebra::{DMatrix, DVector};
 
@@ -372,7 +374,7 @@ fn a_held_out_start_is_found_at_the_fitted_parameters() {
             start: StartChoice::Estimate,
             lag: LagChoice::Stated(0.0),
         };
-        e.conditions = conditions::estimate(&start, &e, choice, rtol)
+        e.conditions = conditions::estimate(&start, &e, choice, (rtol, Weighting::Equal))
             .unwrap()
             .conditions;
         e
@@ -396,7 +398,13 @@ fn a_held_out_start_is_found_at_the_fitted_parameters() {
         conditions: id.conditions[1].conditions.clone(),
         ..val[0].clone()
     };
-    let again = conditions::estimate(&id.params, &judged, opts.conditions.unwrap(), rtol).unwrap();
+    let again = conditions::estimate(
+        &id.params,
+        &judged,
+        opts.conditions.unwrap(),
+        (rtol, opts.weighting),
+    )
+    .unwrap();
     let refound = Experiment {
         conditions: again.conditions,
         ..val[0].clone()

@@ -35,7 +35,9 @@ use std::collections::BTreeMap;
 use std::time::{Duration, Instant};
 
 use crate::identify::conditions::{Choice, LagChoice, StartChoice};
-use crate::identify::{self, Experiment, FIT_RTOL, Hold, Identification, Options as IdOptions, lm};
+use crate::identify::{
+    self, Experiment, FIT_RTOL, Hold, Identification, Options as IdOptions, Weighting, lm,
+};
 use crate::model::effects::{FittedLaw, Form, Magnitude, Probe};
 use crate::model::params::{Rule, parameter};
 use crate::model::{Effect, Params};
@@ -153,6 +155,10 @@ pub struct Candidate {
     /// The other forms and their start values, refitted too when the screening cannot tell
     /// them from the best (`FORM_RUNNER_UP`), best first.
     pub alternatives: Vec<(&'static Form, Vec<(&'static str, f64)>)>,
+    /// The family's forms the screening ranked below those, with their start values: tried in
+    /// the chosen form's place when a later round finds nothing and the model still misses
+    /// the noise floor (book/src/diagnose.md, "Families of forms").
+    pub far_forms: Vec<(&'static Form, Vec<(&'static str, f64)>)>,
     /// Every form refitted, with its ΔBIC or why its refit failed.
     pub forms_tried: Vec<(&'static str, Result<f64, String>)>,
     pub refit: Option<Refit>,
@@ -350,18 +356,16 @@ fn held_out_fits(id: &Identification) -> BTreeMap<String, f64> {
         .collect()
 }
 
-/// The residual sum of squares of `sim` on `exp`, over its channels.
+/// What a diagnosis's fits minimise (book/src/diagnose.md, "The decision rule"): the residual
+/// sum of squares of `sim` on `exp`, each channel in units of its noise.
 fn rss(exp: &Experiment, sim: &[crate::simulation::Sample]) -> f64 {
-    exp.channels
-        .iter()
-        .map(|(c, y)| {
-            y.iter()
-                .zip(sim)
-                .map(|(m, s)| (m - c.of(s)).powi(2))
-                .sum::<f64>()
-        })
-        .sum()
+    exp.misfit(sim, WEIGHTING)
 }
+
+/// How a diagnosis weighs the channels, in its fits and in its BIC alike: each over its noise,
+/// so that a nested refit, which never ends above its start in what it minimises, never ends
+/// above it in the BIC either, and the channels count as the screening counts them.
+const WEIGHTING: Weighting = Weighting::Noise;
 
 /// A candidate's refit in `form` from the screening's values `start` over the current model
 /// `here` (book/src/diagnose.md, "Nested refits"). Where it ends above the current model
@@ -478,16 +482,12 @@ fn degrees(free: &[String], params: &Params) -> usize {
         .count()
 }
 
-/// BIC over the channels of one experiment: Σ_c N_c ln(RSS_c / N_c) + k ln N.
+/// BIC on one experiment with one variance for its channels in units of their noise:
+/// N ln(RSS_w / N) + k ln N, RSS_w the weighted sum the fits minimise ([`rss`]).
 fn bic(exp: &Experiment, sim: &[crate::simulation::Sample], k: usize) -> f64 {
-    let mut total = 0.0;
-    let mut n_all = 0;
-    for (c, y) in &exp.channels {
-        let rss: f64 = y.iter().zip(sim).map(|(m, s)| (m - c.of(s)).powi(2)).sum();
-        total += y.len() as f64 * (rss / y.len() as f64).ln();
-        n_all += y.len();
-    }
-    total + k as f64 * (n_all as f64).ln()
+    let n: usize = exp.channels.iter().map(|(_, y)| y.len()).sum();
+    let n = n as f64;
+    n * (rss(exp, sim) / n).ln() + k as f64 * n.ln()
 }
 
 /// What a refit gained on held-out data over the model before it (book/src/diagnose.md,
@@ -804,6 +804,7 @@ pub fn diagnose(
         // what the fit had gained along it (book/src/identify.md)
         hold: Hold::Reached,
         conditions: Some(refit_conditions(forms)),
+        weighting: WEIGHTING,
         // a refit competes: the polish after its fit, on the sensitivities of tighter
         // simulations, confirms where it stopped well enough to rank it (book/src/identify.md)
         lm: lm::Options {
@@ -1027,6 +1028,22 @@ impl Search {
             added = None;
             added_form = None;
         }
+        let mut revisits = revisits;
+        if added.is_none()
+            && revisits.is_empty()
+            && !self.forms.is_empty()
+            && worst_gap_to_floor(held, &self.current) > FIT_TOLERANCE
+        {
+            revisits = revisit_forms(
+                &self.rounds,
+                &mut self.forms,
+                &mut self.current,
+                (estimation, held),
+                id_opts,
+                opts,
+            )?;
+        }
+        let form_swapped = added.is_none() && revisits.iter().any(|v| v.swapped);
         if !revisits.is_empty() {
             self.effects = self.forms.iter().map(|f| f.effect).collect();
             timing.push((
@@ -1043,7 +1060,7 @@ impl Search {
             revisits,
             provisional,
         });
-        Ok(added.is_some())
+        Ok(added.is_some() || form_swapped)
     }
 
     /// Acts on a round's `decision`: a tie is recorded with the experiments that would
@@ -1331,6 +1348,114 @@ fn revisit(
     Ok(out)
 }
 
+/// When a round adds nothing and a held-out fit is still beyond [`FIT_TOLERANCE`] of its noise
+/// floor, each earlier effect is tried in the forms of its family that its round did not refit
+/// (nor a revisit since), in place of the one it has (book/src/diagnose.md, "Families of
+/// forms"): the screening ranked the forms on the model of that round linearized, which a law far
+/// from it misjudges (a slewing amplifier's first-order lag, seen from the paper's model), and no
+/// later family closes what the chosen form leaves. The try that lowers the BIC most, by at least
+/// [`BIC_MARGIN`], and brings the worst held-out fit nearer its floor takes the place.
+fn revisit_forms(
+    rounds: &[Round],
+    forms: &mut [&'static Form],
+    current: &mut Identification,
+    (estimation, held): (&[Experiment], &[Experiment]),
+    id_opts: &dyn Fn(&[&Form]) -> IdOptions,
+    opts: &Options,
+) -> Result<Vec<Revisit>, Error> {
+    let same = |a: &Form, b: &Form| a.effect == b.effect && a.name == b.name;
+    let revisited = |g: &Form| {
+        rounds
+            .iter()
+            .flat_map(|r| &r.revisits)
+            .any(|v| v.by.is_some_and(|f| same(f, g)))
+    };
+    let neutral = Params::default();
+    let mut tries = Vec::new();
+    for round in rounds {
+        let Some(pos) = forms.iter().position(|f| Some(f.effect) == round.added) else {
+            continue;
+        };
+        let Some(c) = round
+            .candidates
+            .iter()
+            .find(|c| c.effect == forms[pos].effect)
+        else {
+            continue;
+        };
+        for (g, start) in c.alternatives.iter().chain(&c.far_forms) {
+            let refitted = c.forms_tried.iter().any(|(name, _)| *name == g.name);
+            if refitted || revisited(g) || same(g, forms[pos]) {
+                continue;
+            }
+            let mut p = current.params.clone();
+            for name in form_parameters(forms[pos]) {
+                p.set(name, neutral.get(name)?)?;
+            }
+            for &(name, v) in start.iter().chain(g.settings) {
+                p.set(name, v)?;
+            }
+            let mut with = forms.to_vec();
+            with[pos] = *g;
+            tries.push((pos, *g, with, p));
+        }
+    }
+    if tries.is_empty() {
+        return Ok(Vec::new());
+    }
+    let refit_opts: Vec<IdOptions> = tries.iter().map(|t| id_opts(&t.2)).collect();
+    let refits: Vec<_> = std::thread::scope(|s| {
+        let handles: Vec<_> = tries
+            .iter()
+            .zip(&refit_opts)
+            .map(|((_, _, _, p), o)| {
+                s.spawn(move || {
+                    let mut o = o.clone();
+                    o.lm.deadline = opts.refit_budget.map(|b| Instant::now() + b);
+                    identify::identify(p, estimation, held, &o)
+                })
+            })
+            .collect();
+        handles
+            .into_iter()
+            .map(|h| h.join().expect("a refit does not panic"))
+            .collect()
+    });
+    let bic_of = |id: &Identification, with: &[&Form]| {
+        bic(
+            &estimation[0],
+            &id.simulated[0],
+            unknowns(id, degrees(&free_list(with), &id.params)),
+        )
+    };
+    let bic_now = bic_of(current, forms);
+    let gap_now = worst_gap_to_floor(held, current);
+    let mut out = Vec::new();
+    let mut best: Option<(usize, f64, Identification)> = None;
+    for (k, ((pos, g, with, _), refit)) in tries.iter().zip(refits).enumerate() {
+        let delta_bic = refit.as_ref().map(|id| bic_of(id, with) - bic_now);
+        if let (Ok(id), Ok(delta)) = (&refit, &delta_bic) {
+            let better = best.as_ref().is_none_or(|b| *delta < b.1);
+            if *delta <= -BIC_MARGIN && worst_gap_to_floor(held, id) < gap_now && better {
+                best = Some((k, *delta, id.clone()));
+            }
+        }
+        out.push(Revisit {
+            replaced: forms[*pos].effect,
+            by: Some(*g),
+            delta_bic: delta_bic.map_err(|e| e.to_string()),
+            swapped: false,
+        });
+    }
+    if let Some((k, _, id)) = best {
+        let (pos, g, _, _) = &tries[k];
+        out[k].swapped = true;
+        forms[*pos] = *g;
+        *current = converged(id, estimation, held, &refit_opts[k], opts.refit_budget);
+    }
+    Ok(out)
+}
+
 /// The parameters a form frees and sets.
 fn form_parameters(form: &Form) -> impl Iterator<Item = &'static str> {
     form.free
@@ -1433,16 +1558,19 @@ fn screen(
             ranked.sort_by(|a, b| b.worth.total_cmp(&a.worth));
             let mut ranked = ranked.into_iter();
             let first = ranked.next().expect("a family has a form");
-            let alternatives = ranked
-                .filter(|s| first.worth > 0.0 && s.worth >= FORM_RUNNER_UP * first.worth)
-                .map(|s| (s.form, s.start))
-                .collect();
+            let (alternatives, far_forms) = ranked
+                .map(|s| (s.form, s.start, s.worth))
+                .partition::<Vec<_>, _>(|s| {
+                    first.worth > 0.0 && s.2 >= FORM_RUNNER_UP * first.worth
+                });
+            let no_worth = |v: Vec<(_, _, f64)>| v.into_iter().map(|(f, s, _)| (f, s)).collect();
             Candidate {
                 effect,
                 form: first.form,
                 score: first.score,
                 start: first.start,
-                alternatives,
+                alternatives: no_worth(alternatives),
+                far_forms: no_worth(far_forms),
                 forms_tried: Vec::new(),
                 refit: None,
                 refit_error: None,
@@ -1700,6 +1828,7 @@ mod tests {
             score,
             start: Vec::new(),
             alternatives: Vec::new(),
+            far_forms: Vec::new(),
             forms_tried: Vec::new(),
             refit: None,
             refit_error: None,
@@ -1742,6 +1871,7 @@ mod tests {
                 .iter()
                 .map(|f| (f, Vec::new()))
                 .collect(),
+            far_forms: Vec::new(),
             forms_tried: delta_bic
                 .map(|d| (effect.forms()[0].name, Ok(d)))
                 .into_iter()
@@ -1800,6 +1930,7 @@ mod tests {
         let (estimation, held) = exps.split_at(1);
         let base_opts = IdOptions {
             conditions: None,
+            weighting: WEIGHTING,
             ..IdOptions::default()
         };
         let base = identify::identify(&Params::default(), estimation, held, &base_opts).unwrap();
@@ -1813,6 +1944,7 @@ mod tests {
             iteration_budget: Some(2),
             hold: Hold::Reached,
             conditions: None,
+            weighting: WEIGHTING,
             ..IdOptions::default()
         };
         let mut p = base.params.clone();

@@ -631,6 +631,7 @@ fn round_section(md: &mut String, k: usize, r: &Round) {
                 f.free.join(", ")
             ),
             (Some(e), _) => format!("Added: `{}`, {}.", e.name(), e.form()),
+            (None, _) if r.revisits.iter().any(|v| v.by.is_some_and(|f| f.effect == v.replaced)) => format!("Nothing added in this round, and a held-out fit is still beyond {} point(s) of its noise floor: each earlier effect was tried in the forms of its family its round had not refitted (below).", super::FIT_TOLERANCE),
             (None, _) if !r.revisits.is_empty() => "Nothing added in this round: its best candidate, failing only by leaving a held-out fit beyond the tolerance of its noise floor, was tried tentatively with the earlier effects revisited beside it (below), and none of them was replaced.".into(),
             (None, _) => "Nothing added in this round.".into(),
         }
@@ -653,6 +654,12 @@ fn round_section(md: &mut String, k: usize, r: &Round) {
     }
     for v in &r.revisits {
         let against = match v.by {
+            Some(f) if f.effect == v.replaced => {
+                format!(
+                    "its own family's form `{}`, which its round had not refitted,",
+                    f.name
+                )
+            }
             Some(f) => format!(
                 "`{}` in the form `{}`, its round's runner-up,",
                 f.effect.name(),
@@ -666,6 +673,9 @@ fn round_section(md: &mut String, k: usize, r: &Round) {
             v.replaced.name(),
             match (&v.delta_bic, v.swapped) {
                 (Ok(b), true) if v.by.is_none() => format!("ΔBIC {b:.1}, dropped"),
+                (Ok(b), true) if v.by.is_some_and(|f| f.effect == v.replaced) => {
+                    format!("ΔBIC {b:.1}, the form takes the place of the one it had")
+                }
                 (Ok(b), true) => format!("ΔBIC {b:.1}, the runner-up takes its place"),
                 (Ok(b), false) => format!("ΔBIC {b:.1}, kept"),
                 (Err(e), _) => format!("the refit failed ({e}), kept"),

@@ -6,7 +6,7 @@
 
 use nalgebra::DMatrix;
 
-use super::experiment::{Channel, Conditions, Experiment};
+use super::experiment::{Channel, Conditions, Experiment, Weighting};
 use super::fit::{median, noise_level, robust_sigma, span};
 use super::{Error, lm, simulate};
 use crate::model::{Params, Platform};
@@ -92,6 +92,8 @@ struct Unknowns<'a> {
     params: &'a Params,
     exp: &'a Experiment,
     rtol: f64,
+    /// The factor on each channel's residuals (`Weighting`).
+    factors: Vec<f64>,
     lag: bool,
     start: bool,
     slow_scales: Vec<f64>,
@@ -132,21 +134,16 @@ impl lm::Residuals for Unknowns<'_> {
     fn eval(&self, z: &[f64], r: &mut [f64]) -> Result<(), Error> {
         let mut exp = self.exp.clone();
         exp.conditions = self.conditions(z);
-        residuals(self.params, &exp, self.rtol, r)
-    }
-}
-
-/// Simulated minus measured, channel after channel.
-fn residuals(params: &Params, exp: &Experiment, rtol: f64, r: &mut [f64]) -> Result<(), Error> {
-    let sim = simulate(params, exp, rtol)?;
-    let mut k = 0;
-    for (c, y) in &exp.channels {
-        for (s, m) in sim.iter().zip(y) {
-            r[k] = c.of(s) - m;
-            k += 1;
+        let sim = simulate(self.params, &exp, self.rtol)?;
+        let mut k = 0;
+        for ((c, y), f) in exp.channels.iter().zip(&self.factors) {
+            for (s, m) in sim.iter().zip(y) {
+                r[k] = f * (c.of(s) - m);
+                k += 1;
+            }
         }
+        Ok(())
     }
-    Ok(())
 }
 
 /// Whether the first sample of `exp` stands away from the rest state's outputs by more than
@@ -233,7 +230,7 @@ pub fn estimate(
     params: &Params,
     exp: &Experiment,
     choice: Choice,
-    rtol: f64,
+    (rtol, weighting): (f64, Weighting),
 ) -> Result<Found, Error> {
     // a record with a lead-in has its conditions set there alone: what follows is judged
     let lead_in;
@@ -259,6 +256,11 @@ pub fn estimate(
         params,
         exp,
         rtol,
+        factors: exp
+            .channels
+            .iter()
+            .map(|(c, _)| exp.residual_factor(*c, weighting))
+            .collect(),
         lag: estimate_lag,
         start: estimate_start,
         slow_scales,

@@ -4,6 +4,7 @@
 
 use std::path::{Path, PathBuf};
 
+use super::fit::noise_level;
 use crate::io::csv::Table;
 use crate::io::file::FileError;
 use crate::simulation::{Input, Interpolation, Sample, Start};
@@ -41,6 +42,23 @@ impl Channel {
         }
     }
 }
+
+/// How a fit counts each channel's residuals (book/src/identify.md, "How `hasel identify`
+/// estimates").
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Weighting {
+    /// In each channel's own unit, as the paper fits.
+    #[default]
+    Equal,
+    /// Each channel over the measurement noise its record shows ([`noise_level`]): residuals
+    /// in units of noise, so that a quiet channel counts by what its noise allows and one
+    /// pooled variance describes them all (what `hasel diagnose`'s BIC assumes).
+    Noise,
+}
+
+/// The smallest noise a channel is taken to have, as a share of its spread: a record without
+/// noise (a simulation) is weighed by its spread, not by its rounding.
+const NOISE_FLOOR_SHARE: f64 = 1e-6;
 
 /// Fewest samples and shortest duration an experiment may have: the slowest actuator settles
 /// with a 0.42 s time constant, so a shorter record determines nothing.
@@ -228,6 +246,38 @@ impl Experiment {
         self.t.iter().map(|t| t - self.conditions.lag).collect()
     }
 
+    /// The factor on `channel`'s residuals under `weighting` (1 where it is not measured).
+    pub fn residual_factor(&self, channel: Channel, weighting: Weighting) -> f64 {
+        match (weighting, self.measured(channel)) {
+            (Weighting::Noise, Some(y)) => {
+                let mean = y.iter().sum::<f64>() / y.len() as f64;
+                let spread =
+                    (y.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / y.len() as f64).sqrt();
+                let noise = noise_level(&self.t, y)
+                    .max(NOISE_FLOOR_SHARE * spread)
+                    .max(f64::MIN_POSITIVE);
+                1.0 / noise
+            }
+            _ => 1.0,
+        }
+    }
+
+    /// The sum of the squared residuals of `sim` over the channels, each weighted by
+    /// `weighting`: what a fit so weighted minimises.
+    pub fn misfit(&self, sim: &[Sample], weighting: Weighting) -> f64 {
+        self.channels
+            .iter()
+            .map(|(c, y)| {
+                let rss = y
+                    .iter()
+                    .zip(sim)
+                    .map(|(m, s)| (m - c.of(s)).powi(2))
+                    .sum::<f64>();
+                self.residual_factor(*c, weighting).powi(2) * rss
+            })
+            .sum()
+    }
+
     /// The measured values of `channel`, if the experiment has it.
     pub fn measured(&self, channel: Channel) -> Option<&[f64]> {
         self.channels
@@ -261,6 +311,50 @@ mod tests {
                 )
             })
             .collect()
+    }
+
+    /// Weighted by noise, a channel counts in units of its noise σ: h1 alternates ±1 about a
+    /// line (departures from the neighbours' line ±2, σ = 2/√1.5), h2 ±4 (four times that); a
+    /// channel without noise is weighed by a millionth of its spread, not by its rounding.
+    #[test]
+    fn channels_weigh_by_their_noise() {
+        let e = parse(&format!(
+            "t,U1,U2,U3,h1,h2,h3\n{}",
+            (0..100)
+                .map(|k| {
+                    let s = if k % 2 == 0 { 1.0 } else { -1.0 };
+                    format!(
+                        "{},1,2,3,{},{},{k}\n",
+                        0.02 * k as f64,
+                        k as f64 + s,
+                        4.0 * s
+                    )
+                })
+                .collect::<String>()
+        ))
+        .unwrap();
+        let factor = |i| e.residual_factor(Channel::H(i), Weighting::Noise);
+        assert!(
+            (factor(0) - 1.5f64.sqrt() / 2.0).abs() < 1e-9,
+            "{}",
+            factor(0)
+        );
+        assert!((factor(1) / factor(0) - 0.25).abs() < 1e-9, "{}", factor(1));
+        let spread = (((100.0f64 * 100.0) - 1.0) / 12.0).sqrt();
+        assert!((factor(2) * NOISE_FLOOR_SHARE * spread - 1.0).abs() < 1e-6);
+        assert_eq!(e.residual_factor(Channel::H(0), Weighting::Equal), 1.0);
+        // simulated one off on every sample of every channel
+        let sim: Vec<Sample> = (0..100)
+            .map(|k| Sample {
+                t: e.t[k],
+                u: [1.0, 2.0, 3.0],
+                h: [0, 1, 2].map(|i| e.channels[i].1[k] + 1.0),
+                tip: [0.0; 3],
+            })
+            .collect();
+        assert_eq!(e.misfit(&sim, Weighting::Equal), 300.0);
+        let weighted = 100.0 * (factor(0).powi(2) + factor(1).powi(2) + factor(2).powi(2));
+        assert!((e.misfit(&sim, Weighting::Noise) / weighted - 1.0).abs() < 1e-9);
     }
 
     #[test]

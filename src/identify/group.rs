@@ -4,7 +4,7 @@
 
 use nalgebra::{DMatrix, DVector};
 
-use super::experiment::{Channel, Experiment};
+use super::experiment::{Channel, Experiment, Weighting};
 use super::{Error, Hold, Options, lm, simulate};
 use crate::model::Params;
 use crate::model::params::{ParamDef, Rule};
@@ -63,6 +63,8 @@ struct Problem<'a> {
     coords: Vec<Coordinate>,
     channels: Vec<Channel>,
     experiments: &'a [Experiment],
+    /// Per experiment, the factor on each of `channels`' residuals (`Weighting`).
+    factors: Vec<Vec<f64>>,
     rtol: f64,
     len: usize,
     counter: std::sync::atomic::AtomicUsize,
@@ -108,11 +110,11 @@ impl Problem<'_> {
         // the directions in as many parts as the cores this fit may take now, a run each: each
         // direction's sensitivities are the same whichever run carries it
         let part = directions.len().div_ceil(lm::share()).max(1);
-        for exp in self.experiments {
+        for (exp, factors) in self.experiments.iter().zip(&self.factors) {
             let runs = self.sensitive_runs(&p, &directions, part, exp)?;
             self.counter
                 .fetch_add(1, std::sync::atomic::Ordering::Relaxed);
-            for &c in &self.channels {
+            for (&c, &f) in self.channels.iter().zip(factors) {
                 if exp.measured(c).is_some() {
                     let o = match c {
                         Channel::H(i) => i,
@@ -120,7 +122,7 @@ impl Problem<'_> {
                     };
                     for k in 0..exp.t.len() {
                         for j in 0..x.len() {
-                            jac[(row, j)] = runs[j / part].output(k, j % part)[o];
+                            jac[(row, j)] = f * runs[j / part].output(k, j % part)[o];
                         }
                         row += 1;
                     }
@@ -171,14 +173,14 @@ impl lm::Residuals for Problem<'_> {
     fn eval(&self, x: &[f64], r: &mut [f64]) -> Result<(), Error> {
         let p = self.params_at(x)?;
         let mut k = 0;
-        for exp in self.experiments {
+        for (exp, factors) in self.experiments.iter().zip(&self.factors) {
             let sim = simulate(&p, exp, self.rtol)?;
             self.counter
                 .fetch_add(1, std::sync::atomic::Ordering::Relaxed);
-            for &c in &self.channels {
+            for (&c, &f) in self.channels.iter().zip(factors) {
                 if let Some(y) = exp.measured(c) {
                     for (s, m) in sim.iter().zip(y) {
-                        r[k] = c.of(s) - m;
+                        r[k] = f * (c.of(s) - m);
                         k += 1;
                     }
                 }
@@ -434,13 +436,14 @@ pub(super) fn fit_group(
     let coords = Coordinate::of(defs, base);
     // counted among the fits running while it runs: their Jacobians share the cores
     let _running = lm::running();
-    let problem = Problem::new(base, &coords, group, experiments, opts.rtol, len);
+    let weighed = (experiments, opts.weighting);
+    let problem = Problem::new(base, &coords, group, weighed, opts.rtol, len);
     // for the covariance: tighter simulations (see `polish`)
     let precise = Problem::new(
         base,
         &coords,
         group,
-        experiments,
+        weighed,
         opts.rtol * COVARIANCE_RTOL_FACTOR,
         len,
     );
@@ -616,13 +619,13 @@ fn snapped_to_single(mut v: DVector<f64>) -> DVector<f64> {
 }
 
 impl<'a> Problem<'a> {
-    /// The residuals of `group`'s channels in `experiments` (`len` of them), its parameters
-    /// moved in `coords` from `base`, simulated to `rtol`.
+    /// The residuals of `group`'s channels in `experiments` (`len` of them) weighted by
+    /// `weighting`, its parameters moved in `coords` from `base`, simulated to `rtol`.
     fn new(
         base: &'a Params,
         coords: &[Coordinate],
         group: &Group,
-        experiments: &'a [Experiment],
+        (experiments, weighting): (&'a [Experiment], Weighting),
         rtol: f64,
         len: usize,
     ) -> Self {
@@ -631,6 +634,13 @@ impl<'a> Problem<'a> {
             coords: coords.to_vec(),
             channels: group.channels.clone(),
             experiments,
+            factors: experiments
+                .iter()
+                .map(|e| {
+                    let factor = |&c: &Channel| e.residual_factor(c, weighting);
+                    group.channels.iter().map(factor).collect()
+                })
+                .collect(),
             rtol,
             len,
             counter: Default::default(),
@@ -838,8 +848,9 @@ struct Polished {
     jacobian: DMatrix<f64>,
 }
 
-/// JᵀJ and the covariance of the unweighted least-squares estimate with per-channel noise
-/// levels σ_c from the residuals: the sandwich (JᵀJ)⁻¹ JᵀΣJ (JᵀJ)⁻¹ in the reduced coordinates
+/// JᵀJ and the covariance of the least-squares estimate with per-channel noise levels σ_c from
+/// the residuals (as the fit weighs them: a weighting's factor scales a channel's rows of J and
+/// its σ_c alike): the sandwich (JᵀJ)⁻¹ JᵀΣJ (JᵀJ)⁻¹ in the reduced coordinates
 /// (`None` where JᵀJ is singular).
 fn sandwich_covariance(
     j: &DMatrix<f64>,

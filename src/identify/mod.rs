@@ -25,7 +25,7 @@ use crate::model::params::{ParamDef, parameter};
 use crate::model::{Params, Platform};
 use crate::simulation::{DEFAULT_RTOL, Sample, Simulator};
 pub use error::Error;
-pub use experiment::{Channel, Conditions, Experiment};
+pub use experiment::{Channel, Conditions, Experiment, Weighting};
 pub use group::orthonormal;
 use group::{fit_group, groups};
 
@@ -62,6 +62,8 @@ pub struct Options {
     /// What to estimate of each record's conditions (its start, its sensor's lag), or `None`:
     /// the experiments' conditions as they are.
     pub conditions: Option<conditions::Choice>,
+    /// How each channel's residuals count, in the fit and in the conditions' estimate.
+    pub weighting: Weighting,
 }
 
 /// Where a group's fit holds a direction of parameter space the data do not determine
@@ -98,6 +100,7 @@ impl Default for Options {
             iteration_budget: None,
             hold: Hold::Start,
             conditions: Some(conditions::Choice::default()),
+            weighting: Weighting::Equal,
         }
     }
 }
@@ -256,7 +259,7 @@ pub fn identify(
     let began = Instant::now();
     let found = |p: &Params, exps: &[Experiment], c: conditions::Choice| -> Result<Vec<_>, _> {
         exps.iter()
-            .map(|e| conditions::estimate(p, e, c, opts.rtol))
+            .map(|e| conditions::estimate(p, e, c, (opts.rtol, opts.weighting)))
             .collect()
     };
     let under = |exps: &[Experiment], found: &[conditions::Found]| -> Vec<Experiment> {
@@ -321,7 +324,7 @@ pub fn identify(
         id.simulations += simulations;
     }
     if fitted_last && !val.is_empty() {
-        validated_under_fit(&mut id, &mut settled, &val, choice, opts.rtol)?;
+        validated_under_fit(&mut id, &mut settled, &val, choice, opts)?;
     }
     id.seconds = began.elapsed().as_secs_f64();
     id.conditions = settled;
@@ -337,11 +340,11 @@ fn validated_under_fit(
     settled: &mut [conditions::Found],
     val: &[Experiment],
     choice: conditions::Choice,
-    rtol: f64,
+    opts: &Options,
 ) -> Result<(), Error> {
-    let first = id.estimation.len();
+    let (first, rtol) = (id.estimation.len(), opts.rtol);
     for (k, e) in val.iter().enumerate() {
-        let f = conditions::estimate(&id.params, e, choice, rtol)?;
+        let f = conditions::estimate(&id.params, e, choice, (rtol, opts.weighting))?;
         let under = Experiment {
             conditions: f.conditions.clone(),
             ..e.clone()
