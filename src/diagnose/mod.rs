@@ -56,6 +56,11 @@ const NOISE_FLOOR_EXCESS: f64 = 0.05;
 /// Points of held-out fit within which a model with its effects is at the noise floor: a
 /// further effect is looked for only beyond it, and the report says what remains beyond it.
 const AT_FLOOR: f64 = 0.5;
+/// Residual variance beyond the noise, as a fraction of it, that a held-out output may keep and
+/// the model still be at its floor: a fit's points hide more variance the higher its floor (at a
+/// floor of 97 %, 0.5 points below it is a third more variance than the noise; at 90 %, a tenth),
+/// so a further effect is looked for also where a fit within `AT_FLOOR` leaves more than a fifth.
+const HELD_OUT_EXCESS: f64 = 0.2;
 /// Points of held-out fit within which a later effect (or a revisit's swap) must bring every
 /// held-out output to its noise floor: looser than `AT_FLOOR`, as the library's term is
 /// rarely the data's exact form.
@@ -961,7 +966,15 @@ impl Search {
         if excess < NOISE_FLOOR_EXCESS {
             return Ok(false);
         }
-        if !self.effects.is_empty() && worst_gap_to_floor(held, &self.current) <= AT_FLOOR {
+        let held_out_excess = now
+            .iter()
+            .filter(|d| d.experiment != estimation[0].name)
+            .map(|d| d.excess)
+            .fold(0.0, f64::max);
+        if !self.effects.is_empty()
+            && worst_gap_to_floor(held, &self.current) <= AT_FLOOR
+            && held_out_excess <= HELD_OUT_EXCESS
+        {
             return Ok(false);
         }
         let t0 = Instant::now();
