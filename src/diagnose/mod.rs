@@ -495,6 +495,13 @@ fn bic(exp: &Experiment, sim: &[crate::simulation::Sample], k: usize) -> f64 {
     n * (rss(exp, sim) / n).ln() + k as f64 * n.ln()
 }
 
+/// The BIC on `exp` (the estimation record) of `id`, a model with the effects' `forms`: its
+/// unknowns are the free parameters it uses and its states at a start mid-run.
+fn model_bic(exp: &Experiment, id: &Identification, forms: &[&Form]) -> f64 {
+    let k = unknowns(id, degrees(&free_list(forms), &id.params));
+    bic(exp, &id.simulated[0], k)
+}
+
 /// What a refit gained on held-out data over the model before it (book/src/diagnose.md,
 /// "The decision rule").
 struct HeldOutGain {
@@ -1304,11 +1311,7 @@ fn revisit(
         if let Some((form, r)) = runner_up {
             tries.push((Some(form), r.id.params.clone()));
         }
-        let bic_now = bic(
-            &estimation[0],
-            &current.simulated[0],
-            unknowns(current, degrees(&free_list(forms), &current.params)),
-        );
+        let bic_now = model_bic(&estimation[0], current, forms);
         let gap = |id: &Identification| worst_gap_to_floor(held, id);
         let gap_now = gap(current);
         for (by, mut start) in tries {
@@ -1329,11 +1332,7 @@ fn revisit(
             let refit = identify::identify(&start, estimation, held, &o);
             let (delta_bic, swapped) = match refit {
                 Ok(id) => {
-                    let delta = bic(
-                        &estimation[0],
-                        &id.simulated[0],
-                        unknowns(&id, degrees(&o.free, &id.params)),
-                    ) - bic_now;
+                    let delta = model_bic(&estimation[0], &id, &with) - bic_now;
                     // a replacement must reach the floor; fewer effects need only do no worse
                     // on held-out data than more, the BIC having found the one dropped not needed
                     let held_out_ok =
@@ -1434,13 +1433,7 @@ fn revisit_forms(
             .map(|h| h.join().expect("a refit does not panic"))
             .collect()
     });
-    let bic_of = |id: &Identification, with: &[&Form]| {
-        bic(
-            &estimation[0],
-            &id.simulated[0],
-            unknowns(id, degrees(&free_list(with), &id.params)),
-        )
-    };
+    let bic_of = |id: &Identification, with: &[&Form]| model_bic(&estimation[0], id, with);
     let bic_now = bic_of(current, forms);
     let gap_now = worst_gap_to_floor(held, current);
     let mut out = Vec::new();
@@ -1604,15 +1597,9 @@ fn judge(
     held: &[Experiment],
     forms: &[&Form],
 ) -> Refit {
-    let k_before = degrees(&free_list(forms), &before.params);
     let with: Vec<&Form> = forms.iter().copied().chain([form]).collect();
-    let k_after = degrees(&free_list(&with), &id.params);
-    let delta_bic = bic(&estimation[0], &id.simulated[0], unknowns(&id, k_after))
-        - bic(
-            &estimation[0],
-            &before.simulated[0],
-            unknowns(before, k_before),
-        );
+    let delta_bic =
+        model_bic(&estimation[0], &id, &with) - model_bic(&estimation[0], before, forms);
     let held_gain = held_out_gain(held, before, &id);
     let (fit_gain, gap_closed) = (held_gain.gain, held_gain.closed);
     let (interval, excludes) = magnitude_interval(form, &id, estimation);
