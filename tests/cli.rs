@@ -243,6 +243,30 @@ fn identify_refuses_bad_data_and_writes_nothing() {
     assert!(!out.exists());
 }
 
+/// `--weigh noise` fits each output over its record's noise and says so in the JSON and the
+/// report; a weighting it does not know is refused by name.
+#[test]
+fn identify_weighs_by_the_noise_when_asked() {
+    let dir = scratch("identify_weigh");
+    let exp = dir.join("e.csv");
+    let o = hasel(&["synth", "--t-end", "1", "--noise", "0.01", "--out", s(&exp)]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let out = dir.join("out");
+    let args = ["identify", s(&exp), "--free", "gamma1_1", "--out", s(&out)];
+    let o = hasel(&[&args[..], &["--weigh", "noise"]].concat());
+    assert!(o.status.success(), "{}", stderr(&o));
+    let json = std::fs::read_to_string(out.join("identification.json")).unwrap();
+    assert!(json.contains("\"weighting\": \"noise\""), "{json}");
+    let report = std::fs::read_to_string(out.join("report.md")).unwrap();
+    assert!(
+        report.contains("in units of the noise its record shows"),
+        "{report}"
+    );
+    let o = hasel(&[&args[..], &["--weigh", "loud"]].concat());
+    assert!(!o.status.success());
+    assert!(stderr(&o).contains("--weigh"), "{}", stderr(&o));
+}
+
 #[test]
 fn diagnose_answers_in_json_and_refuses_bad_data() {
     let dir = scratch("diagnose");

@@ -401,6 +401,14 @@ impl Hidden {
         })
     }
 
+    /// The device's true model, where the whole truth is one (no drive distorted outside the
+    /// model, no floor vibration): refitted, it tells a miss from a case the records do not
+    /// decide ([`crate::diagnose::base_gap`]).
+    pub fn true_model(&self) -> Option<&Params> {
+        let outside = self.wandering_delay.is_some() || self.ripple.is_some();
+        (!outside && self.vibration.is_none()).then_some(&self.params)
+    }
+
     /// This case recorded with `protocol`.
     pub fn with_protocol(mut self, protocol: Protocol) -> Hidden {
         self.description = format!("{}; {}", self.description, protocol.describe());

@@ -805,39 +805,9 @@ pub fn diagnose(
     let (experiments, outliers) =
         analysis::trim_outliers(experiments).map_err(identify::Error::from)?;
     let experiments = with_held_out(experiments)?;
-    let (estimation, held) = experiments.split_at(1);
     let bounds = base_bounds(start, opts)?;
-    let id_opts = |forms: &[&Form]| IdOptions {
-        free: free_list(forms),
-        bounds: bounds.clone(),
-        rtol: opts.rtol,
-        iteration_budget: Some(REFIT_ITERATIONS),
-        // a refit starts from the screening's guess: held there, a direction would give back
-        // what the fit had gained along it (book/src/identify.md)
-        hold: Hold::Reached,
-        conditions: Some(refit_conditions(forms)),
-        weighting: WEIGHTING,
-        // a refit competes: the polish after its fit, on the sensitivities of tighter
-        // simulations, confirms where it stopped well enough to rank it (book/src/identify.md)
-        lm: lm::Options {
-            confirm: false,
-            ..IdOptions::default().lm
-        },
-    };
-    // the paper's model fitted to convergence: every candidate is judged against it
-    let base = identify::identify(
-        start,
-        estimation,
-        held,
-        &IdOptions {
-            iteration_budget: None,
-            // as `hasel identify` fits it: what the data leave open stays at the prior
-            hold: Hold::Start,
-            conditions: Some(opts.conditions),
-            lm: IdOptions::default().lm,
-            ..id_opts(&[])
-        },
-    )?;
+    let id_opts = |forms: &[&Form]| refit_options(forms, &bounds, opts);
+    let base = fit_base(start, &experiments, &bounds, opts)?;
     let ordered = under_found_conditions(&experiments, &base);
     let (estimation, held) = ordered.split_at(1);
     timing.push((
@@ -897,6 +867,74 @@ pub fn diagnose(
         outliers,
         fits,
     })
+}
+
+/// How a diagnosis fits the model with the effects of `forms` free (the base parameters within
+/// `bounds`): weighed by each output's noise, the records' conditions estimated beside it, a
+/// refit bounded in iterations.
+fn refit_options(
+    forms: &[&Form],
+    bounds: &BTreeMap<String, (f64, f64)>,
+    opts: &Options,
+) -> IdOptions {
+    IdOptions {
+        free: free_list(forms),
+        bounds: bounds.clone(),
+        rtol: opts.rtol,
+        iteration_budget: Some(REFIT_ITERATIONS),
+        // a refit starts from the screening's guess: held there, a direction would give back
+        // what the fit had gained along it (book/src/identify.md)
+        hold: Hold::Reached,
+        conditions: Some(refit_conditions(forms)),
+        weighting: WEIGHTING,
+        // a refit competes: the polish after its fit, on the sensitivities of tighter
+        // simulations, confirms where it stopped well enough to rank it (book/src/identify.md)
+        lm: lm::Options {
+            confirm: false,
+            ..IdOptions::default().lm
+        },
+    }
+}
+
+/// The paper's model fitted to convergence from `start` on the first of `experiments`, the
+/// others held out (book/src/diagnose.md, workflow step 1): every candidate is judged against it.
+fn fit_base(
+    start: &Params,
+    experiments: &[Experiment],
+    bounds: &BTreeMap<String, (f64, f64)>,
+    opts: &Options,
+) -> Result<Identification, Error> {
+    let (estimation, held) = experiments.split_at(1);
+    Ok(identify::identify(
+        start,
+        estimation,
+        held,
+        &IdOptions {
+            iteration_budget: None,
+            // as `hasel identify` fits it: what the data leave open stays at the prior
+            hold: Hold::Start,
+            conditions: Some(opts.conditions),
+            lm: IdOptions::default().lm,
+            ..refit_options(&[], bounds, opts)
+        },
+    )?)
+}
+
+/// The worst held-out gap to the noise floor \[points\] the paper's parameters leave, fitted
+/// from `start` as a diagnosis fits them first, on the records as it prepares them. From a
+/// device's true model (its hidden mechanisms in place) it tells whether the records can
+/// decide that model at all: `hasel bench --diagnose` counts a miss whose truth leaves more
+/// than [`FIT_TOLERANCE`] as one its records do not decide.
+pub fn base_gap(
+    start: &Params,
+    experiments: Vec<Experiment>,
+    opts: &Options,
+) -> Result<f64, Error> {
+    let (experiments, _) = analysis::trim_outliers(experiments).map_err(identify::Error::from)?;
+    let experiments = with_held_out(experiments)?;
+    let base = fit_base(start, &experiments, &base_bounds(start, opts)?, opts)?;
+    let ordered = under_found_conditions(&experiments, &base);
+    Ok(worst_gap_to_floor(&ordered[1..], &base))
 }
 
 /// The base parameters' bounds: each free one within a factor `opts.base_range` of `start`.

@@ -56,6 +56,23 @@ pub enum Weighting {
     Noise,
 }
 
+impl Weighting {
+    /// As `hasel identify --weigh` takes it and its report says it.
+    pub fn name(self) -> &'static str {
+        match self {
+            Weighting::Equal => "equal",
+            Weighting::Noise => "noise",
+        }
+    }
+
+    /// The weighting named `name`, if any.
+    pub fn from_name(name: &str) -> Option<Weighting> {
+        [Weighting::Equal, Weighting::Noise]
+            .into_iter()
+            .find(|w| w.name() == name)
+    }
+}
+
 /// The smallest noise a channel is taken to have, as a share of its spread: a record without
 /// noise (a simulation) is weighed by its spread, not by its rounding.
 const NOISE_FLOOR_SHARE: f64 = 1e-6;

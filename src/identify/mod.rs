@@ -165,6 +165,8 @@ pub struct Identification {
     /// The conditions estimated for each record, estimation then validation experiments;
     /// empty where they were kept as given (`Options::conditions` = `None`).
     pub conditions: Vec<conditions::Found>,
+    /// How the fit counted each output's residuals.
+    pub weighting: Weighting,
 }
 
 impl Identification {
@@ -522,5 +524,6 @@ fn fit(
         seconds: began.elapsed().as_secs_f64(),
         simulated,
         conditions: Vec::new(),
+        weighting: opts.weighting,
     })
 }

@@ -7,7 +7,7 @@ use std::path::Path;
 use serde_json::{Value, json};
 
 use super::conditions::{Found, LAG_MAX};
-use super::experiment::{Channel, Experiment};
+use super::experiment::{Channel, Experiment, Weighting};
 use super::{ExperimentFit, Identification};
 use crate::io::file::{FileError, write_text_atomic};
 use crate::io::params_file;
@@ -77,6 +77,7 @@ pub fn to_json(id: &Identification) -> Value {
             "matrix": (0..id.covariance.names.len()).map(|r| (0..id.covariance.names.len()).map(|c| id.covariance.matrix[(r, c)]).collect::<Vec<_>>()).collect::<Vec<_>>(),
         },
         "conditions": conditions_json(&id.conditions),
+        "weighting": id.weighting.name(),
         "iterations": id.iterations,
         "simulations": id.simulations,
         "seconds": round(id.seconds, 3),
@@ -250,8 +251,12 @@ pub fn write(
     let mut md = String::from("# Identification report\n\n");
     let _ = writeln!(
         md,
-        "Levenberg–Marquardt on the simulation error: {} iterations, {} simulations, {:.2} s. \
-         Estimation on {}; validation on {}.",
+        "Levenberg–Marquardt on the simulation error, {}: {} iterations, {} simulations, \
+         {:.2} s. Estimation on {}; validation on {}.",
+        match id.weighting {
+            Weighting::Equal => "each output in its own unit",
+            Weighting::Noise => "each output in units of the noise its record shows",
+        },
         id.iterations,
         id.simulations,
         id.seconds,

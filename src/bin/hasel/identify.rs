@@ -3,7 +3,7 @@
 use std::path::PathBuf;
 
 use hasel_fmu::identify::synth::{self, DATA_RTOL, Sensor, Spec};
-use hasel_fmu::identify::{self, Options, report};
+use hasel_fmu::identify::{self, Options, Weighting, report};
 use hasel_fmu::io::csv::write_atomic;
 
 use hasel_fmu::diagnose::hidden::{self, Truth};
@@ -51,6 +51,11 @@ pub struct Args {
     /// Bounds of a parameter, NAME=LO:HI (default [start/20, start*20])
     #[arg(long = "bound", value_name = "NAME=LO:HI")]
     bounds: Vec<String>,
+    /// How the outputs' residuals count: equal (each in its own unit, as the paper fits) or
+    /// noise (each over the noise its record shows: for outputs of unequal noise, such as
+    /// heights and the tip, or a quiet actuator beside loud ones)
+    #[arg(long, default_value = "equal", value_parser = ["equal", "noise"])]
+    weigh: String,
     #[command(flatten)]
     conditions: ConditionArgs,
 }
@@ -104,6 +109,8 @@ pub fn run(a: Args) -> Result<(), Error> {
     let validation = read_all(&a.validate)?;
     let mut opts = Options {
         conditions: Some(a.conditions.choice(&start)?),
+        weighting: Weighting::from_name(&a.weigh)
+            .ok_or_else(|| Error::flag("weigh", &a.weigh, "expected equal or noise"))?,
         ..Options::default()
     };
     if !a.free.is_empty() {

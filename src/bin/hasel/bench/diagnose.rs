@@ -120,7 +120,7 @@ pub fn run(
                 protocol = case.protocol_label();
             }
             let exps = case.experiments(columns, seed)?;
-            let d = diagnose::diagnose(&Params::default(), exps, &Options::default())?;
+            let d = diagnose::diagnose(&Params::default(), exps.clone(), &Options::default())?;
             if let Some(dir) = &reports {
                 diagnose::report::write(&dir.join(format!("{}-{seed}", truth.name())), &d)?;
             }
@@ -129,6 +129,14 @@ pub fn run(
             let seconds = d.timing.last().map_or(0.0, |t| t.1);
             let gap = worst_gap(&d);
             let weight = tally.count(truth, seed, &d, &protocol, (ok, seconds, gap));
+            let truth_gap = match case.true_model() {
+                Some(model) if !ok && !truth.effects().is_empty() => {
+                    let g = diagnose::base_gap(model, exps, &Options::default())?;
+                    tally.undecided(truth, seed, &d, g, pair);
+                    format!(" | truth refitted {g:.2} below floor")
+                }
+                _ => String::new(),
+            };
             let (before, after) = (&d.fits.before, &d.fits.after);
             let single = d.after.len() == 1;
             let floor: Vec<String> = d
@@ -139,7 +147,7 @@ pub fn run(
                 .collect();
             let forms: Vec<&str> = d.forms.iter().map(|f| f.name).collect();
             say!(
-                "  {:<26} seed {seed}: {:<28} {} {:5.1} s | {protocol}{weight} | held-out fit {} -> {} | {gap:.2} below floor | excess after {} % | {} outlier(s) | {}",
+                "  {:<26} seed {seed}: {:<28} {} {:5.1} s | {protocol}{weight}{truth_gap} | held-out fit {} -> {} | {gap:.2} below floor | excess after {} % | {} outlier(s) | {}",
                 truth.name(),
                 format!("{got} [{}]", forms.join("+")),
                 if ok { "ok  " } else { "MISS" },
@@ -181,6 +189,9 @@ struct Tally {
     stages: BTreeMap<String, f64>,
     /// Per protocol (its drive, and whether recorded mid-run): (right, cases).
     by_protocol: BTreeMap<String, (usize, usize)>,
+    /// Misses whose true model, refitted, leaves a held-out fit beyond `FIT_TOLERANCE`:
+    /// (case, that gap, the answer, whether a pair).
+    undecided: Vec<(String, f64, String, bool)>,
 }
 
 impl Tally {
@@ -227,6 +238,23 @@ impl Tally {
         weight
     }
 
+    /// Counts a miss whose true model, its paper's parameters refitted on the estimation record,
+    /// left the held-out fits `gap` points below their floor, if that is beyond what a
+    /// diagnosis accepts of an effect: a case the records do not decide.
+    fn undecided(
+        &mut self,
+        truth: Truth,
+        seed: u64,
+        d: &diagnose::Diagnosis,
+        gap: f64,
+        pair: bool,
+    ) {
+        if gap > diagnose::FIT_TOLERANCE {
+            let case = format!("{} seed {seed}", truth.name());
+            self.undecided.push((case, gap, d.answer(), pair));
+        }
+    }
+
     /// The closing lines: the confusion matrix, the evidence weights, the scores against
     /// their targets, the times, and with `protocols` the score per protocol.
     fn say(self, protocols: bool) {
@@ -245,6 +273,7 @@ impl Tally {
             slowest,
             stages,
             by_protocol,
+            undecided,
         } = self;
         say!("confusion by family (hidden -> answer: count)");
         for ((t, a), n) in &matrix {
@@ -269,6 +298,26 @@ impl Tally {
             say!(
                 "two mechanisms, both named: {pair_right}/{pair_cases} ({:.0} %, target >= 85 %)",
                 100.0 * pair_right as f64 / pair_cases as f64
+            );
+        }
+        if !undecided.is_empty() {
+            let pairs = undecided.iter().filter(|u| u.3).count();
+            let singles = undecided.len() - pairs;
+            say!(
+                "misses the records do not decide: {} (the hidden model itself, its paper's parameters refitted on the estimation record, leaves a held-out fit more than {} point below the noise floor): {}",
+                undecided.len(),
+                diagnose::FIT_TOLERANCE,
+                undecided
+                    .iter()
+                    .map(|(c, g, a, _)| format!("{c} {g:.2} points, answered {a}"))
+                    .collect::<Vec<_>>()
+                    .join("; ")
+            );
+            say!(
+                "where the records decide: right {right_cases}/{}, effect named exactly {effect_right}/{}, both of two named {pair_right}/{}",
+                total - undecided.len(),
+                effect_cases - singles,
+                pair_cases - pairs
             );
         }
         gaps.sort_by(|a, b| b.0.total_cmp(&a.0));
