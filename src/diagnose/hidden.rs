@@ -402,8 +402,8 @@ impl Hidden {
     }
 
     /// The device's true model, where the whole truth is one (no drive distorted outside the
-    /// model, no floor vibration): refitted, it tells a miss from a case the records do not
-    /// decide ([`crate::diagnose::base_gap`]).
+    /// model, no floor vibration): what a miss is checked against
+    /// ([`crate::diagnose::truth_gaps`]).
     pub fn true_model(&self) -> Option<&Params> {
         let outside = self.wandering_delay.is_some() || self.ripple.is_some();
         (!outside && self.vibration.is_none()).then_some(&self.params)

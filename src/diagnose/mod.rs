@@ -595,7 +595,12 @@ fn with_held_out(mut experiments: Vec<Experiment>) -> Result<Vec<Experiment>, Er
 
 /// The largest distance of a held-out fit below the noise floor's [points].
 fn worst_gap_to_floor(held: &[Experiment], id: &Identification) -> f64 {
-    let (_, fits) = id.held_out();
+    worst_gap(held, id.held_out().1)
+}
+
+/// The largest distance of the fits `fits` of the records `held` below their noise floors
+/// [points] (0 at or above them).
+fn worst_gap(held: &[Experiment], fits: &[identify::ExperimentFit]) -> f64 {
     let mut worst: f64 = 0.0;
     for (e, f) in held.iter().zip(fits) {
         for (name, v) in &f.fits {
@@ -920,21 +925,48 @@ fn fit_base(
     )?)
 }
 
-/// The worst held-out gap to the noise floor \[points\] the paper's parameters leave, fitted
-/// from `start` as a diagnosis fits them first, on the records as it prepares them. From a
-/// device's true model (its hidden mechanisms in place) it tells whether the records can
-/// decide that model at all: `hasel bench --diagnose` counts a miss whose truth leaves more
-/// than [`FIT_TOLERANCE`] as one its records do not decide.
-pub fn base_gap(
-    start: &Params,
+/// How near a device's true model comes to the held-out records' noise floors when a diagnosis
+/// meets it ([`truth_gaps`]): the worst held-out gap \[points\] with its parameters held, the
+/// records' conditions found as a diagnosis finds them, and with the paper's parameters refitted
+/// on the estimation record as a diagnosis fits them first (workflow step 1).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct TruthGaps {
+    pub held: f64,
+    pub refitted: f64,
+}
+
+/// [`TruthGaps`] of `truth` (a device's true model, its hidden mechanisms in place) on
+/// `experiments`, prepared as a diagnosis prepares them. Beyond [`FIT_TOLERANCE`] refitted, no
+/// effect could pass on these records, the right one included: `hasel bench --diagnose` counts
+/// such a miss apart, and `held` says whether its start mid-run or the estimation record's
+/// information is what falls short.
+pub fn truth_gaps(
+    truth: &Params,
     experiments: Vec<Experiment>,
     opts: &Options,
-) -> Result<f64, Error> {
+) -> Result<TruthGaps, Error> {
     let (experiments, _) = analysis::trim_outliers(experiments).map_err(identify::Error::from)?;
     let experiments = with_held_out(experiments)?;
-    let base = fit_base(start, &experiments, &base_bounds(start, opts)?, opts)?;
+    let held = &experiments[1..];
+    let at_truth = held
+        .iter()
+        .map(|e| {
+            let how = (opts.rtol, WEIGHTING);
+            let found = identify::conditions::estimate(truth, e, opts.conditions, how)?;
+            let under = Experiment {
+                conditions: found.conditions,
+                ..e.clone()
+            };
+            let sim = identify::simulate(truth, &under, opts.rtol)?;
+            Ok(identify::fits(&under, &sim))
+        })
+        .collect::<Result<Vec<_>, identify::Error>>()?;
+    let base = fit_base(truth, &experiments, &base_bounds(truth, opts)?, opts)?;
     let ordered = under_found_conditions(&experiments, &base);
-    Ok(worst_gap_to_floor(&ordered[1..], &base))
+    Ok(TruthGaps {
+        held: worst_gap(held, &at_truth),
+        refitted: worst_gap_to_floor(&ordered[1..], &base),
+    })
 }
 
 /// The base parameters' bounds: each free one within a factor `opts.base_range` of `start`.

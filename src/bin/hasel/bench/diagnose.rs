@@ -131,9 +131,12 @@ pub fn run(
             let weight = tally.count(truth, seed, &d, &protocol, (ok, seconds, gap));
             let truth_gap = match case.true_model() {
                 Some(model) if !ok && !truth.effects().is_empty() => {
-                    let g = diagnose::base_gap(model, exps, &Options::default())?;
-                    tally.undecided(truth, seed, &d, g, pair);
-                    format!(" | truth refitted {g:.2} below floor")
+                    let g = diagnose::truth_gaps(model, exps, &Options::default())?;
+                    tally.beyond_truth(truth, seed, &d, g, pair);
+                    format!(
+                        " | truth held {:.2}, refitted {:.2} below floor",
+                        g.held, g.refitted
+                    )
                 }
                 _ => String::new(),
             };
@@ -189,9 +192,9 @@ struct Tally {
     stages: BTreeMap<String, f64>,
     /// Per protocol (its drive, and whether recorded mid-run): (right, cases).
     by_protocol: BTreeMap<String, (usize, usize)>,
-    /// Misses whose true model, refitted, leaves a held-out fit beyond `FIT_TOLERANCE`:
-    /// (case, that gap, the answer, whether a pair).
-    undecided: Vec<(String, f64, String, bool)>,
+    /// Misses whose true model, refitted as a diagnosis fits, leaves a held-out fit beyond
+    /// `FIT_TOLERANCE`: (case, its truth's gaps, the answer, whether a pair).
+    beyond_truth: Vec<(String, diagnose::TruthGaps, String, bool)>,
 }
 
 impl Tally {
@@ -238,20 +241,19 @@ impl Tally {
         weight
     }
 
-    /// Counts a miss whose true model, its paper's parameters refitted on the estimation record,
-    /// left the held-out fits `gap` points below their floor, if that is beyond what a
-    /// diagnosis accepts of an effect: a case the records do not decide.
-    fn undecided(
+    /// Counts a miss whose true model (`gaps`) the rules could not accept either: refitted as a
+    /// diagnosis fits it, beyond what a diagnosis accepts of an effect.
+    fn beyond_truth(
         &mut self,
         truth: Truth,
         seed: u64,
         d: &diagnose::Diagnosis,
-        gap: f64,
+        gaps: diagnose::TruthGaps,
         pair: bool,
     ) {
-        if gap > diagnose::FIT_TOLERANCE {
+        if gaps.refitted > diagnose::FIT_TOLERANCE {
             let case = format!("{} seed {seed}", truth.name());
-            self.undecided.push((case, gap, d.answer(), pair));
+            self.beyond_truth.push((case, gaps, d.answer(), pair));
         }
     }
 
@@ -273,7 +275,7 @@ impl Tally {
             slowest,
             stages,
             by_protocol,
-            undecided,
+            beyond_truth,
         } = self;
         say!("confusion by family (hidden -> answer: count)");
         for ((t, a), n) in &matrix {
@@ -300,23 +302,33 @@ impl Tally {
                 100.0 * pair_right as f64 / pair_cases as f64
             );
         }
-        if !undecided.is_empty() {
-            let pairs = undecided.iter().filter(|u| u.3).count();
-            let singles = undecided.len() - pairs;
+        if !beyond_truth.is_empty() {
+            let why = |g: &diagnose::TruthGaps| {
+                if g.held > diagnose::FIT_TOLERANCE {
+                    "even held, its start mid-run is not found"
+                } else {
+                    "the estimation record does not determine it"
+                }
+            };
             say!(
-                "misses the records do not decide: {} (the hidden model itself, its paper's parameters refitted on the estimation record, leaves a held-out fit more than {} point below the noise floor): {}",
-                undecided.len(),
+                "misses beyond the truth's reach: {} (the hidden model itself, fitted as a diagnosis fits the paper's model, leaves a held-out fit more than {} point below the noise floor): {}",
+                beyond_truth.len(),
                 diagnose::FIT_TOLERANCE,
-                undecided
+                beyond_truth
                     .iter()
-                    .map(|(c, g, a, _)| format!("{c} {g:.2} points, answered {a}"))
+                    .map(|(c, g, a, _)| format!(
+                        "{c} {:.2} points ({}), answered {a}",
+                        g.refitted,
+                        why(g)
+                    ))
                     .collect::<Vec<_>>()
                     .join("; ")
             );
+            let pairs = beyond_truth.iter().filter(|u| u.3).count();
             say!(
-                "where the records decide: right {right_cases}/{}, effect named exactly {effect_right}/{}, both of two named {pair_right}/{}",
-                total - undecided.len(),
-                effect_cases - singles,
+                "within the truth's reach: right {right_cases}/{}, effect named exactly {effect_right}/{}, both of two named {pair_right}/{}",
+                total - beyond_truth.len(),
+                effect_cases - (beyond_truth.len() - pairs),
                 pair_cases - pairs
             );
         }
