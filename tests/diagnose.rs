@@ -709,7 +709,7 @@ fn a_start_mid_run_is_found_though_the_model_misses_a_static_load() {
 /// tell the device at 35 V. Its true model with its own parameters predicts the held-out record
 /// at the noise floor (0.006 points measured), its start mid-run found; with the paper's
 /// parameters refitted on the estimation record, as a diagnosis fits, it leaves the held-out h1
-/// 201.9 points below. On the paper's two sines the same device's truth refits to its floor
+/// 201.6 points below. On the paper's two sines the same device's truth refits to its floor
 /// (`preload_is_named` names it there). No effect can pass on the levels, and the answer is
 /// `unexplained`, not another effect: the benchmark counts it among the misses beyond the
 /// truth's reach.

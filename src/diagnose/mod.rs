@@ -926,9 +926,9 @@ fn fit_base(
 }
 
 /// How near a device's true model comes to the held-out records' noise floors when a diagnosis
-/// meets it ([`truth_gaps`]): the worst held-out gap \[points\] with its parameters held, the
-/// records' conditions found as a diagnosis finds them, and with the paper's parameters refitted
-/// on the estimation record as a diagnosis fits them first (workflow step 1).
+/// meets it ([`truth_gaps`]): the worst held-out gap \[points\] with its parameters held, and
+/// with the paper's parameters refitted on the estimation record; each under the records'
+/// conditions as a refit finds them (a start mid-run with the model's own states).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct TruthGaps {
     pub held: f64,
@@ -936,10 +936,11 @@ pub struct TruthGaps {
 }
 
 /// [`TruthGaps`] of `truth` (a device's true model, its hidden mechanisms in place) on
-/// `experiments`, prepared as a diagnosis prepares them. Beyond [`FIT_TOLERANCE`] refitted, no
-/// effect could pass on these records, the right one included: `hasel bench --diagnose` counts
-/// such a miss apart, and `held` says whether its start mid-run or the estimation record's
-/// information is what falls short.
+/// `experiments`, prepared as a diagnosis prepares them, fitted as a diagnosis fits the paper's
+/// model (workflow step 1) and then refits it with an effect (its conditions refined). Beyond
+/// [`FIT_TOLERANCE`] refitted, no effect could pass on these records, the right one included:
+/// `hasel bench --diagnose` counts such a miss apart, and `held` says whether the start mid-run
+/// or the estimation record's information falls short.
 pub fn truth_gaps(
     truth: &Params,
     experiments: Vec<Experiment>,
@@ -947,25 +948,34 @@ pub fn truth_gaps(
 ) -> Result<TruthGaps, Error> {
     let (experiments, _) = analysis::trim_outliers(experiments).map_err(identify::Error::from)?;
     let experiments = with_held_out(experiments)?;
-    let held = &experiments[1..];
-    let at_truth = held
+    let bounds = base_bounds(truth, opts)?;
+    let refit = refit_options(&[], &bounds, opts);
+    let conditions = refit.conditions.unwrap_or_default();
+    let how = (opts.rtol, WEIGHTING);
+    let at_truth = experiments[1..]
         .iter()
         .map(|e| {
-            let how = (opts.rtol, WEIGHTING);
-            let found = identify::conditions::estimate(truth, e, opts.conditions, how)?;
+            let first = identify::conditions::estimate(truth, e, opts.conditions, how)?;
+            let found = Experiment {
+                conditions: first.conditions,
+                ..e.clone()
+            };
+            let refined = identify::conditions::estimate(truth, &found, conditions, how)?;
             let under = Experiment {
-                conditions: found.conditions,
+                conditions: refined.conditions,
                 ..e.clone()
             };
             let sim = identify::simulate(truth, &under, opts.rtol)?;
             Ok(identify::fits(&under, &sim))
         })
         .collect::<Result<Vec<_>, identify::Error>>()?;
-    let base = fit_base(truth, &experiments, &base_bounds(truth, opts)?, opts)?;
+    let base = fit_base(truth, &experiments, &bounds, opts)?;
     let ordered = under_found_conditions(&experiments, &base);
+    let (estimation, held) = ordered.split_at(1);
+    let refitted = identify::identify(&base.params, estimation, held, &refit)?;
     Ok(TruthGaps {
-        held: worst_gap(held, &at_truth),
-        refitted: worst_gap_to_floor(&ordered[1..], &base),
+        held: worst_gap(&experiments[1..], &at_truth),
+        refitted: worst_gap_to_floor(held, &refitted),
     })
 }
 
