@@ -598,14 +598,18 @@ impl Law for Terms {
         out.extend(self.scales.iter().map(|_| 0.0));
     }
 
-    /// A stage's charge at the current i its voltage i R takes through C = τ / R, i τ; a
-    /// branch's C at the film's 100 V, a branch of the spectrum the spectrum's whole
-    /// capacitance.
+    /// At a 100 V command, whose source is γ1 · 100 V (the actuator's own scales): a stage's
+    /// charge at the current i its voltage i R takes through C = τ / R, i τ; a branch's C at
+    /// that source's voltage, which the film and the electrode hold at rest (R0 ≪ R2), a
+    /// branch of the spectrum the spectrum's whole capacitance. (At 100 V across instead, a
+    /// branch's charge at a start mid-run was held below a seventh of what a 60 V drive gives
+    /// it, γ1 ≈ 118: `conditions`' range is 10 scales.)
     fn scales(&self, a: &Actuator, _: f64, out: &mut Vec<f64>) {
-        let i_dc = a.par.gamma1 * 100.0 / (a.par.r0 + a.par.r1 + a.par.r2);
+        let v_source = a.par.gamma1 * 100.0;
+        let i_dc = v_source / (a.par.r0 + a.par.r1 + a.par.r2);
         out.extend(self.scales.iter().map(|s| match *s {
             ChargeScale::Series(tau) => i_dc * tau,
-            ChargeScale::Branch(c) => 100.0 * c,
+            ChargeScale::Branch(c) => v_source * c,
         }));
     }
 }
