@@ -948,30 +948,25 @@ pub fn truth_gaps(
 ) -> Result<TruthGaps, Error> {
     let (experiments, _) = analysis::trim_outliers(experiments).map_err(identify::Error::from)?;
     let experiments = with_held_out(experiments)?;
-    let bounds = base_bounds(truth, opts)?;
-    let refit = refit_options(&[], &bounds, opts);
-    let conditions = refit.conditions.unwrap_or_default();
     let how = (opts.rtol, WEIGHTING);
     let at_truth = experiments[1..]
         .iter()
         .map(|e| {
-            let first = identify::conditions::estimate(truth, e, opts.conditions, how)?;
-            let found = Experiment {
-                conditions: first.conditions,
-                ..e.clone()
-            };
-            let refined = identify::conditions::estimate(truth, &found, conditions, how)?;
-            let under = Experiment {
-                conditions: refined.conditions,
-                ..e.clone()
-            };
+            // found as the base fit finds them, then refined as a refit does
+            let mut under = e.clone();
+            for choice in [opts.conditions, refit_conditions(&[])] {
+                under.conditions =
+                    identify::conditions::estimate(truth, &under, choice, how)?.conditions;
+            }
             let sim = identify::simulate(truth, &under, opts.rtol)?;
             Ok(identify::fits(&under, &sim))
         })
         .collect::<Result<Vec<_>, identify::Error>>()?;
+    let bounds = base_bounds(truth, opts)?;
     let base = fit_base(truth, &experiments, &bounds, opts)?;
     let ordered = under_found_conditions(&experiments, &base);
     let (estimation, held) = ordered.split_at(1);
+    let refit = refit_options(&[], &bounds, opts);
     let refitted = identify::identify(&base.params, estimation, held, &refit)?;
     Ok(TruthGaps {
         held: worst_gap(&experiments[1..], &at_truth),
