@@ -807,13 +807,10 @@ pub fn diagnose(
     }
     let mut timing = Vec::new();
     let began = Instant::now();
-    let (experiments, outliers) =
-        analysis::trim_outliers(experiments).map_err(identify::Error::from)?;
-    let experiments = with_held_out(experiments)?;
+    let (experiments, outliers) = prepared(experiments)?;
     let bounds = base_bounds(start, opts)?;
     let id_opts = |forms: &[&Form]| refit_options(forms, &bounds, opts);
-    let base = fit_base(start, &experiments, &bounds, opts)?;
-    let ordered = under_found_conditions(&experiments, &base);
+    let (base, ordered) = fit_base(start, &experiments, &bounds, opts)?;
     let (estimation, held) = ordered.split_at(1);
     timing.push((
         "re-identify the paper's model".to_string(),
@@ -901,16 +898,27 @@ fn refit_options(
     }
 }
 
+/// The records a diagnosis works on: outliers trimmed (returned for the report), a single
+/// record split into its estimation and held-out parts ([`with_held_out`]).
+fn prepared(
+    experiments: Vec<Experiment>,
+) -> Result<(Vec<Experiment>, Vec<analysis::Outliers>), Error> {
+    let (experiments, outliers) =
+        analysis::trim_outliers(experiments).map_err(identify::Error::from)?;
+    Ok((with_held_out(experiments)?, outliers))
+}
+
 /// The paper's model fitted to convergence from `start` on the first of `experiments`, the
 /// others held out (book/src/diagnose.md, workflow step 1): every candidate is judged against it.
+/// Also the records under the conditions it found, which every later fit starts from.
 fn fit_base(
     start: &Params,
     experiments: &[Experiment],
     bounds: &BTreeMap<String, (f64, f64)>,
     opts: &Options,
-) -> Result<Identification, Error> {
+) -> Result<(Identification, Vec<Experiment>), Error> {
     let (estimation, held) = experiments.split_at(1);
-    Ok(identify::identify(
+    let base = identify::identify(
         start,
         estimation,
         held,
@@ -922,7 +930,9 @@ fn fit_base(
             lm: IdOptions::default().lm,
             ..refit_options(&[], bounds, opts)
         },
-    )?)
+    )?;
+    let ordered = under_found_conditions(experiments, &base);
+    Ok((base, ordered))
 }
 
 /// How near a device's true model comes to the held-out records' noise floors when a diagnosis
@@ -946,8 +956,7 @@ pub fn truth_gaps(
     experiments: Vec<Experiment>,
     opts: &Options,
 ) -> Result<TruthGaps, Error> {
-    let (experiments, _) = analysis::trim_outliers(experiments).map_err(identify::Error::from)?;
-    let experiments = with_held_out(experiments)?;
+    let (experiments, _) = prepared(experiments)?;
     let how = (opts.rtol, WEIGHTING);
     let at_truth = experiments[1..]
         .iter()
@@ -963,8 +972,7 @@ pub fn truth_gaps(
         })
         .collect::<Result<Vec<_>, identify::Error>>()?;
     let bounds = base_bounds(truth, opts)?;
-    let base = fit_base(truth, &experiments, &bounds, opts)?;
-    let ordered = under_found_conditions(&experiments, &base);
+    let (base, ordered) = fit_base(truth, &experiments, &bounds, opts)?;
     let (estimation, held) = ordered.split_at(1);
     let refit = refit_options(&[], &bounds, opts);
     let refitted = identify::identify(&base.params, estimation, held, &refit)?;
