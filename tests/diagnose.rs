@@ -661,10 +661,10 @@ fn a_hysteresis_on_a_staircase_recorded_mid_run_is_named() {
 /// drift's spectrum leads the first round and leaves the held-out tip fits 0.47 points below
 /// their floor, with 21 % and 32 % more variance than the noise. Within `AT_FLOOR` in points, but
 /// beyond `HELD_OUT_EXCESS` in variance: a second round adds the stiffening and a revisit swaps
-/// the drift for the lag (measured 0.11 points below the floor). Fails since 223876ef: with the
-/// drift's branch charges at the record's start free to their right size, the revisit keeps the
-/// drift's spectrum by 172.5 in BIC, both at the held-out floor (book/src/hidden-effects.md, "On
-/// a lab's protocols"): a wrong family named, kept here as the case to mend.
+/// the drift for the lag. The revisit's try starts from the model's base parameters, fitted with
+/// the stiffening beside: from the runner-up's own (fitted without it) the lag converged 172.5
+/// above the drift in BIC, from the model's 303.4 below (measured 0.07 points below the floor;
+/// book/src/diagnose.md, "Two mechanisms at once").
 #[test]
 #[ignore = "long (532 s on two cores shared with a suite): ci/bench.sh runs it"]
 fn a_second_effect_is_looked_for_where_a_fit_near_its_floor_hides_variance() {

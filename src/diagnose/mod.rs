@@ -1383,26 +1383,26 @@ fn revisit(
         let replaced = forms[pos].effect;
         // first the model without the effect, its parameters neutral (off): when the later
         // effects explain all it stood in for, a runner-up swapped in would be a spurious second
-        // effect that happens to fit; then the runner-up's refit, with the other effects'
-        // parameters as the model has them
+        // effect that happens to fit; then the runner-up in its place, its parameters as its
+        // round refitted them and the rest as the model has them (the base's fitted with the
+        // later effects beside, as the runner-up's were not)
         let mut without = current.params.clone();
         let neutral = Params::default();
         for name in form_parameters(forms[pos]) {
             without.set(name, neutral.get(name)?)?;
         }
-        let mut tries = vec![(None, without)];
+        let mut tries = vec![(None, without.clone())];
         if let Some((form, r)) = runner_up {
-            tries.push((Some(form), r.id.params.clone()));
+            let mut start = without;
+            for name in form_parameters(form) {
+                start.set(name, r.id.params.get(name)?)?;
+            }
+            tries.push((Some(form), start));
         }
         let bic_now = model_bic(&estimation[0], current, forms);
         let gap = |id: &Identification| worst_gap_to_floor(held, id);
         let gap_now = gap(current);
-        for (by, mut start) in tries {
-            for (_, f) in forms.iter().enumerate().filter(|(k, _)| *k != pos) {
-                for name in form_parameters(f) {
-                    start.set(name, current.params.get(name)?)?;
-                }
-            }
+        for (by, start) in tries {
             let mut with: Vec<&'static Form> = forms.to_vec();
             match by {
                 Some(form) => with[pos] = form,
@@ -1412,7 +1412,9 @@ fn revisit(
             }
             let mut o = id_opts(&with);
             o.lm.deadline = opts.refit_budget.map(|b| Instant::now() + b);
-            let refit = identify::identify(&start, estimation, held, &o);
+            // judged against a model fitted to convergence, the try is fitted so too
+            let refit = identify::identify(&start, estimation, held, &o)
+                .map(|id| converged(id, estimation, held, &o, opts.refit_budget));
             let (delta_bic, swapped) = match refit {
                 Ok(id) => {
                     let delta = model_bic(&estimation[0], &id, &with) - bic_now;
@@ -1423,7 +1425,7 @@ fn revisit(
                     let swapped = delta <= -BIC_MARGIN && held_out_ok;
                     if swapped {
                         *forms = with;
-                        *current = converged(id, estimation, held, &o, opts.refit_budget);
+                        *current = id;
                     }
                     (Ok(delta), swapped)
                 }
@@ -1507,7 +1509,9 @@ fn revisit_forms(
                 s.spawn(move || {
                     let mut o = o.clone();
                     o.lm.deadline = opts.refit_budget.map(|b| Instant::now() + b);
+                    // judged against a model fitted to convergence, each try is fitted so too
                     identify::identify(p, estimation, held, &o)
+                        .map(|id| converged(id, estimation, held, &o, opts.refit_budget))
                 })
             })
             .collect();
@@ -1540,7 +1544,7 @@ fn revisit_forms(
         let (pos, g, _, _) = &tries[k];
         out[k].swapped = true;
         forms[*pos] = *g;
-        *current = converged(id, estimation, held, &refit_opts[k], opts.refit_budget);
+        *current = id;
     }
     Ok(out)
 }
