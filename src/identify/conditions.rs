@@ -415,7 +415,8 @@ fn lag_standard_error(
     cost: f64,
     threads: usize,
 ) -> Result<Option<f64>, Error> {
-    let j: DMatrix<f64> = lm::jacobian_central(problem, z, 1e-3, threads)?;
+    let r = lm::evaluate(problem, z)?;
+    let j: DMatrix<f64> = lm::jacobian_central(problem, z, &r, 1e-3, threads)?;
     let sigma2 = 2.0 * cost / problem.len as f64;
     Ok((j.transpose() * &j)
         .try_inverse()

@@ -353,12 +353,12 @@ impl Reduced<'_, '_> {
 /// or central differences where they cannot be had.
 fn polish_jacobian(
     sharp: &Reduced<'_, '_>,
-    z: &[f64],
+    (z, r): (&[f64], &DVector<f64>),
     threads: usize,
 ) -> Result<DMatrix<f64>, Error> {
     match sharp.sensitivity_jacobian(z) {
         Ok(j) => Ok(j),
-        Err(_) => lm::jacobian_central(sharp, z, COVARIANCE_FD_STEP, threads),
+        Err(_) => lm::jacobian_central(sharp, z, r, COVARIANCE_FD_STEP, threads),
     }
 }
 
@@ -810,7 +810,7 @@ fn polish(
 ) -> Result<Polished, Error> {
     let m = z.len();
     let mut r = lm::evaluate(sharp, &z)?;
-    let mut j = polish_jacobian(sharp, &z, lm::share())?;
+    let mut j = polish_jacobian(sharp, (&z, &r), lm::share())?;
     for _ in 0..GN_POLISH {
         lm::check_deadline(opts.lm.deadline)?;
         let Some(step) = (j.transpose() * &j)
@@ -826,7 +826,7 @@ fn polish(
         match lm::evaluate(sharp, &z_new) {
             Ok(r_new) if r_new.norm_squared() < r.norm_squared() => {
                 (z, r) = (z_new, r_new);
-                j = polish_jacobian(sharp, &z, lm::share())?;
+                j = polish_jacobian(sharp, (&z, &r), lm::share())?;
                 if step.amax() < 1e-8 {
                     break;
                 }

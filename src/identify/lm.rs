@@ -160,7 +160,10 @@ fn jacobian_at(
 }
 
 /// ∂r/∂x by forward differences (backward where the forward point is out of bounds or cannot
-/// be evaluated).
+/// be evaluated). A direction the residuals cannot be evaluated along either way gets a zero
+/// column, so the iteration does not move along it, as it rejects a trial it cannot evaluate: a
+/// time constant at its bound 0, where the least step makes the model too stiff to integrate,
+/// stays there rather than ending the fit.
 pub fn jacobian(
     p: &impl Residuals,
     x: &[f64],
@@ -178,9 +181,12 @@ pub fn jacobian(
             Ok(v) => v,
             Err(_) if forward && x[j] - h >= lo[j] => {
                 xp[j] = x[j] - h;
-                evaluate(p, &xp)?
+                match evaluate(p, &xp) {
+                    Ok(v) => v,
+                    Err(_) => return Ok(vec![0.0; r.len()]),
+                }
             }
-            Err(e) => return Err(e),
+            Err(_) => return Ok(vec![0.0; r.len()]),
         };
         let step = xp[j] - x[j];
         Ok(rp
@@ -192,22 +198,32 @@ pub fn jacobian(
 }
 
 /// ∂r/∂x by central differences with step `h` (for the covariance: second-order accurate,
-/// so the weakly determined directions of a correlated problem are not distorted).
+/// so the weakly determined directions of a correlated problem are not distorted). Where one
+/// side cannot be evaluated (a time constant at its bound 0 stepped below it) the column is
+/// one-sided from `r`, the residuals at `x`; where neither can, zero, as in [`jacobian`].
 pub fn jacobian_central(
     p: &impl Residuals,
     x: &[f64],
+    r: &DVector<f64>,
     h: f64,
     threads: usize,
 ) -> Result<DMatrix<f64>, Error> {
     assemble(p.count(), x.len(), threads, |j| {
-        let (mut xp, mut xm) = (x.to_vec(), x.to_vec());
-        xp[j] += h;
-        xm[j] -= h;
-        let (rp, rm) = (evaluate(p, &xp)?, evaluate(p, &xm)?);
-        Ok(rp
+        let at = |step: f64| {
+            let mut xs = x.to_vec();
+            xs[j] += step;
+            evaluate(p, &xs)
+        };
+        let (from, to, width) = match (at(-h), at(h)) {
+            (Ok(rm), Ok(rp)) => (rm, rp, 2.0 * h),
+            (Err(_), Ok(rp)) => (r.clone(), rp, h),
+            (Ok(rm), Err(_)) => (rm, r.clone(), h),
+            (Err(_), Err(_)) => return Ok(vec![0.0; r.len()]),
+        };
+        Ok(to
             .iter()
-            .zip(rm.iter())
-            .map(|(a, b)| (a - b) / (2.0 * h))
+            .zip(from.iter())
+            .map(|(a, b)| (a - b) / width)
             .collect())
     })
 }
@@ -456,6 +472,56 @@ mod tests {
         .unwrap();
         assert!(s.converged && s.x[1] == 1.5, "{:?}", s.x);
         assert!(s.iterations < 30, "{} iterations", s.iterations);
+    }
+
+    /// The decay beside a fourth parameter, an offset that the residuals cannot be evaluated at
+    /// just above its bound 0 (as a time constant too small to integrate).
+    struct Unsteppable(Decay);
+
+    impl Residuals for Unsteppable {
+        fn count(&self) -> usize {
+            self.0.count()
+        }
+        fn eval(&self, x: &[f64], r: &mut [f64]) -> Result<(), Error> {
+            if x[3] > 0.0 && x[3] < 1e-3 {
+                return Err(Error::NonFiniteResidual);
+            }
+            self.0.eval(&x[..3], r)?;
+            r.iter_mut().for_each(|v| *v += x[3]);
+            Ok(())
+        }
+    }
+
+    #[test]
+    fn a_direction_that_cannot_be_evaluated_is_held_not_fatal() {
+        let inf = f64::INFINITY;
+        let s = minimize(
+            &Unsteppable(Decay::exact()),
+            &[1.0, 0.5, 0.0, 0.0],
+            &[-inf, -inf, -inf, 0.0],
+            &[inf; 4],
+            &Options::default(),
+        )
+        .unwrap();
+        assert!(s.converged && s.x[3] == 0.0, "{:?}", s.x);
+        for (got, want) in s.x.iter().zip([2.0, 1.3, 0.5]) {
+            assert!((got - want).abs() < 1e-6, "{:?}", s.x);
+        }
+        // the covariance's differences: one-sided where one side fails, zero where both do
+        let p = Unsteppable(Decay::exact());
+        let column = |x3: f64, h: f64| {
+            let mut x = s.x.clone();
+            x[3] = x3;
+            let r = evaluate(&p, &x).unwrap_or_else(|_| DVector::zeros(p.count()));
+            let j = jacobian_central(&p, &x, &r, h, 1).unwrap();
+            j.column(3)
+                .iter()
+                .fold(0.0f64, |m, v| m.max((v - 1.0).abs()))
+        };
+        assert!(column(0.0, 1e-4) < 1e-9, "at the bound, backward");
+        assert!(column(1.05e-3, 1e-4) < 1e-9, "just above the gap, forward");
+        // inside the gap nothing can be evaluated: every column is zero
+        assert!((column(5e-4, 1e-4) - 1.0).abs() < 1e-12);
     }
 
     #[test]
