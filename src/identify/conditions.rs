@@ -4,7 +4,7 @@
 //! the sensor shows the outputs. Neither is physics of the device: they are unknowns of the
 //! experiment, fitted with the parameters held, so that neither names an effect.
 
-use nalgebra::DMatrix;
+use nalgebra::{DMatrix, DVector};
 
 use super::experiment::{Channel, Conditions, Experiment, Weighting};
 use super::fit::{median, noise_level, robust_sigma, span};
@@ -277,7 +277,7 @@ pub fn estimate(
         };
         let sol = lm::minimize(&problem, &z0, &lo, &hi, &opts)?;
         let lag_se = estimate_lag
-            .then(|| lag_standard_error(&problem, &sol.x, sol.cost, lm::share()))
+            .then(|| lag_standard_error(&problem, (&sol.x, &sol.residuals), lm::share()))
             .transpose()?
             .flatten();
         (problem.conditions(&sol.x), lag_se)
@@ -411,13 +411,11 @@ fn unknown_start(
 /// σ² the mean square residual.
 fn lag_standard_error(
     problem: &Unknowns<'_>,
-    z: &[f64],
-    cost: f64,
+    (z, r): (&[f64], &DVector<f64>),
     threads: usize,
 ) -> Result<Option<f64>, Error> {
-    let r = lm::evaluate(problem, z)?;
-    let j: DMatrix<f64> = lm::jacobian_central(problem, z, &r, 1e-3, threads)?;
-    let sigma2 = 2.0 * cost / problem.len as f64;
+    let j: DMatrix<f64> = lm::jacobian_central(problem, z, r, 1e-3, threads)?;
+    let sigma2 = r.norm_squared() / problem.len as f64;
     Ok((j.transpose() * &j)
         .try_inverse()
         .map(|inv| (sigma2 * inv[(0, 0)]).max(0.0).sqrt() * LAG_MAX))
