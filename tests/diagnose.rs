@@ -666,7 +666,7 @@ fn a_hysteresis_on_a_staircase_recorded_mid_run_is_named() {
 /// above the drift in BIC, from the model's 303.4 below (measured 0.07 points below the floor;
 /// book/src/diagnose.md, "Two mechanisms at once").
 #[test]
-#[ignore = "long (532 s on two cores shared with a suite): ci/bench.sh runs it"]
+#[ignore = "long (228 s idle): ci/bench.sh runs it"]
 fn a_second_effect_is_looked_for_where_a_fit_near_its_floor_hides_variance() {
     let d = diagnose_drawn("amplifier_lag+stiffening", 1);
     let mut got = d.effects.clone();
