@@ -214,10 +214,11 @@ pub fn jacobian_central(
             xs[j] += step;
             evaluate(p, &xs)
         };
-        let (from, to, width) = match (at(-h), at(h)) {
+        let (below, above) = (at(-h), at(h));
+        let (from, to, width) = match (&below, &above) {
             (Ok(rm), Ok(rp)) => (rm, rp, 2.0 * h),
-            (Err(_), Ok(rp)) => (r.clone(), rp, h),
-            (Ok(rm), Err(_)) => (rm, r.clone(), h),
+            (Err(_), Ok(rp)) => (r, rp, h),
+            (Ok(rm), Err(_)) => (rm, r, h),
             (Err(_), Err(_)) => return Ok(vec![0.0; r.len()]),
         };
         Ok(to
