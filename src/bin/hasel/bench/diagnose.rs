@@ -77,7 +77,7 @@ fn worst_gap(d: &diagnose::Diagnosis) -> f64 {
 }
 
 pub fn run(
-    seeds: u64,
+    seeds: std::ops::RangeInclusive<u64>,
     columns: Columns,
     only: Option<String>,
     artifacts: bool,
@@ -85,7 +85,10 @@ pub fn run(
     reports: Option<std::path::PathBuf>,
 ) -> Result<(), Error> {
     say!(
-        "diagnosis of hidden mechanisms: {seeds} seed(s) per case, {columns:?} data{}, {}, target <= 30 s per diagnosis, median <= 5 s (issue #29)",
+        "diagnosis of hidden mechanisms: {} seed(s) per case ({}-{}), {columns:?} data{}, {}, target <= 30 s per diagnosis, median <= 5 s (issue #29)",
+        seeds.clone().count(),
+        seeds.start(),
+        seeds.end(),
         if artifacts {
             " with lab artifacts (sensor lag, resolution, outliers, dropouts)"
         } else {
@@ -109,7 +112,7 @@ pub fn run(
         }) {
             continue;
         }
-        for seed in 1..=seeds {
+        for seed in seeds.clone() {
             let mut case = hidden::hide(truth, seed)?;
             if artifacts {
                 case = case.with_artifacts(seed);

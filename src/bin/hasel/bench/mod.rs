@@ -39,6 +39,9 @@ pub struct Args {
     /// With --diagnose: seeds per hidden mechanism
     #[arg(long, default_value_t = 2)]
     seeds: u64,
+    /// With --diagnose: the first seed, so that seeds a rule was not tuned on can be run alone
+    #[arg(long, default_value_t = 1)]
+    first_seed: u64,
     /// With --diagnose: recorded outputs, h or tip
     #[arg(long, default_value = "h", value_parser = ["h", "tip"])]
     columns: String,
@@ -63,7 +66,7 @@ pub struct Args {
 pub fn run(a: Args) -> Result<(), Error> {
     if a.diagnose {
         return diagnose::run(
-            a.seeds,
+            a.first_seed..=a.first_seed.saturating_add(a.seeds).saturating_sub(1),
             crate::common::columns(&a.columns),
             a.only,
             a.artifacts,
