@@ -516,12 +516,19 @@ struct HeldOutGain {
 }
 
 impl HeldOutGain {
-    /// The gain a candidate must reach: [`MIN_GAIN`], or [`GAP_CLOSED`] of the gap where the
-    /// model before it stood closer to the noise floor than twice that (no effect could gain
-    /// [`MIN_GAIN`] there, however structured the residual): for a first effect where the paper's
-    /// model was near its floor, for a later one where the mechanism it stands for is weak.
-    fn required(&self) -> f64 {
-        MIN_GAIN.min(GAP_CLOSED * self.gap)
+    /// The gain a candidate must reach: [`MIN_GAIN`]; for a `first` effect [`GAP_CLOSED`] of the
+    /// gap where the paper's model stood closer to the noise floor than twice that (no effect
+    /// could gain [`MIN_GAIN`] there, however structured the residual). A later effect keeps the
+    /// bar: near the floor it would stand in for what the earlier ones' laws do not contain
+    /// (asked half the gap, a creep beside a hysteresis and a charge drift gained 0.05 points,
+    /// 52 % of what they left, and was named as a third effect; book/src/diagnose.md, "The
+    /// decision rule", test 3).
+    fn required(&self, first: bool) -> f64 {
+        if first {
+            MIN_GAIN.min(GAP_CLOSED * self.gap)
+        } else {
+            MIN_GAIN
+        }
     }
 }
 
@@ -1701,7 +1708,7 @@ fn judge(
             100.0 * GAP_CLOSED
         ));
     }
-    let required = held_gain.required();
+    let required = held_gain.required(forms.is_empty());
     if fit_gain < required {
         failed.push(format!(
             "held-out fit gain {fit_gain:.2} points, less than {required:.2}"
@@ -1983,20 +1990,21 @@ mod tests {
         assert!(close(&leading_first).is_empty());
     }
 
-    /// Near the noise floor an effect is asked half the gap, a first or a later one alike.
+    /// Near the noise floor a first effect is asked half the gap, a later one [`MIN_GAIN`].
     #[test]
-    fn near_the_noise_floor_half_the_gap_is_the_gain_asked() {
-        let asked = |gap| {
+    fn near_the_noise_floor_half_the_gap_is_the_gain_asked_of_a_first_effect() {
+        let asked = |gap, first| {
             HeldOutGain {
                 gain: 0.0,
                 closed: 0.0,
                 gap,
             }
-            .required()
+            .required(first)
         };
-        assert_eq!(asked(5.0), MIN_GAIN);
-        assert_eq!(asked(2.0 * MIN_GAIN / GAP_CLOSED), MIN_GAIN);
-        assert!((asked(0.14) - 0.07).abs() < 1e-12);
+        assert_eq!(asked(5.0, true), MIN_GAIN);
+        assert_eq!(asked(2.0 * MIN_GAIN / GAP_CLOSED, true), MIN_GAIN);
+        assert!((asked(0.14, true) - 0.07).abs() < 1e-12);
+        assert_eq!(asked(0.3, false), MIN_GAIN);
     }
 
     /// Twins of one refit (issue: lab protocols): started from a bad guess, which ends above the
