@@ -3,8 +3,8 @@
 //! effects at once), two 6 s experiments at 1 ms each or a lab protocol drawn per case,
 //! optionally recorded as lab data (artifacts on top); prints every case, the confusion matrix
 //! by family, the evidence weight of the hidden family, the held-out fits against the noise
-//! floor, the spurious effects (named beside every hidden one), the share of two-effect cases with both named and where
-//! the time goes.
+//! floor, the spurious effects (named beside every hidden one), the share of two-effect cases
+//! with both named and where the time goes.
 
 use std::collections::BTreeMap;
 
