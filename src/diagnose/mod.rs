@@ -1138,7 +1138,7 @@ impl Search {
         if added.is_none()
             && revisits.is_empty()
             && !self.forms.is_empty()
-            && worst_gap_to_floor(held, &self.current) > FIT_TOLERANCE
+            && worst_gap_to_floor(held, &self.current) > AT_FLOOR
         {
             revisits = revisit_forms(
                 &self.rounds,
@@ -1448,10 +1448,10 @@ fn revisit(
     Ok(out)
 }
 
-/// When a round adds nothing and a held-out fit is still beyond [`FIT_TOLERANCE`] of its noise
-/// floor, each earlier effect is tried in the forms of its family that its round did not refit
-/// (nor a revisit since), in place of the one it has (book/src/diagnose.md, "Families of
-/// forms"): the screening ranked the forms on the model of that round linearized, which a law far
+/// When a round adds nothing and a held-out fit is still beyond [`AT_FLOOR`] of its noise floor
+/// (the nearness a named family is asked to reach), each earlier effect is tried in the forms
+/// of its family that its round did not refit (nor a revisit since), in place of the one it has
+/// (book/src/diagnose.md, "Families of forms"): the screening ranked the forms on the model of that round linearized, which a law far
 /// from it misjudges (a slewing amplifier's first-order lag, seen from the paper's model), and no
 /// later family closes what the chosen form leaves. The try that lowers the BIC most, by at least
 /// [`BIC_MARGIN`], and brings the worst held-out fit nearer its floor takes the place.
