@@ -15,6 +15,12 @@ use hasel_fmu::identify::{Options as IdOptions, Weighting};
 use hasel_fmu::model::effects::{FittedLaw, prony};
 use hasel_fmu::model::{Effect, Params};
 
+/// The seed of the random-law cases below that pin no path: the decision rule's thresholds were
+/// tuned on seeds 1–8 of `hasel bench --diagnose` and checked on 9–16; none was tuned on seed 17
+/// on (book/src/hidden-effects.md, "Seeds no rule was tuned on"). A test that pins a path names
+/// the seed of the case that showed it.
+const UNTUNED: u64 = 17;
+
 fn diagnose_case(truth: Truth, columns: Columns, seed: u64) -> diagnose::Diagnosis {
     diagnose_hidden(hidden::hide(truth, seed).unwrap(), columns, seed)
 }
@@ -121,12 +127,12 @@ fn law_shown(d: &diagnose::Diagnosis) -> (&FittedLaw, &'static str) {
 
 #[test]
 fn coupling_is_named() {
-    named(Effect::Coupling, 1);
+    named(Effect::Coupling, UNTUNED);
 }
 
 #[test]
 fn charge_drift_is_named() {
-    named(Effect::ChargeDrift, 1);
+    named(Effect::ChargeDrift, UNTUNED);
 }
 
 /// Two trapping stages in series (seed 3: at 0.13 and 1.1 s), which the one series stage held
@@ -151,7 +157,7 @@ fn two_traps_in_series_are_charge_drift_in_its_series_spectrum() {
 
 #[test]
 fn creep_is_named() {
-    named(Effect::Creep, 1);
+    named(Effect::Creep, UNTUNED);
 }
 
 /// A hidden kernel of `truth`'s family off the grid (seed `seed` draws one, a `kernel`): named
@@ -208,22 +214,22 @@ fn dielectric_absorption_of_a_stretched_kernel_is_charge_drift_with_its_law() {
 
 #[test]
 fn hysteresis_is_named() {
-    named(Effect::Hysteresis, 1);
+    named(Effect::Hysteresis, UNTUNED);
 }
 
 #[test]
 fn amplifier_lag_is_named() {
-    named(Effect::AmplifierLag, 1);
+    named(Effect::AmplifierLag, UNTUNED);
 }
 
 #[test]
 fn delay_is_named() {
-    named(Effect::Delay, 1);
+    named(Effect::Delay, UNTUNED);
 }
 
 #[test]
 fn saturation_is_named() {
-    named(Effect::Saturation, 1);
+    named(Effect::Saturation, UNTUNED);
 }
 
 /// The suite's `saturation_unequal` seed 2: a refit holds a parameter alone, and the rounding of
@@ -238,12 +244,12 @@ fn unequal_limits_whose_refit_holds_parameters_in_turn_are_named() {
 
 #[test]
 fn stiffening_is_named() {
-    named(Effect::Stiffening, 1);
+    named(Effect::Stiffening, UNTUNED);
 }
 
 #[test]
 fn preload_is_named() {
-    named(Effect::Preload, 1);
+    named(Effect::Preload, UNTUNED);
 }
 
 /// The suite's `preload` seed 2: the base fit took the load up with four parameters at a bound
@@ -443,6 +449,14 @@ fn a_tilt_spring_and_creep_are_both_named() {
 }
 
 #[test]
+fn a_tilt_spring_and_creep_on_an_untuned_seed_are_both_named() {
+    // (the other pairs on this seed: `amplifier_lag+stiffening` both named in 26.9 s, too long
+    // for this suite; `charge_drift_film+hysteresis` one of the misses the bench counts, its film
+    // drift worth 0.10 points beside the hysteresis)
+    both_named("coupling_tilt+creep", UNTUNED);
+}
+
+#[test]
 fn film_retention_and_hysteresis_are_both_named() {
     // on this device neither closes half of the held-out gap alone: hysteresis is added
     // provisionally and kept once the charge drift beside it closes the rest
@@ -470,7 +484,7 @@ fn an_amplifier_lag_and_stiffening_are_both_named() {
 
 #[test]
 fn no_effect_is_named_on_data_without_one() {
-    for seed in [1, 2] {
+    for seed in [UNTUNED, UNTUNED + 1] {
         let d = diagnose_case(Truth::Nothing, Columns::Heights, seed);
         assert_eq!(d.verdict, Verdict::None, "seed {seed}: {:?}", d.effects);
         assert!(d.effects.is_empty());
@@ -479,13 +493,13 @@ fn no_effect_is_named_on_data_without_one() {
 
 #[test]
 fn a_rippling_supply_is_unexplained() {
-    let d = diagnose_case(Truth::Ripple, Columns::Heights, 1);
+    let d = diagnose_case(Truth::Ripple, Columns::Heights, UNTUNED);
     assert_eq!(d.verdict, Verdict::Unexplained, "{:?}", d.effects);
 }
 
 #[test]
 fn a_mechanism_outside_the_library_is_unexplained() {
-    let d = diagnose_case(Truth::Outside, Columns::Heights, 1);
+    let d = diagnose_case(Truth::Outside, Columns::Heights, UNTUNED);
     assert_eq!(d.verdict, Verdict::Unexplained, "{:?}", d.effects);
     // and the analysis shows why: most of the structured residual is off the drive's harmonics
     let off: f64 = d.before.iter().map(|x| x.off_harmonic).sum::<f64>() / d.before.len() as f64;
@@ -510,7 +524,7 @@ fn outliers_reported(case: &hidden::Hidden, d: &diagnose::Diagnosis) {
 
 #[test]
 fn no_effect_is_named_on_lab_data() {
-    for seed in [1, 2] {
+    for seed in [UNTUNED, UNTUNED + 1] {
         let case = hidden::hide(Truth::Nothing, seed)
             .unwrap()
             .with_artifacts(seed);
@@ -522,10 +536,10 @@ fn no_effect_is_named_on_lab_data() {
 
 #[test]
 fn an_effect_is_named_on_lab_data() {
-    let case = hidden::hide(Truth::Effect(Effect::Creep), 1)
+    let case = hidden::hide(Truth::Effect(Effect::Creep), UNTUNED)
         .unwrap()
-        .with_artifacts(1);
-    let d = diagnose_hidden(case.clone(), Columns::Heights, 1);
+        .with_artifacts(UNTUNED);
+    let d = diagnose_hidden(case.clone(), Columns::Heights, UNTUNED);
     assert_named(Effect::Creep, &d);
     outliers_reported(&case, &d);
 }
