@@ -17,7 +17,7 @@ use hasel_fmu::model::{Effect, Params};
 
 /// The seed of the random-law cases below that pin no path: the decision rule's thresholds were
 /// tuned on seeds 1–8 of `hasel bench --diagnose` and checked on 9–16; none was tuned on seed 17
-/// on (book/src/hidden-effects.md, "Seeds no rule was tuned on"). A test that pins a path names
+/// (book/src/hidden-effects.md, "Seeds no rule was tuned on"). A test that pins a path names
 /// the seed of the case that showed it.
 const UNTUNED: u64 = 17;
 
