@@ -688,8 +688,9 @@ fn round_section(md: &mut String, k: usize, r: &Round) {
 fn passing_rule(md: &mut String) {
     let _ = writeln!(
         md,
-        "An effect passes when it lowers the BIC on the estimation data by more than {margin}, closes at least {:.0} % of the held-out gap to the noise floor, gains at least {gain} points of held-out fit (half the gap to the floor where that is less), and the 95 % interval of its magnitude excludes the neutral value. Of two that pass, the one with the lower BIC is added if it beats the other by {margin}, else the one with {gain} points more of held-out fit; otherwise the answer is `ambiguous`.\n",
+        "An effect passes when it lowers the BIC on the estimation data by more than {margin}, closes at least {:.0} % of the held-out gap to the noise floor, gains at least {gain} points of held-out fit (half the gap to the floor where that is less; a later effect only where it closes {:.0} % of that gap), and the 95 % interval of its magnitude excludes the neutral value. Of two that pass, the one with the lower BIC is added if it beats the other by {margin}, else the one with {gain} points more of held-out fit; otherwise the answer is `ambiguous`.\n",
         100.0 * super::GAP_CLOSED,
+        100.0 * super::LATER_GAP_CLOSED,
         margin = super::BIC_MARGIN,
         gain = super::MIN_GAIN
     );
