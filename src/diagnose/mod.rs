@@ -1460,8 +1460,9 @@ fn revisit(
 /// of its family that its round did not refit (nor a revisit since), in place of the one it has
 /// (book/src/diagnose.md, "Families of forms"): the screening ranked the forms on the model of
 /// that round linearized, which a law far from it misjudges (a slewing amplifier's first-order
-/// lag, seen from the paper's model), and no later family closes what the chosen form leaves. The try that lowers the BIC most, by at least
-/// [`BIC_MARGIN`], and brings the worst held-out fit nearer its floor takes the place.
+/// lag, seen from the paper's model), and no later family closes what the chosen form leaves.
+/// The try that lowers the BIC most, by at least [`BIC_MARGIN`], and brings the worst held-out
+/// fit nearer its floor takes the place.
 fn revisit_forms(
     rounds: &[Round],
     forms: &mut [&'static Form],
