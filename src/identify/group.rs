@@ -92,7 +92,8 @@ impl Problem<'_> {
     }
 
     /// ∂r/∂x from the forward sensitivities of one simulation per experiment, or the reason
-    /// they cannot be had (a direction that switches an effect's states, or moves the delay).
+    /// they cannot be had (a direction that switches an effect's states, or moves the delay from
+    /// 0).
     fn sensitivity_jacobian(&self, x: &[f64]) -> Result<DMatrix<f64>, Error> {
         let p = self.params_at(x)?;
         let directions = (0..x.len())

@@ -88,6 +88,13 @@ impl Drive<'_> {
     fn value(&self, t: f64) -> [f64; 3] {
         self.piece.value(t - self.delay)
     }
+    /// The same piece of the command, `by` later (a held piece is the same at any time).
+    fn later(&self, by: f64) -> Drive<'_> {
+        Drive {
+            piece: self.piece,
+            delay: self.delay + by,
+        }
+    }
 }
 
 /// The platform driven by one smooth piece of input: the solver's view of the model.
@@ -247,6 +254,11 @@ trait Observer {
     fn stepped(&mut self, solver: &Integrator, sys: &Driven<'_>) -> Result<(), SimError>;
     /// At every output time, with the state there.
     fn sampled(&mut self, sample: &Sample, x: &[f64]);
+    /// Where the voltage the model sees jumps from `before` to `after` at a breakpoint of the
+    /// delayed command inside the run, at state `x`.
+    fn jumped(&mut self, _x: &[f64], _before: [f64; 3], _after: [f64; 3]) -> Result<(), SimError> {
+        Ok(())
+    }
 }
 
 /// The outputs at one instant: heights h_i and the antenna tip \[m\].
@@ -658,9 +670,18 @@ impl Simulator {
         let mut x = vec![0.0; self.model.n_states()];
         let mut k = 0;
         let t_run = self.t();
+        let mut last: Option<Drive<'_>> = None;
         loop {
             let (piece, piece_end) = self.drive_at(input, t_run, self.t());
             self.apply(piece)?;
+            // the first piece takes over from whatever came before the run, not at a breakpoint
+            if let Some(last) = last {
+                let (before, after) = (last.value(self.t()), self.u_now);
+                if before != after {
+                    observer.jumped(self.solver.y(), before, after)?;
+                }
+            }
+            last = Some(piece);
             let seg_end = if t_end - piece_end <= SLIVER * t_end.abs().max(1.0) {
                 t_end
             } else {

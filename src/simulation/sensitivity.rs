@@ -7,7 +7,10 @@
 //! state's and the outputs' own dependence on θ_j are the differences of the two models divided
 //! by the step (cheap: no simulation), and the dynamics carry them through the variational
 //! equation. The delay `tau_d` acts on the input's timing, not on f: a direction that moves it
-//! is refused.
+//! sees the piece of the command it is in that much later, and where the delayed command steps,
+//! the step's moving in time makes s jump by (f before − f after) · ∂τ_d/∂θ_j. At τ_d = 0 that
+//! derivative is one-sided (the first command's arrival separates from the start), and such a
+//! direction is refused.
 
 use super::{Driven, Input, Integrator, Observer, Sample, SimError, Simulator, Start};
 use crate::model::{Params, Platform};
@@ -44,6 +47,8 @@ struct Parametric<'a, 'd> {
     steps: &'a [f64],
     /// Per direction, the one actuator it moves (see [`own_actuator`]).
     own: &'a [Option<usize>],
+    /// Per direction, how much later it has the command arrive [s] (its τ_d − the run's).
+    later: &'a [f64],
 }
 
 impl OdeSystem for Parametric<'_, '_> {
@@ -71,14 +76,20 @@ impl ParametricSystem for Parametric<'_, '_> {
         let mut base = vec![0.0; n];
         self.driven.rhs(t, y, &mut base)?;
         let columns = fp.chunks_mut(n);
-        for (((model, step), own), column) in self
+        for ((((model, step), own), &later), column) in self
             .models
             .iter()
             .zip(self.steps)
             .zip(self.own)
+            .zip(self.later)
             .zip(columns)
         {
             let fail = |e: crate::model::ModelError| RhsError(e.to_string());
+            let u = if later == 0.0 {
+                u
+            } else {
+                self.driven.piece.later(later).value(t)
+            };
             // an actuator's own parameter: its block alone, the others' are exactly zero
             let rows = match *own {
                 Some(i) => {
@@ -111,6 +122,8 @@ struct Follower<'a> {
     same_map: Vec<bool>,
     /// Per direction, the one actuator it moves (see [`own_actuator`]).
     own: Vec<Option<usize>>,
+    /// Per direction, how much later it has the command arrive [s] (its τ_d − the run's).
+    later: Vec<f64>,
     sens: Sensitivities,
     s: Vec<f64>,
     /// ∂g/∂x as its entries (output, state, value): a dozen of 6 × n, the heights' angles
@@ -131,6 +144,7 @@ impl Observer for Follower<'_> {
             models: self.models,
             steps: self.steps,
             own: &self.own,
+            later: &self.later,
         };
         self.sens
             .follow(solver, &sys)
@@ -161,6 +175,31 @@ impl Observer for Follower<'_> {
         }
         self.out.samples.push(*sample);
     }
+
+    /// A step of the delayed command moves with τ_d: s jumps by (f before − f after) ∂τ_d/∂θ_j.
+    fn jumped(&mut self, x: &[f64], before: [f64; 3], after: [f64; 3]) -> Result<(), SimError> {
+        if self.later.iter().all(|&l| l == 0.0) {
+            return Ok(());
+        }
+        let n = x.len();
+        let (mut f_before, mut f_after) = (vec![0.0; n], vec![0.0; n]);
+        self.base.rhs(x, before, &mut f_before)?;
+        self.base.rhs(x, after, &mut f_after)?;
+        let ds: Vec<f64> = self
+            .later
+            .iter()
+            .zip(self.steps)
+            .flat_map(|(later, step)| {
+                let rate = later / step;
+                f_before
+                    .iter()
+                    .zip(&f_after)
+                    .map(move |(b, a)| rate * (b - a))
+            })
+            .collect();
+        self.sens.jump(&ds);
+        Ok(())
+    }
 }
 
 /// Simulates `input` from `start` of `params` at `times[0]` (relative tolerance `rtol`), sampled
@@ -189,9 +228,11 @@ pub fn simulate_sensitive(
                 m.n_states()
             )));
         }
-        if d.params.effects.delay.tau_d != params.effects.delay.tau_d {
+        if params.effects.delay.tau_d == 0.0
+            && d.params.effects.delay.tau_d != params.effects.delay.tau_d
+        {
             return Err(SimError::Setting(format!(
-                "sensitivity direction {j} moves the delay tau_d, which shifts the input rather than the dynamics"
+                "sensitivity direction {j} moves the delay tau_d from 0, where its derivative is one-sided"
             )));
         }
         if !(d.step.is_finite() && d.step != 0.0) {
@@ -217,6 +258,10 @@ pub fn simulate_sensitive(
         own: directions
             .iter()
             .map(|d| own_actuator(&base, &d.params))
+            .collect(),
+        later: directions
+            .iter()
+            .map(|d| d.params.effects.delay.tau_d - params.effects.delay.tau_d)
             .collect(),
         sens: Sensitivities::new(n, models.len(), t0, &s0),
         s: vec![0.0; n * models.len()],
@@ -265,22 +310,42 @@ mod tests {
     /// actuators coupled (one block of J) and an effect's parameter among the directions.
     #[test]
     fn output_sensitivities_match_central_differences() {
-        check_against_differences(&Params::default(), &["Kb_1", "gamma1_2"]);
+        let input = sampled(Interpolation::Spline, |t| {
+            30.0 * (1.0 - (3.0 * std::f64::consts::PI * t).cos())
+        });
+        check_against_differences(&Params::default(), &input, &["Kb_1", "gamma1_2"]);
         let mut coupled = Params::default();
         coupled.set("k_c", 1000.0).unwrap();
-        check_against_differences(&coupled, &["Kb_1", "k_c"]);
+        check_against_differences(&coupled, &input, &["Kb_1", "k_c"]);
     }
 
-    fn check_against_differences(params: &Params, names: &[&str]) {
+    /// The sensitivity to a transport delay of 10.3 ms (off the samples' grid) against central
+    /// differences, on a measured command that is at 10 V before the run (so its arrival is a
+    /// step) and steps by 25 V at 0.3 s between two pieces of a sine: the two steps arrive
+    /// later as τ_d grows, and s jumps there.
+    #[test]
+    fn the_delays_sensitivity_matches_central_differences() {
+        let mut delayed = Params::default();
+        delayed.set("tau_d", 0.0103).unwrap();
+        let input = sampled(Interpolation::Measured, |t| {
+            10.0 + 20.0 * (1.0 - (3.0 * std::f64::consts::PI * t).cos())
+                + if t >= 0.3 { 25.0 } else { 0.0 }
+        });
+        check_against_differences(&delayed, &input, &["tau_d", "Kb_1"]);
+    }
+
+    /// `volts(t)` on the three actuators (scaled 1, 0.8, 0.6) sampled every ms for 1.5 s.
+    fn sampled(interpolation: Interpolation, volts: impl Fn(f64) -> f64) -> Input {
         let times: Vec<f64> = (0..=1500).map(|k| k as f64 * 1e-3).collect();
-        let u: Vec<[f64; 3]> = times
+        let u = times
             .iter()
-            .map(|t| {
-                let v = 30.0 * (1.0 - (3.0 * std::f64::consts::PI * t).cos());
-                [v, 0.8 * v, 0.6 * v]
-            })
+            .map(|&t| [1.0, 0.8, 0.6].map(|s| s * volts(t)))
             .collect();
-        let input = Input::sampled(times.clone(), u, Interpolation::Spline).unwrap();
+        Input::sampled(times, u, interpolation).unwrap()
+    }
+
+    fn check_against_differences(params: &Params, input: &Input, names: &[&str]) {
+        let times: Vec<f64> = (0..=1500).map(|k| k as f64 * 1e-3).collect();
         let moved = |name: &str, dln: f64| {
             let mut p = params.clone();
             p.set(name, params.get(name).unwrap() * dln.exp()).unwrap();
@@ -294,11 +359,11 @@ mod tests {
             })
             .collect();
         let got =
-            simulate_sensitive(params, &directions, &Start::Rest, &input, &times, 1e-8).unwrap();
+            simulate_sensitive(params, &directions, &Start::Rest, input, &times, 1e-8).unwrap();
         let run = |p: &Params| {
             let mut sim = Simulator::new(Platform::new(p.clone()).unwrap(), 0.0, 1e-12).unwrap();
             let mut out = Vec::new();
-            sim.run_at(&input, &times, |s| out.push(s.h)).unwrap();
+            sim.run_at(input, &times, |s| out.push(s.h)).unwrap();
             out
         };
         let h = 1e-3;

@@ -239,6 +239,17 @@ impl Sensitivities {
         Ok(())
     }
 
+    /// Adds `ds` (column-major n × m) to ∂y/∂θ at the current point: the jump where a
+    /// discontinuity of f moves with θ (a delayed step of the input), whose size the system
+    /// knows, not the method. The last step's polynomial does not end at the jumped values.
+    pub fn jump(&mut self, ds: &[f64]) {
+        assert_eq!(ds.len(), self.s.len(), "one jump per state and parameter");
+        for (s, d) in self.s.iter_mut().zip(ds) {
+            *s += d;
+        }
+        self.have_poly = false;
+    }
+
     /// Do the sensitivities to parameter `j` stay zero on the states `block` over this step: are
     /// they zero there and is ∂f/∂θ_j zero there at every stage? (Each actuator's own
     /// parameters leave the others' blocks at exactly zero.)
