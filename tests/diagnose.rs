@@ -735,7 +735,7 @@ fn a_load_its_estimation_record_cannot_tell_is_unexplained() {
     let opts = Options::default();
     let truth_gaps = |case: &hidden::Hidden| {
         let exps = case.experiments(Columns::Heights, 1).unwrap();
-        diagnose::truth_gaps(case.true_model().unwrap(), exps, &opts).unwrap()
+        diagnose::truth_gaps(&case.true_model().unwrap(), exps, &opts).unwrap()
     };
     let paper = hidden::hide(Truth::Effect(Effect::Preload), 1).unwrap();
     let gaps = truth_gaps(&paper);

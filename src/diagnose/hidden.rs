@@ -401,12 +401,19 @@ impl Hidden {
         })
     }
 
-    /// The device's true model, where the whole truth is one (no drive distorted outside the
-    /// model, no floor vibration): what a miss is checked against
-    /// ([`crate::diagnose::truth_gaps`]).
-    pub fn true_model(&self) -> Option<&Params> {
-        let outside = self.wandering_delay.is_some() || self.ripple.is_some();
-        (!outside && self.vibration.is_none()).then_some(&self.params)
+    /// The device's true model, what a diagnosis is checked against
+    /// ([`crate::diagnose::truth_gaps`]): a delay that wanders about its mean held at its mean,
+    /// the time-invariant law nearest it; none where the drive is distorted outside the model (a
+    /// rippling supply) or the floor vibrates.
+    pub fn true_model(&self) -> Option<Params> {
+        if self.ripple.is_some() || self.vibration.is_some() {
+            return None;
+        }
+        let mut model = self.params.clone();
+        if let Some((mean, _)) = self.wandering_delay {
+            model.effects.delay.tau_d = mean;
+        }
+        Some(model)
     }
 
     /// This case recorded with `protocol`.
@@ -584,6 +591,22 @@ impl Protocol {
 mod tests {
     use super::*;
     use crate::identify::Channel;
+
+    /// The truth a diagnosis is checked against holds a wandering delay at its mean, and keeps
+    /// the drawn parameters; a rippling supply or a vibrating floor has none.
+    #[test]
+    fn a_wandering_delay_is_held_at_its_mean_in_the_true_model() {
+        let case = hide(Truth::Effect(Effect::Delay), 17).unwrap();
+        let (mean, _) = case.wandering_delay.unwrap();
+        let model = case.true_model().unwrap();
+        assert_eq!(model.effects.delay.tau_d, mean);
+        let mut rest = model.clone();
+        rest.effects.delay.tau_d = 0.0;
+        assert_eq!(rest, case.params);
+        for outside in [Truth::Ripple, Truth::Outside] {
+            assert!(hide(outside, 17).unwrap().true_model().is_none());
+        }
+    }
 
     #[test]
     fn drawn_protocols_span_the_lab_protocols() {

@@ -55,7 +55,7 @@ pub const MIN_GAIN: f64 = 0.2;
 const NOISE_FLOOR_EXCESS: f64 = 0.05;
 /// Points of held-out fit within which a model with its effects is at the noise floor: a
 /// further effect is looked for only beyond it, and the report says what remains beyond it.
-const AT_FLOOR: f64 = 0.5;
+pub const AT_FLOOR: f64 = 0.5;
 /// Residual variance beyond the noise, as a fraction of it, that a held-out output may keep and
 /// the model still be at its floor: a fit's points hide more variance the higher its floor (a
 /// gap of g points is an RMS ratio to the noise of 1 + g / (100 − floor): at a floor of 97 %,

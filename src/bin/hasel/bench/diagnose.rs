@@ -131,18 +131,21 @@ pub fn run(
             let ok = right(truth, &d);
             let seconds = d.timing.last().map_or(0.0, |t| t.1);
             let gap = worst_gap(&d);
-            let weight = tally.count(truth, seed, &d, &protocol, (ok, seconds, gap));
-            let truth_gap = match case.true_model() {
-                Some(model) if !ok && !truth.effects().is_empty() => {
-                    let g = diagnose::truth_gaps(model, exps, &Options::default())?;
-                    tally.beyond_truth(truth, seed, &d, g, pair);
-                    format!(
-                        " | truth held {:.2}, refitted {:.2} below floor",
-                        g.held, g.refitted
-                    )
+            // a miss, or the right effects short of the floor: how near the truth comes
+            let short = !ok || gap > diagnose::AT_FLOOR;
+            let truth_gaps = match case.true_model() {
+                Some(model) if short && !truth.effects().is_empty() => {
+                    Some(diagnose::truth_gaps(&model, exps, &Options::default())?)
                 }
-                _ => String::new(),
+                _ => None,
             };
+            let weight = tally.count(truth, seed, &d, &protocol, (ok, seconds, gap), truth_gaps);
+            let truth_gap = truth_gaps.map_or(String::new(), |g| {
+                format!(
+                    " | truth held {:.2}, refitted {:.2} below floor",
+                    g.held, g.refitted
+                )
+            });
             let (before, after) = (&d.fits.before, &d.fits.after);
             let single = d.after.len() == 1;
             let floor: Vec<String> = d
@@ -180,8 +183,9 @@ pub fn run(
 struct Tally {
     times: Vec<f64>,
     spurious: usize,
-    /// Effect cases named exactly: (worst held-out gap to the noise floor, case).
-    gaps: Vec<(f64, String)>,
+    /// Effect cases named exactly: (worst held-out gap to the noise floor, case, its truth's
+    /// gaps where the gap is beyond `AT_FLOOR`).
+    gaps: Vec<(f64, String, Option<diagnose::TruthGaps>)>,
     matrix: BTreeMap<(String, String), usize>,
     /// The right family's evidence weight on each single-mechanism case.
     confidences: Vec<f64>,
@@ -203,7 +207,8 @@ struct Tally {
 impl Tally {
     /// Counts the diagnosis `d` of the case hiding `truth` (drawn from `seed`, recorded in
     /// `protocol`): whether it is right, its time and its worst held-out gap; returns the hidden
-    /// family's evidence weight as the case's line shows it, if any.
+    /// family's evidence weight as the case's line shows it, if any. `truth_gaps`, where the
+    /// case's truth was checked: a miss beyond its reach is counted apart.
     fn count(
         &mut self,
         truth: Truth,
@@ -211,6 +216,7 @@ impl Tally {
         d: &diagnose::Diagnosis,
         protocol: &str,
         (ok, seconds, gap): (bool, f64, f64),
+        truth_gaps: Option<diagnose::TruthGaps>,
     ) -> String {
         let pair = matches!(truth, Truth::Two(_));
         self.slowest = self.slowest.max(seconds);
@@ -224,9 +230,12 @@ impl Tally {
             self.confidences.push(confidence(e, d));
             weight = format!(" | weight {:.3}", confidence(e, d));
         }
+        let case = format!("{} seed {seed}", truth.name());
         if ok && !truth.effects().is_empty() {
-            self.gaps
-                .push((gap, format!("{} seed {seed}", truth.name())));
+            self.gaps.push((gap, case.clone(), truth_gaps));
+        }
+        if let Some(g) = truth_gaps.filter(|g| !ok && g.refitted > diagnose::FIT_TOLERANCE) {
+            self.beyond_truth.push((case, g, d.answer(), pair));
         }
         for (stage, s) in &d.timing {
             let key = stage.split(" (round").next().unwrap_or(stage).to_string();
@@ -245,22 +254,6 @@ impl Tally {
             self.effect_right += ok as usize;
         }
         weight
-    }
-
-    /// Counts a miss whose true model (`gaps`) the rules could not accept either: refitted as a
-    /// diagnosis fits it, beyond what a diagnosis accepts of an effect.
-    fn beyond_truth(
-        &mut self,
-        truth: Truth,
-        seed: u64,
-        d: &diagnose::Diagnosis,
-        gaps: diagnose::TruthGaps,
-        pair: bool,
-    ) {
-        if gaps.refitted > diagnose::FIT_TOLERANCE {
-            let case = format!("{} seed {seed}", truth.name());
-            self.beyond_truth.push((case, gaps, d.answer(), pair));
-        }
     }
 
     /// The closing lines: the confusion matrix, the evidence weights, the scores against
@@ -339,14 +332,33 @@ impl Tally {
             );
         }
         gaps.sort_by(|a, b| b.0.total_cmp(&a.0));
-        let within = gaps.iter().filter(|g| g.0 <= 0.5).count();
+        let floor = diagnose::AT_FLOOR;
+        let within = gaps.iter().filter(|g| g.0 <= floor).count();
         say!(
-            "held-out fit after the right effect(s) within 0.5 points of the noise floor: {within}/{}{}",
+            "held-out fit after the right effect(s) within {floor} points of the noise floor: {within}/{}{}",
             gaps.len(),
             gaps.first()
-                .map(|(g, c)| format!("; farthest {g:.2} points below ({c})"))
+                .map(|(g, c, _)| format!("; farthest {g:.2} points below ({c})"))
                 .unwrap_or_default()
         );
+        let short: Vec<String> = gaps
+            .iter()
+            .filter(|g| g.0 > floor)
+            .map(|(g, c, t)| {
+                t.map_or(format!("{c} {g:.2} (no model truth)"), |t| {
+                    format!(
+                        "{c} {g:.2} (its truth held {:.2}, refitted {:.2})",
+                        t.held, t.refitted
+                    )
+                })
+            })
+            .collect();
+        if !short.is_empty() {
+            say!(
+                "  beyond {floor} points, with how far below the floor the hidden model itself leaves them: {}",
+                short.join("; ")
+            );
+        }
         say!(
             "time per diagnosis: median {typical:.1} s ({}), slowest {slowest:.1} s ({})",
             if typical <= 5.0 { "met" } else { "MISSED" },
