@@ -324,16 +324,16 @@ pub fn minimize(
                 converged = true;
                 break;
             }
-            let trial = evaluate(p, &x_new);
-            evaluations += 1;
+            // a step the bounds bent until the model promises no descent is rejected unseen:
+            // its ratio could not be positive (a simulation saved)
+            let trial = (predicted > 0.0).then(|| {
+                evaluations += 1;
+                evaluate(p, &x_new)
+            });
             let accepted = match trial {
-                Ok(r_new) => {
+                Some(Ok(r_new)) => {
                     let cost_new = 0.5 * r_new.norm_squared();
-                    let rho = if predicted > 0.0 {
-                        (cost - cost_new) / predicted
-                    } else {
-                        -1.0
-                    };
+                    let rho = (cost - cost_new) / predicted;
                     if rho > 0.0 {
                         let small_x = d.amax()
                             <= opts.xtol * (1.0 + x.iter().fold(0.0f64, |m, v| m.max(v.abs())));
@@ -348,7 +348,7 @@ pub fn minimize(
                         false
                     }
                 }
-                Err(_) => false,
+                Some(Err(_)) | None => false,
             };
             if accepted {
                 break;
