@@ -551,4 +551,58 @@ mod tests {
         .unwrap();
         assert!(s.x[1] <= 1.0 && (s.x[1] - 1.0).abs() < 1e-9, "{:?}", s.x);
     }
+
+    /// Linear residuals J (x − x*) with correlated columns, whose minimum x* = (−1, 1.5) lies
+    /// beyond the bound x0 ≥ −0.1; each evaluation's cost is recorded.
+    struct Pressed(std::sync::Mutex<Vec<f64>>);
+
+    impl Pressed {
+        const J: [[f64; 2]; 2] = [[1.0, 1.0], [0.1, -0.1]];
+    }
+
+    impl Residuals for Pressed {
+        fn count(&self) -> usize {
+            2
+        }
+        fn eval(&self, x: &[f64], r: &mut [f64]) -> Result<(), Error> {
+            let dx = [x[0] + 1.0, x[1] - 1.5];
+            for (ri, row) in r.iter_mut().zip(Self::J) {
+                *ri = row[0] * dx[0] + row[1] * dx[1];
+            }
+            self.0
+                .lock()
+                .unwrap()
+                .push(0.5 * r.iter().map(|v| v * v).sum::<f64>());
+            Ok(())
+        }
+        fn jacobian(&self, _x: &[f64]) -> Option<Result<DMatrix<f64>, Error>> {
+            Some(Ok(DMatrix::from_fn(2, 2, |i, j| Self::J[i][j])))
+        }
+    }
+
+    /// The first steps toward x* take x0 past its bound, and clamped there x1 keeps the move it
+    /// made for x0's: the model promises an ascent. Such a step is rejected without a
+    /// simulation: on linear residuals the model is exact, so every trial simulated lowers the
+    /// cost.
+    #[test]
+    fn a_step_the_bounds_bend_into_no_descent_is_not_simulated() {
+        let p = Pressed(Default::default());
+        let opts = Options {
+            confirm: false,
+            ..Options::default()
+        };
+        let inf = f64::INFINITY;
+        let s = minimize(&p, &[0.0, 0.0], &[-0.1, -inf], &[inf, inf], &opts).unwrap();
+        assert!(s.converged && s.x[0] == -0.1, "{:?}", s.x);
+        // with x0 at its bound, x1 where the cost is least given it: (JᵀJ)₁₀ / (JᵀJ)₁₁ of x0's miss
+        assert!(
+            (s.x[1] - (1.5 - 0.99 / 1.01 * 0.9)).abs() < 1e-6,
+            "{:?}",
+            s.x
+        );
+        let costs = p.0.into_inner().unwrap();
+        for w in costs.windows(2) {
+            assert!(w[1] < w[0], "a simulated trial raised the cost: {costs:?}");
+        }
+    }
 }
