@@ -51,8 +51,12 @@ const NON_STIFF_STEP: f64 = 1e-3;
 /// so that the pair's steps are set by its accuracy, not by its stability.
 const NON_STIFF_H_RHO: f64 = 1.0;
 
-/// Most steps of the explicit pair in one call (as [`Radau5`]'s default).
-const MAX_EXPLICIT_STEPS: usize = 100_000;
+/// Most steps between two points a run must reach (an output time, a breakpoint of the input,
+/// the end of a co-simulation step), as [`Radau5::advance`] allows in one call: a run whose
+/// steps shrink until it crawls (accepted steps of 1.5e-16 s near t = 0 were met inside a fit,
+/// where Radau's vanishing-step guard, relative to |t|, cannot see them) stops with
+/// [`SolverError::TooManySteps`], which a fit takes as a failed trial, instead of running on.
+const MAX_STEPS: usize = 100_000;
 
 /// Why a simulation could not go on.
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
@@ -232,10 +236,10 @@ impl Integrator {
             if e.t() >= t_end {
                 return Ok(());
             }
-            if steps == MAX_EXPLICIT_STEPS {
+            if steps == MAX_STEPS {
                 return Err(SolverError::TooManySteps {
                     t: e.t(),
-                    limit: MAX_EXPLICIT_STEPS,
+                    limit: MAX_STEPS,
                 });
             }
             self.step(sys, t_end)?;
@@ -627,7 +631,7 @@ impl Simulator {
     /// Integrates `input` through the increasing `times` (none before the current time),
     /// calling `on_sample` at each: outputs come from the integrator's dense output inside
     /// smooth pieces; the integrator stops exactly at every breakpoint of the input and at the
-    /// last time.
+    /// last time. At most [`MAX_STEPS`] steps lie between two output times or breakpoints.
     pub fn run_at(
         &mut self,
         input: &Input,
@@ -691,17 +695,28 @@ impl Simulator {
                 model: &self.model,
                 piece,
             };
+            // steps since the last output time or breakpoint (`MAX_STEPS`)
+            let mut steps = 0;
             loop {
                 while k < times.len() && times[k] <= self.t() {
                     self.solver.interpolate(times[k], &mut x);
                     let sample = Sample::of(&self.model, times[k], input.value(times[k]), &x);
                     observer.sampled(&sample, &x);
                     k += 1;
+                    steps = 0;
                 }
                 if self.t() >= seg_end {
                     break;
                 }
+                if steps == MAX_STEPS {
+                    return Err(SolverError::TooManySteps {
+                        t: self.t(),
+                        limit: MAX_STEPS,
+                    }
+                    .into());
+                }
                 self.solver.step(&sys, seg_end)?;
+                steps += 1;
                 observer.stepped(&self.solver, &sys)?;
             }
             if k == times.len() {
@@ -743,6 +758,30 @@ mod tests {
         slow_lag.set("tau_a", 0.1).unwrap();
         let sim = Simulator::new(slow(slow_lag), 0.0, DEFAULT_RTOL).unwrap();
         assert_eq!(sim.method(), explicit);
+    }
+
+    /// The step budget counts from the last output time: 500 s of the paper's sine without an
+    /// output in between takes more than [`MAX_STEPS`] explicit steps (about 230 a second) and
+    /// stops with the error where the budget ran out, its earlier samples delivered; with an
+    /// output every second the same run ends.
+    #[test]
+    fn a_run_stops_where_its_steps_between_two_outputs_run_out() {
+        let input = Input::sine(60.0, 3.0 * std::f64::consts::PI);
+        let mut sim = Simulator::new(slow(Params::default()), 0.0, DEFAULT_RTOL).unwrap();
+        let mut samples = 0;
+        let e = sim
+            .run_at(&input, &[0.0, 500.0], |_| samples += 1)
+            .unwrap_err();
+        let SimError::Solver(SolverError::TooManySteps { t, limit }) = e else {
+            panic!("{e}")
+        };
+        assert_eq!((samples, limit), (1, MAX_STEPS));
+        assert!(t > 100.0 && t < 500.0 && t == sim.t(), "t = {t}");
+        let mut sim = Simulator::new(slow(Params::default()), 0.0, DEFAULT_RTOL).unwrap();
+        let mut samples = 0;
+        sim.run(&input, 500.0, 1.0, |_| samples += 1).unwrap();
+        assert_eq!(samples, 501);
+        assert!(sim.stats().accepted > MAX_STEPS);
     }
 
     /// A step held for 5 s: the explicit pair's steps grow as the motion settles until one
