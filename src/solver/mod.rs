@@ -45,7 +45,7 @@ pub enum SolverError {
     #[error("step size {h:e} s too small at t = {t} s ({reason})")]
     StepTooSmall { t: f64, h: f64, reason: String },
     /// More steps than the limit before the next time the caller must reach (the end of one
-    /// call, or an output time): the steps shrank until the run crawls.
+    /// call, an output time, the end of a budgeted run): the steps shrank until the run crawls.
     #[error("more than {limit} steps without reaching the next time to stop at, at t = {t} s")]
     TooManySteps { t: f64, limit: usize },
     /// f or J failed at the start of the step, so no smaller step can help.
