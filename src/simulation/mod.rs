@@ -631,7 +631,7 @@ impl Simulator {
     /// Integrates `input` through the increasing `times` (none before the current time),
     /// calling `on_sample` at each: outputs come from the integrator's dense output inside
     /// smooth pieces; the integrator stops exactly at every breakpoint of the input and at the
-    /// last time. At most [`MAX_STEPS`] steps lie between two output times or breakpoints.
+    /// last time. At most 100,000 steps lie between two output times or breakpoints.
     pub fn run_at(
         &mut self,
         input: &Input,
