@@ -8,7 +8,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::model::{ModelError, Platform};
 use crate::solver::sensitivity::SensitivityError;
-use crate::solver::{Bs23, OdeSystem, Radau5, RhsError, SolverError, Stats, Tolerances};
+use crate::solver::{Bs23, MAX_STEPS, OdeSystem, Radau5, RhsError, SolverError, Stats, Tolerances};
 pub use input::{Input, InputError, Interpolation, Piece, Tone};
 
 /// Relative tolerance of every way of running the model unless the user picks another
@@ -50,13 +50,6 @@ const NON_STIFF_STEP: f64 = 1e-3;
 /// not stiff: well inside the explicit pair's stability interval (−2.5, 0] ([`Bs23::stiffness`]),
 /// so that the pair's steps are set by its accuracy, not by its stability.
 const NON_STIFF_H_RHO: f64 = 1.0;
-
-/// Most steps between two points a run must reach (an output time, a breakpoint of the input,
-/// the end of a co-simulation step), as [`Radau5::advance`] allows in one call: a run whose
-/// steps shrink until it crawls (accepted steps of 1.5e-16 s near t = 0 were met inside a fit,
-/// where Radau's vanishing-step guard, relative to |t|, cannot see them) stops with
-/// [`SolverError::TooManySteps`], which a fit takes as a failed trial, instead of running on.
-const MAX_STEPS: usize = 100_000;
 
 /// Why a simulation could not go on.
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
@@ -631,7 +624,7 @@ impl Simulator {
     /// Integrates `input` through the increasing `times` (none before the current time),
     /// calling `on_sample` at each: outputs come from the integrator's dense output inside
     /// smooth pieces; the integrator stops exactly at every breakpoint of the input and at the
-    /// last time. At most 100,000 steps lie between two output times or breakpoints.
+    /// last time. At most [`MAX_STEPS`] steps lie between two output times or breakpoints.
     pub fn run_at(
         &mut self,
         input: &Input,
@@ -695,7 +688,10 @@ impl Simulator {
                 model: &self.model,
                 piece,
             };
-            // steps since the last output time or breakpoint (`MAX_STEPS`)
+            // steps since the last output time or breakpoint: a run whose steps shrink until it
+            // crawls (accepted steps of 1.5e-16 s near t = 0 were met inside a fit, where Radau's
+            // vanishing-step guard, relative to |t|, cannot see them) stops at `MAX_STEPS`, a
+            // failed trial to a fit, instead of running on
             let mut steps = 0;
             loop {
                 while k < times.len() && times[k] <= self.t() {

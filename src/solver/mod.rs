@@ -32,6 +32,11 @@ pub trait OdeSystem {
     }
 }
 
+/// Most steps an integration takes between two times it must reach ([`Radau5::advance`]'s
+/// default, and a run's budget between its output times in `simulation`): past it the steps
+/// have shrunk until the run crawls.
+pub const MAX_STEPS: usize = 100_000;
+
 /// The system could not be evaluated (for example outside the domain of its equations).
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
 #[error("{0}")]

@@ -240,7 +240,7 @@ impl Radau5 {
             atol_int,
             tol,
             h_max: f64::INFINITY,
-            max_steps: 100_000,
+            max_steps: super::MAX_STEPS,
             t: 0.0,
             y: vec![0.0; n],
             f0: vec![0.0; n],
