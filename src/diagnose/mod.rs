@@ -934,8 +934,10 @@ fn fit_base(
         held,
         &IdOptions {
             iteration_budget: None,
-            // as `hasel identify` fits it: what the data leave open stays at the prior
-            hold: Hold::Start,
+            // what the data leave open stays at the prior, and so does what they push against
+            // its bound: the paper's model as the device's table has it, its disagreement left
+            // for the rounds (`hasel identify` holds that at the bound)
+            hold: Hold::Prior,
             conditions: Some(opts.conditions),
             lm: IdOptions::default().lm,
             ..refit_options(&[], bounds, opts)

@@ -451,8 +451,7 @@ pub(super) fn fit_group(
     let x0: Vec<f64> = coords.iter().map(|c| c.to_x((c.def.get)(base))).collect();
     let bounds = parameter_bounds(&coords, base, opts);
     let (lo, hi) = coordinate_bounds(&coords, &bounds);
-    let mut held: Vec<DVector<f64>> = Vec::new();
-    let mut reasons: Vec<String> = Vec::new();
+    let mut held: Vec<Held> = Vec::new();
     let mut iterations = 0;
     let mut out_of_budget = false;
     // the fit stops where the noise can no longer tell a step (see NOISE_TELL)
@@ -462,10 +461,11 @@ pub(super) fn fit_group(
     };
     // where the last fit ended: a refit after holding a direction starts there
     let mut x_last = x0.clone();
-    // where the held directions are held: the start, or where the fit had taken them
+    // where the held directions are held: each at the start, or where the fit had taken it
     let mut anchor = x0.clone();
     loop {
-        let basis = complement(n, &held);
+        let directions: Vec<DVector<f64>> = held.iter().map(|h| h.v.clone()).collect();
+        let basis = complement(n, &directions);
         let reduced = Reduced {
             inner: &problem,
             anchor: &anchor,
@@ -475,13 +475,16 @@ pub(super) fn fit_group(
         };
         let m = basis.ncols();
         if m == 0 {
+            let report = held_report(&held, &coords);
+            let active = report.unfixed(&coords);
+            let fitted = fitted_params(base, &coords, &bounds, &anchor, &active, &report)?;
             return Ok((
-                base.clone(),
+                fitted,
                 GroupResult {
                     iterations,
                     simulations: simulations(&problem, &precise),
                     out_of_budget,
-                    ..GroupResult::all_held(&held, &reasons, &coords)
+                    ..GroupResult::all_held(report)
                 },
             ));
         }
@@ -509,17 +512,57 @@ pub(super) fn fit_group(
             // held where the fit reached, the point stays: what the data leave undetermined
             // beside it is judged there at once; held at the start, the point moves back
             // along it, and the next is judged after a fit from there
-            let found = match opts.hold {
+            match opts.hold {
                 Hold::Reached => {
                     anchor = x.clone();
-                    let at = (&polished.jacobian, &basis, held.as_slice());
-                    hold_undetermined(first, at, &coords, covariance)
+                    let at = (&polished.jacobian, &basis, directions.as_slice());
+                    for (v, reason) in hold_undetermined(first, at, &coords, covariance) {
+                        held.push(Held {
+                            v,
+                            reason,
+                            at: Hold::Reached,
+                        });
+                    }
                 }
-                Hold::Start => vec![first],
-            };
-            for (v, reason) in found {
-                held.push(v);
-                reasons.push(reason);
+                Hold::Start | Hold::Prior => {
+                    let (v, reason) = first;
+                    let back = back_to_start(&x, &x0, &v, &directions);
+                    // a parameter the data push against its bound is not undetermined: its
+                    // column of J is one-sided there (zero where the clamp holds it), and back
+                    // at the start the fit could cost ten times as much; one that wandered
+                    // there along a flat direction goes back
+                    let limited = (opts.hold == Hold::Start)
+                        .then(|| at_bound(&v, &x, (&lo, &hi)))
+                        .flatten()
+                        .filter(|_| costs_more(&precise, &back, &polished.residuals, m));
+                    let held_here = match limited {
+                        Some(j) => {
+                            anchor = x.clone();
+                            Held {
+                                reason: format!(
+                                    "{reason}; at its bound {:.6e}, where the data would take \
+                                     it further: held there",
+                                    value_at(&coords, &bounds, j, x[j])
+                                ),
+                                v,
+                                at: Hold::Reached,
+                            }
+                        }
+                        None => {
+                            // every direction at the start while none is held at a bound
+                            anchor = match held.iter().any(|h| h.at == Hold::Reached) {
+                                true => back,
+                                false => x0.clone(),
+                            };
+                            Held {
+                                v,
+                                reason,
+                                at: Hold::Start,
+                            }
+                        }
+                    };
+                    held.push(held_here);
+                }
             }
             x_last = x;
             continue;
@@ -527,8 +570,8 @@ pub(super) fn fit_group(
         // (where JᵀJ is singular, its weakest direction lies in what `basis` spans: held above)
         let cov = cov_z.expect("checked above");
         let cov_x = &basis * cov * basis.transpose();
-        let report = held_report(&held, &reasons, &coords, opts.hold);
-        let (fitted, result) = determined(base, &coords, &bounds, &x, &cov_x, report, opts.hold)?;
+        let report = held_report(&held, &coords);
+        let (fitted, result) = determined(base, &coords, &bounds, &x, &cov_x, report)?;
         return Ok((
             fitted,
             GroupResult {
@@ -539,6 +582,50 @@ pub(super) fn fit_group(
             },
         ));
     }
+}
+
+/// The coordinate whose axis the direction `v` is, where `x` sits at one of its bounds.
+fn at_bound(v: &DVector<f64>, x: &[f64], (lo, hi): (&[f64], &[f64])) -> Option<usize> {
+    let j = v.iamax();
+    let alone = (0..v.len()).all(|i| i == j || v[i] == 0.0);
+    let near = |b: f64| (x[j] - b).abs() <= 1e-12 * (1.0 + b.abs());
+    (alone && (near(lo[j]) || near(hi[j]))).then_some(j)
+}
+
+/// Whether the point `back` fits worse than the fit's point (its `residuals`, `m` coordinates
+/// fitted) by more than the noise explains: χ²₁(95 %) = 3.84 times the residual variance. Where
+/// the model cannot run at `back`, it does.
+fn costs_more(problem: &Problem, back: &[f64], residuals: &DVector<f64>, m: usize) -> bool {
+    use lm::Residuals;
+    let mut r = vec![0.0; problem.count()];
+    if problem.eval(back, &mut r).is_err() {
+        return true;
+    }
+    let here = residuals.norm_squared();
+    let variance = here / residuals.len().saturating_sub(m).max(1) as f64;
+    r.iter().map(|v| v * v).sum::<f64>() - here > CHI2_1_95 * variance
+}
+
+/// The 95 % quantile of χ² with one degree of freedom.
+const CHI2_1_95: f64 = 3.841;
+
+/// A direction of parameter space a group's fit holds, why, and where.
+struct Held {
+    v: DVector<f64>,
+    reason: String,
+    at: Hold,
+}
+
+/// The point `x` with its component along `v` (less what the directions `held` before take of
+/// it) moved back to the start `x0`'s: `v` held at the start, the others where `x` has them.
+fn back_to_start(x: &[f64], x0: &[f64], v: &DVector<f64>, held: &[DVector<f64>]) -> Vec<f64> {
+    let mut u = v.clone();
+    for q in orthonormal(held) {
+        u -= &q * q.dot(v);
+    }
+    let u = u.normalize();
+    let back: f64 = (0..x.len()).map(|i| u[i] * (x0[i] - x[i])).sum();
+    (0..x.len()).map(|i| x[i] + back * u[i]).collect()
 }
 
 /// One run of the optimiser from `z_start` within what is left of the iteration `budget`: adds
@@ -667,16 +754,11 @@ impl Reduced<'_, '_> {
 impl GroupResult {
     /// Every direction held, nothing estimated: the held ones in words, with their reasons
     /// (no iterations or simulations counted yet).
-    fn all_held(held: &[DVector<f64>], reasons: &[String], coords: &[Coordinate]) -> Self {
-        let not_identifiable = held
-            .iter()
-            .zip(reasons)
-            .map(|(v, r)| (describe(v, coords).1, r.clone()))
-            .collect();
+    fn all_held(report: HeldReport) -> Self {
         GroupResult {
             estimates: vec![],
-            not_identifiable,
-            held_combinations: vec![],
+            not_identifiable: report.not_identifiable,
+            held_combinations: report.held_combinations,
             names: vec![],
             coords: vec![],
             covariance: DMatrix::zeros(0, 0),
@@ -697,17 +779,14 @@ fn determined(
     x: &[f64],
     cov_x: &DMatrix<f64>,
     report: HeldReport,
-    hold: Hold,
 ) -> Result<(Params, GroupResult), Error> {
+    let active = report.unfixed(coords);
+    let fitted = fitted_params(base, coords, bounds, x, &active, &report)?;
     let HeldReport {
         not_identifiable,
         held_combinations,
-        fixed,
+        ..
     } = report;
-    let active: Vec<usize> = (0..coords.len())
-        .filter(|&c| !fixed.iter().any(|f| f == coords[c].def.name))
-        .collect();
-    let fitted = fitted_params(base, coords, bounds, x, &active, hold)?;
     let estimates = estimates(coords, bounds, x, cov_x, &active);
     let names = active
         .iter()
@@ -945,38 +1024,43 @@ struct HeldReport {
     not_identifiable: Vec<(String, String)>,
     /// The weights of each held combination of several parameters.
     held_combinations: Vec<Vec<(String, f64)>>,
-    /// The names of the single parameters held.
-    fixed: Vec<String>,
+    /// The names of the single parameters held, and where.
+    fixed: Vec<(String, Hold)>,
+}
+
+impl HeldReport {
+    /// The coordinates not held single: estimated, or in a held combination.
+    fn unfixed(&self, coords: &[Coordinate]) -> Vec<usize> {
+        (0..coords.len())
+            .filter(|&c| !self.fixed.iter().any(|(f, _)| f == coords[c].def.name))
+            .collect()
+    }
 }
 
 /// The held directions in words, the held combinations' weights, and the single parameters held.
-fn held_report(
-    held: &[DVector<f64>],
-    reasons: &[String],
-    coords: &[Coordinate],
-    hold: Hold,
-) -> HeldReport {
+fn held_report(held: &[Held], coords: &[Coordinate]) -> HeldReport {
     let mut not_identifiable = Vec::new();
     let mut held_combinations = Vec::new();
     let mut fixed = Vec::new();
-    for (v, r) in held.iter().zip(reasons) {
-        let (single, text) = describe(v, coords);
+    for h in held {
+        let (single, text) = describe(&h.v, coords);
         if let Some(name) = single {
-            fixed.push(name.clone());
-            not_identifiable.push((name, r.clone()));
+            fixed.push((name.clone(), h.at));
+            not_identifiable.push((name, h.reason.clone()));
         } else {
             held_combinations.push(
                 coords
                     .iter()
-                    .zip(v.iter())
+                    .zip(h.v.iter())
                     .map(|(c, w)| (c.def.name.to_string(), *w))
                     .collect(),
             );
             not_identifiable.push((
                 format!("combination {text}"),
                 format!(
-                    "{r}; held {}, so the parameters in it are estimated relative to that",
-                    hold.at()
+                    "{}; held {}, so the parameters in it are estimated relative to that",
+                    h.reason,
+                    h.at.at()
                 ),
             ));
         }
@@ -988,18 +1072,22 @@ fn held_report(
     }
 }
 
-/// `base` with the fit's values set: a parameter held at the start keeps its start value
-/// exactly (not exp(ln(value))); one held where the fit had taken it takes that value.
+/// `base` with the fit's values at `x` set: the `active` parameters, and those held single
+/// where the fit had taken them; one held at the start keeps its start value exactly (not
+/// exp(ln(value))).
 fn fitted_params(
     base: &Params,
     coords: &[Coordinate],
     bounds: &[(f64, f64)],
     x: &[f64],
     active: &[usize],
-    hold: Hold,
+    report: &HeldReport,
 ) -> Result<Params, Error> {
+    let reached = |c: usize| {
+        (report.fixed.iter()).any(|(f, at)| f == coords[c].def.name && *at == Hold::Reached)
+    };
     let mut fitted = base.clone();
-    for c in (0..coords.len()).filter(|c| hold == Hold::Reached || active.contains(c)) {
+    for c in (0..coords.len()).filter(|&c| active.contains(&c) || reached(c)) {
         fitted.set(coords[c].def.name, value_at(coords, bounds, c, x[c]))?;
     }
     Ok(fitted)

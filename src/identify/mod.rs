@@ -70,18 +70,23 @@ pub struct Options {
 /// (book/src/identify.md, "How `hasel identify` estimates").
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Hold {
-    /// At the start value: the prior, which the data cannot improve on along it.
+    /// At the start value: the prior, which the data cannot improve on along it (a parameter
+    /// the data push against its bound is held there instead: not undetermined, but limited).
     Start,
     /// Where the fit had taken it when it was found: for a start that is a guess, such as a
     /// diagnosis's refit, where holding it at the start would undo what the fit had gained.
     Reached,
+    /// At the start value, every direction, a parameter the data push against its bound too:
+    /// a diagnosis's paper model, where that push is a symptom of what the model lacks, left
+    /// for the rounds to find (book/src/diagnose.md, workflow step 1).
+    Prior,
 }
 
 impl Hold {
     /// Where, in words.
     pub fn at(self) -> &'static str {
         match self {
-            Hold::Start => "at its start value",
+            Hold::Start | Hold::Prior => "at its start value",
             Hold::Reached => "where the fit had taken it",
         }
     }
