@@ -243,6 +243,51 @@ fn identify_refuses_bad_data_and_writes_nothing() {
     assert!(!out.exists());
 }
 
+/// The README's example: a poor first guess, fitted, each estimate printed beside that guess
+/// (it was shown beside where the fit after the records' conditions were found began).
+#[test]
+fn identify_shows_each_estimate_beside_the_callers_start() {
+    let dir = scratch("identify_start");
+    let (est, val) = (dir.join("est.csv"), dir.join("val.csv"));
+    for (file, sine, seed) in [(&est, "60,11", "1"), (&val, "60,30", "2")] {
+        let args = ["synth", "--sine", sine, "--noise", "0.01", "--seed", seed];
+        let o = hasel(&[&args[..], &["--out", s(file)]].concat());
+        assert!(o.status.success(), "{}", stderr(&o));
+    }
+    let start = dir.join("start.toml");
+    std::fs::write(&start, "Kb_1 = 0.4\nb_1 = 0.2\ngamma1_2 = 100\n").unwrap();
+    let out = dir.join("out");
+    let o = hasel(&[
+        "identify",
+        s(&est),
+        "--validate",
+        s(&val),
+        "--params",
+        s(&start),
+        "--out",
+        s(&out),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let printed = String::from_utf8_lossy(&o.stdout);
+    let line = |name: &str| {
+        printed
+            .lines()
+            .find(|l| l.trim_start().starts_with(&format!("{name} ")))
+            .unwrap_or_else(|| panic!("{name} not printed: {printed}"))
+            .to_string()
+    };
+    assert!(
+        line("Kb_1").contains("(start 0.400000)"),
+        "{}",
+        line("Kb_1")
+    );
+    assert!(
+        line("gamma1_2").contains("(start 100.000000)"),
+        "{}",
+        line("gamma1_2")
+    );
+}
+
 /// `--weigh noise` fits each output over its record's noise and says so in the JSON and the
 /// report; a weighting it does not know is refused by name.
 #[test]

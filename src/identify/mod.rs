@@ -335,6 +335,11 @@ pub fn identify(
     }
     id.seconds = began.elapsed().as_secs_f64();
     id.conditions = settled;
+    // each fit after the first starts where the one before ended: the start an estimate is
+    // shown beside is the caller's
+    for e in &mut id.estimates {
+        e.prior = start.get(&e.name)?;
+    }
     Ok(id)
 }
 
