@@ -16,7 +16,9 @@ python3 ci/self_contained.py
 ensure_apt
 step "formatting and lints (cargo fmt --check, cargo clippy -D warnings)"
 cargo fmt --check
-cargo clippy -q --release --all-targets -- -D warnings
+# at the Rust suite's profile, whose build then finds the build scripts (bindgen's among them)
+# compiled and run
+cargo clippy -q --profile "$HOST_PROFILE" --all-targets -- -D warnings
 build_fmu
 build_cross
 build_wheel
