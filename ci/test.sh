@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Every test: self-containment, formatting and lints, the Rust suite, the book and the API
-# documentation, then the packed FMUs
+# documentation, and beside them the packed FMUs
 # through fmpy, fmutool, libcosimpy, ecospy, fmi-sim (installed by ci/lib.sh) and ctypes, and the
 # other platforms' binaries: the FMUs' libraries (the platform's and the slow model's, FMI 2.0 and
 # 3.0, and the inverse's) and the hasel command cross-built for Windows and macOS at the cheap
@@ -23,16 +23,29 @@ build_fmu
 build_cross
 build_wheel
 ensure_wine
+ensure_mdbook
+ensure_fmi_sim
+# The Python suite runs beside the Rust suite: it is one process that mostly keeps one core busy
+# (an FMU, a simulator, Wine), while the Rust suite's diagnoses keep both; its report follows the
+# Rust suite's and the book's. Nothing in either writes what the other reads, and no diagnosis
+# of the Rust suite has a time budget: side by side, neither's results change.
+step "Python tests of the packed FMUs, the other platforms' among them: started, beside the Rust tests (report below)"
+PYTHON_LOG="$ROOT/target/python-tests.log"
+HASEL="$HASEL" HASEL_PLATFORMS=required python -m pytest tests/python -q -p no:cacheprovider \
+    > "$PYTHON_LOG" 2>&1 &
+python_tests=$!
+trap 'kill "$python_tests" 2>/dev/null || true' EXIT
 # tests/fuzz_replay.rs replays the committed corpus of every fuzz target (tests/fuzz/corpus: the
 # readers' files, the FMI call sequences of all five FMUs) through the targets' own code, in about a
 # second; only the sanitizer's findings need a campaign (ci/fuzz.sh)
 step "Rust tests (tests/fuzz_replay.rs replays every fuzz target's committed corpus)"
 cargo test --profile release-tests --all-targets
 step "the book (mdbook build book; tests/docs.rs above checked its links and the code's citations), the API documentation without a warning, its examples"
-ensure_mdbook
 mdbook build book
 RUSTDOCFLAGS="-D warnings" cargo doc -q --no-deps --lib
 cargo test -q --profile release-tests --doc
-ensure_fmi_sim
-step "Python tests of the packed FMUs, the other platforms' among them"
-HASEL="$HASEL" HASEL_PLATFORMS=required python -m pytest tests/python -q -p no:cacheprovider
+step "Python tests of the packed FMUs: the report"
+python_status=0
+wait "$python_tests" || python_status=$?
+cat "$PYTHON_LOG"
+exit "$python_status"
