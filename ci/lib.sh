@@ -58,8 +58,8 @@ ensure_venv() {
 
 # cargo install of a tool the scripts run, unoptimized: each does little work per run (wraps the
 # linker, builds the book in 2 s, reads and writes a few thousand rows), and at opt-level 0 it
-# compiles about three times faster (fmi-sim 103 s instead of 318 s, mdBook 45 s instead of
-# 136 s, on two cores; the book they build is the same, byte for byte).
+# compiles about three times faster (on two cores fmi-sim 103 s and mdBook 45 s, where a CI run
+# had installed them at release in 318 s and 136 s; the book is the same, byte for byte).
 install_tool() {
     CARGO_PROFILE_RELEASE_OPT_LEVEL=0 cargo install -q --locked "$@"
 }
