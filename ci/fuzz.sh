@@ -3,7 +3,7 @@
 # with leak detection, one campaign per target for a bounded time:
 #   - the FMI call sequences of every FMU the project builds: fmi2_calls, fmi3_calls (the
 #     platform's FMI 2.0 and 3.0 builds), inverse_calls (HaselInverse's FMI 2.0 build),
-#     reduced_calls and reduced_fmi3_calls (HaselPlatformReduced's FMI 2.0 and 3.0 builds);
+#     reduced_calls and reduced_fmi3_calls (HaselPlatformReduced's FMI 2.0 and 3.0 functions);
 #   - every reader of a user's file (tests/fuzz/checks.rs): csv_input, csv_experiment,
 #     params_toml, heights_toml, identification_json, and the serialized FMU states fed to the
 #     deserializers directly, fmi2_state and fmi3_state.

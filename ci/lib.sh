@@ -10,14 +10,10 @@ FMU_LIB="$ROOT/target/$FMU_TARGET/release/libhasel_fmu.so"
 # so that neither build undoes the other
 INVERSE_TARGET_DIR="$ROOT/target/inverse"
 INVERSE_LIB="$INVERSE_TARGET_DIR/$FMU_TARGET/release/libhasel_fmu.so"
-# the FMI 3.0 build (--features fmi3), likewise in a target folder of its own
-FMU3_TARGET_DIR="$ROOT/target/fmi3"
-FMU3_LIB="$FMU3_TARGET_DIR/$FMU_TARGET/release/libhasel_fmu.so"
-# the slow model's FMU (feature reduced-fmu), FMI 2.0 and 3.0, each in a target folder of its own
+# the slow model's library (feature reduced-fmu), likewise in a target folder of its own; it and
+# the platform's export the functions of FMI 2.0 and 3.0, one build for both versions' FMUs
 REDUCED_TARGET_DIR="$ROOT/target/reduced"
 REDUCED_LIB="$REDUCED_TARGET_DIR/$FMU_TARGET/release/libhasel_fmu.so"
-REDUCED3_TARGET_DIR="$ROOT/target/reduced-fmi3"
-REDUCED3_LIB="$REDUCED3_TARGET_DIR/$FMU_TARGET/release/libhasel_fmu.so"
 # the cargo profile of this machine's hasel command and of the Linux wheel that bundles it:
 # release, what ships; ci/test.sh sets release-tests, the profile of its Rust suite, which then
 # finds the dependencies and the library built (compiling them at both profiles cost about two
@@ -104,7 +100,7 @@ seed_target_dir() {
             if [ -d "$from/$profile/$sub" ] && [ ! -d "$dir/$profile/$sub" ]; then cp -a "$from/$profile/$sub" "$dir/$profile/"; fi
         done
         # cargo's record of what rustc said of the host and target, so that it does not ask again:
-        # in a fresh clone's CI run the FMI 3.0 build's asking failed three times in a row (rustc
+        # in a fresh clone's CI run a seeded build's asking failed three times in a row (rustc
         # read a compiler message as its source on stdin), and never when the step ran alone
         if [ -f "$from/.rustc_info.json" ]; then cp -a "$from/.rustc_info.json" "$dir/"; fi
     fi
@@ -123,31 +119,26 @@ zigbuild_fmu_lib() {
 }
 
 # Builds the FMUs' shared libraries against glibc 2.17 (so they load on older hosts): the
-# platform's for FMI 2.0 and 3.0, the slow model's for both, the inverse FMU's, the CLI, and packs
+# platform's and the slow model's (each FMI 2.0's and 3.0's in one), the inverse FMU's, the CLI, and packs
 # fmu/HaselPlatform.fmu, fmu/HaselPlatform-fmi3.fmu, fmu/HaselPlatformReduced.fmu,
 # fmu/HaselPlatformReduced-fmi3.fmu and fmu/HaselInverse.fmu.
 build_fmu() {
     ensure_venv
     ensure_zigbuild
-    step "build the FMU library against glibc 2.17 (cargo zigbuild)"
+    step "build the FMU library (FMI 2.0 and 3.0) against glibc 2.17 (cargo zigbuild)"
     zigbuild_fmu_lib
-    step "build the FMI 3.0 library against glibc 2.17 (cargo zigbuild --features fmi3)"
-    seed_target_dir "$FMU3_TARGET_DIR"
-    zigbuild_fmu_lib --features fmi3 --target-dir "$FMU3_TARGET_DIR"
     step "build the hasel command ($HOST_PROFILE)"
     cargo build --profile "$HOST_PROFILE" --bin hasel
     step "pack fmu/HaselPlatform.fmu and fmu/HaselPlatform-fmi3.fmu"
-    "$HASEL" fmu --lib "$FMU_LIB" --lib-fmi3 "$FMU3_LIB"
+    "$HASEL" fmu --lib "$FMU_LIB"
     step "build the inverse FMU's library (feature inverse-fmu) and pack fmu/HaselInverse.fmu"
     seed_target_dir "$INVERSE_TARGET_DIR"
     zigbuild_fmu_lib --features inverse-fmu --target-dir "$INVERSE_TARGET_DIR"
     "$HASEL" fmu --model inverse --lib "$INVERSE_LIB"
-    step "build the slow model's libraries (feature reduced-fmu, FMI 2.0 and 3.0) and pack fmu/HaselPlatformReduced.fmu and -fmi3.fmu"
+    step "build the slow model's library (feature reduced-fmu) and pack fmu/HaselPlatformReduced.fmu and -fmi3.fmu"
     seed_target_dir "$REDUCED_TARGET_DIR"
     zigbuild_fmu_lib --features reduced-fmu --target-dir "$REDUCED_TARGET_DIR"
-    seed_target_dir "$REDUCED3_TARGET_DIR"
-    zigbuild_fmu_lib --features reduced-fmu,fmi3 --target-dir "$REDUCED3_TARGET_DIR"
-    "$HASEL" fmu --model reduced --lib "$REDUCED_LIB" --lib-fmi3 "$REDUCED3_LIB"
+    "$HASEL" fmu --model reduced --lib "$REDUCED_LIB"
 }
 
 # ---- the other platforms' libraries and commands (ci/platforms.sh; ci/test.sh builds some) ----
@@ -159,18 +150,20 @@ build_fmu() {
 WINDOWS_TARGET=x86_64-pc-windows-gnu
 MAC_TARGETS=(x86_64-apple-darwin aarch64-apple-darwin)
 CROSS_TARGETS=("$WINDOWS_TARGET" "${MAC_TARGETS[@]}")
+# the targets of the hasel command's cross build (words): every one by default; ci/test.sh leaves
+# out macOS x86_64, whose command is only checked, as arm64's is, but without a signature
+CROSS_CLI_TARGETS="${CROSS_CLI_TARGETS:-${CROSS_TARGETS[*]}}"
 CROSS_DIR="$ROOT/target/cross"
 # the one cargo target folder of every cross build: the standard library and the dependencies,
 # compiled once per target and profile, serve every set (with a folder per set, seeded by
-# copying, cargo compiled them all again: the FMI 3.0 libraries took 113 s, in the shared
+# copying, cargo compiled them all again: a further library took 113 s, in the shared
 # folder 11 s)
 CROSS_BUILD_DIR="$CROSS_DIR/build"
-# what is built, each copied into a folder of its own under CROSS_DIR: the five FMU libraries
-# (the platform's for FMI 2.0 and 3.0, the slow model's for both, the inverse's; without the
+# what is built, each copied into a folder of its own under CROSS_DIR: the three FMU libraries
+# (the platform's and the slow model's, each for FMI 2.0 and 3.0, and the inverse's; without the
 # feature tools, which only the hasel command needs) and the hasel command
-declare -A CROSS_ARGS=([fmi2]="--lib --no-default-features" [fmi3]="--lib --no-default-features --features fmi3"
+declare -A CROSS_ARGS=([platform]="--lib --no-default-features"
     [reduced]="--lib --no-default-features --features reduced-fmu"
-    [reduced-fmi3]="--lib --no-default-features --features reduced-fmu,fmi3"
     [inverse]="--lib --no-default-features --features inverse-fmu" [cli]="--bin hasel")
 # the cargo profile of the cross builds: release for what ships; CROSS_PROFILE=cross-test for a
 # cheaper build to test (Cargo.toml says why)
@@ -238,8 +231,8 @@ cross_env() {
     done
 }
 
-# cross_cargo SET TRIPLE...: builds SET (the FMU library fmi2, fmi3, reduced, reduced-fmi3 or
-# inverse, or cli, the hasel command) for every TRIPLE in one cargo run (the targets' builds
+# cross_cargo SET TRIPLE...: builds SET (the FMU library platform, reduced or inverse, or cli,
+# the hasel command) for every TRIPLE in one cargo run (the targets' builds
 # overlap on the two cores) in CROSS_BUILD_DIR, with the profile CROSS_PROFILE, and copies what it
 # made to cross_file's place.
 cross_cargo() {
@@ -319,19 +312,20 @@ cross_build() {
 }
 
 # Packs the five FMUs with the Linux libraries of build_fmu and every other platform's that
-# cross_build made; `hasel fmu` says which went where.
+# cross_build made (the same library in both versions' FMUs, but for macOS's: FMI 2.0 takes the
+# universal one); `hasel fmu` says which went where.
 pack_platforms() {
     local v2 v3 reduced reduced3 inverse
-    mapfile -t v2 < <(cross_libs fmi2 --lib)
-    mapfile -t v3 < <(cross_libs fmi3 --lib-fmi3)
+    mapfile -t v2 < <(cross_libs platform --lib)
+    mapfile -t v3 < <(cross_libs platform --lib-fmi3)
     mapfile -t reduced < <(cross_libs reduced --lib)
-    mapfile -t reduced3 < <(cross_libs reduced-fmi3 --lib-fmi3)
+    mapfile -t reduced3 < <(cross_libs reduced --lib-fmi3)
     mapfile -t inverse < <(cross_libs inverse --lib)
     step "pack fmu/HaselPlatform.fmu and fmu/HaselPlatform-fmi3.fmu with every platform's library built"
-    "$HASEL" fmu --lib "$FMU_LIB" "${v2[@]}" --lib-fmi3 "$FMU3_LIB" "${v3[@]}"
+    "$HASEL" fmu --lib "$FMU_LIB" "${v2[@]}" --lib-fmi3 "$FMU_LIB" "${v3[@]}"
     step "pack fmu/HaselPlatformReduced.fmu and fmu/HaselPlatformReduced-fmi3.fmu with every platform's library built"
     "$HASEL" fmu --model reduced --lib "$REDUCED_LIB" "${reduced[@]}" \
-        --lib-fmi3 "$REDUCED3_LIB" "${reduced3[@]}"
+        --lib-fmi3 "$REDUCED_LIB" "${reduced3[@]}"
     step "pack fmu/HaselInverse.fmu with every platform's library built"
     "$HASEL" fmu --model inverse --lib "$INVERSE_LIB" "${inverse[@]}"
 }
@@ -356,13 +350,15 @@ build_wheel() {
     (cd python && env "${env[@]}" nice -n 10 maturin build -q "${args[@]}" --out "$WHEELS")
 }
 
-# The five FMU libraries and the hasel command for Windows and both macOS architectures
-# (target/cross/SET/TRIPLE/CROSS_PROFILE/), and the FMUs packed with them.
+# The three FMU libraries and the hasel command for Windows and both macOS architectures
+# (target/cross/SET/TRIPLE/CROSS_PROFILE/), and the five FMUs packed with them.
 build_cross() {
     local set
-    for set in fmi2 fmi3 reduced reduced-fmi3 inverse cli; do
+    for set in platform reduced inverse; do
         cross_build "$set" "${CROSS_TARGETS[@]}"
     done
+    # shellcheck disable=SC2086 # the targets split into words
+    cross_build cli $CROSS_CLI_TARGETS
     pack_platforms
 }
 

@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # The FMUs and the hasel command for every platform, built and tested: the Linux build of
-# ci/main.sh, then the five FMU libraries (the platform's FMI 2.0 and 3.0, the slow model's FMI 2.0
-# and 3.0, the inverse's) and the hasel command for Windows x86_64 and macOS x86_64 and arm64,
+# ci/main.sh, then the three FMU libraries (the platform's and the slow model's, each FMI 2.0's and
+# 3.0's in one, and the inverse's) and the hasel command for Windows x86_64 and macOS x86_64 and arm64,
 # cross-built here (ci/lib.sh, build_platforms; the commands in target/cross/cli/TRIPLE/release/),
 # fmu/HaselPlatform.fmu, fmu/HaselPlatform-fmi3.fmu, fmu/HaselPlatformReduced.fmu,
 # fmu/HaselPlatformReduced-fmi3.fmu and fmu/HaselInverse.fmu packed with all of them, and a Python

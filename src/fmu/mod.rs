@@ -115,28 +115,27 @@ pub fn model_info_of(
     }
 }
 
-/// The 44 C functions of the platform's FMI 2.0 binary, around [`HaselCore`]; in a module of
-/// their own, as the macro imports the C types where it is invoked. The features `fmi3` and
-/// `inverse-fmu` build the library of another FMU instead (a cdylib exports one set).
-#[cfg(not(any(feature = "fmi3", feature = "inverse-fmu", feature = "reduced-fmu")))]
+/// The C functions of the platform's binary around [`HaselCore`], FMI 2.0's 44 and FMI 3.0's 75
+/// in one library (their names differ by the prefix, so one build serves both FMUs); in modules
+/// of their own, as the macros import the C types where they are invoked. The features
+/// `reduced-fmu` and `inverse-fmu` build the library of another FMU instead.
+#[cfg(not(any(feature = "inverse-fmu", feature = "reduced-fmu")))]
 mod fmi2_functions {
     crate::export_fmi2!(super::HaselCore);
 }
 
-/// The C functions of the FMI 3.0 binary (`--features fmi3`), around the same core.
-#[cfg(all(feature = "fmi3", not(feature = "reduced-fmu")))]
+#[cfg(not(any(feature = "inverse-fmu", feature = "reduced-fmu")))]
 mod fmi3_functions {
     crate::export_fmi3!(super::HaselCore);
 }
 
-/// The FMI 2.0 functions of HaselPlatformReduced (`--features reduced-fmu`).
-#[cfg(all(feature = "reduced-fmu", not(feature = "fmi3")))]
+/// The FMI 2.0 and 3.0 functions of HaselPlatformReduced (`--features reduced-fmu`).
+#[cfg(feature = "reduced-fmu")]
 mod reduced_fmi2_functions {
     crate::export_fmi2!(super::HaselReducedCore);
 }
 
-/// The FMI 3.0 functions of HaselPlatformReduced (`--features reduced-fmu,fmi3`).
-#[cfg(all(feature = "reduced-fmu", feature = "fmi3"))]
+#[cfg(feature = "reduced-fmu")]
 mod reduced_fmi3_functions {
     crate::export_fmi3!(super::HaselReducedCore);
 }

@@ -245,7 +245,7 @@ pub fn fmi2_state(data: &[u8]) {
     }
 }
 
-/// FMI 3.0 states (`fmi3DeserializeFMUState`) of the platform, the one FMU with an FMI 3.0 build.
+/// FMI 3.0 states (`fmi3DeserializeFMUState`) of the platform.
 pub fn fmi3_state(data: &[u8]) {
     state::<Fmi3, HaselCore>(data)
 }

@@ -43,7 +43,7 @@ import zipfile
 
 import pytest
 from conftest import cross_built, platform_missing
-from test_binary import FMI2_FUNCTIONS, FMI3_FUNCTIONS
+from test_binary import exported_functions
 
 ROOT = pathlib.Path(__file__).resolve().parents[2]
 SOURCES = ROOT / "tests" / "windows"
@@ -84,7 +84,7 @@ DLLS = {
 @pytest.fixture(scope="module", params=list(DLLS))
 def dll(request, tmp_path_factory):
     fixture, folder = DLLS[request.param]
-    return dll_of(request.getfixturevalue(fixture), folder, tmp_path_factory), folder
+    return dll_of(request.getfixturevalue(fixture), folder, tmp_path_factory), request.param
 
 
 def pe_tables(path):
@@ -98,9 +98,9 @@ def pe_tables(path):
 
 
 def test_the_dll_exports_exactly_the_fmi_functions_and_imports_only_windows(dll):
-    path, folder = dll
+    path, fmu = dll
     imports, exports = pe_tables(path)
-    expected = FMI3_FUNCTIONS if folder == "x86_64-windows" else FMI2_FUNCTIONS
+    expected = exported_functions(fmu)
     assert exports == expected, (exports - expected, expected - exports)
     assert imports and imports <= SYSTEM_DLLS, imports - SYSTEM_DLLS
 

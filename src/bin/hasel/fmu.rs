@@ -16,7 +16,7 @@ enum Model {
     /// HaselPlatform: voltages in, heights and tip out
     Platform,
     /// HaselPlatformReduced: the same with the slow model (one angle per actuator), its
-    /// libraries built with `--features reduced-fmu` (FMI 3.0: `reduced-fmu,fmi3`)
+    /// library built with `--features reduced-fmu`
     Reduced,
     /// HaselInverse: tip x, y and mean height in, heights and holding voltages out (FMI 2.0, its
     /// library built with `--features inverse-fmu`)
@@ -32,7 +32,7 @@ impl Model {
         }
     }
 
-    /// The cargo feature its libraries are built with, beside `fmi3` for FMI 3.0.
+    /// The cargo feature its library is built with.
     fn feature(self) -> Option<&'static str> {
         match self {
             Model::Platform => None,
@@ -85,14 +85,14 @@ pub struct Args {
     /// with `-fmi3` added to the name when both are packed)
     #[arg(long)]
     out: Option<PathBuf>,
-    /// The FMI 2.0 shared library, built for that model; once for each platform (Linux .so,
-    /// Windows .dll, macOS universal .dylib of both architectures), each packed into the folder
-    /// FMI 2.0 names for it (default: libhasel_fmu.so beside this executable)
+    /// The shared library, built for that model; once for each platform (Linux .so, Windows
+    /// .dll, macOS universal .dylib of both architectures), each packed into the folder FMI 2.0
+    /// names for it, and into FMI 3.0's unless `--lib-fmi3` is given (one build exports both
+    /// versions' functions) (default: libhasel_fmu.so beside this executable)
     #[arg(long, value_name = "FILE")]
     lib: Vec<PathBuf>,
-    /// The FMI 3.0 shared library, built with `--features fmi3`; once for each platform (Linux,
-    /// Windows, and macOS x86_64 and arm64 each on its own) (default: libhasel_fmu_fmi3.so
-    /// beside this executable)
+    /// The libraries of the FMI 3.0 FMU where they differ from `--lib`'s, e.g. macOS's, which
+    /// FMI 3.0 takes one architecture a folder (x86_64 and arm64 each on its own)
     #[arg(long, value_name = "FILE")]
     lib_fmi3: Vec<PathBuf>,
     /// Take the libraries of this FMU (of the same model, any version and platforms, e.g. one
@@ -161,7 +161,11 @@ pub fn run(a: Args) -> Result<(), Error> {
         .out
         .unwrap_or_else(|| PathBuf::from(format!("fmu/{}.fmu", a.model.identifier())));
     let v2 = or_beside_exe(a.lib, "libhasel_fmu.so")?;
-    let v3 = or_beside_exe(a.lib_fmi3, "libhasel_fmu_fmi3.so")?;
+    let v3 = if a.lib_fmi3.is_empty() {
+        v2.clone()
+    } else {
+        a.lib_fmi3
+    };
     let jobs = match (a.fmi, a.model) {
         (Some(Fmi::V2), _) | (None, Model::Inverse) => vec![(FmiVersion::V2, v2, out)],
         (Some(Fmi::V3), _) => vec![(FmiVersion::V3, v3, out)],

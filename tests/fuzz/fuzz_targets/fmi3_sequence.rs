@@ -240,7 +240,7 @@ pub struct Functions {
 }
 
 /// The [`Functions`] of the core `$core` (a path from the crate root): the C functions the
-/// FMU's FMI 3.0 build exports, made by the same macro without the exported symbol names, as in
+/// FMU's library exports for FMI 3.0, made by the same macro without the exported symbol names, as in
 /// fmi2_sequence.rs.
 macro_rules! functions {
     ($core:ty) => {{
@@ -301,7 +301,7 @@ macro_rules! functions {
 pub type Fmu = crate::common::Fmu<Functions>;
 
 impl Fmu {
-    /// HaselPlatform's FMI 3.0 build (target fmi3_calls).
+    /// HaselPlatform's FMI 3.0 functions (target fmi3_calls).
     pub fn platform() -> Fmu {
         use hasel_fmu::fmu::{HaselCore, pack, variables::rows};
         Fmu::new::<HaselCore>(
@@ -311,7 +311,7 @@ impl Fmu {
         )
     }
 
-    /// HaselPlatformReduced's FMI 3.0 build (target reduced_fmi3_calls).
+    /// HaselPlatformReduced's FMI 3.0 functions (target reduced_fmi3_calls).
     pub fn reduced() -> Fmu {
         use hasel_fmu::fmu::{HaselReducedCore, pack, variables::rows_of};
         use hasel_fmu::model::Reduction;
