@@ -470,3 +470,42 @@ fn a_held_out_start_is_found_at_the_fitted_parameters() {
         );
     }
 }
+
+/// The default bounds are around the caller's start in every fit (book/src/identify.md, "How `hasel
+/// identify` estimates": [start/20, start·20] for a positive parameter). `identify` fits, finds the
+/// records' conditions at the fit (here a sensor's 5 ms lag) and fits again from where the first
+/// fit ended; that second fit took its bounds around the first's end, so a damping the data push
+/// past 20 times its start went on to 60 times it. From a device whose actuator 1 is damped 60
+/// times the table's, `b_1` ends at its bound, 20 times its start.
+#[test]
+fn the_default_bounds_stay_around_the_callers_start_in_every_fit() {
+    use hasel_fmu::identify::synth::Sensor;
+    let start = Params::default();
+    let b_start = start.get("b_1").unwrap();
+    let mut truth = start.clone();
+    truth.set("b_1", 60.0 * b_start).unwrap();
+    let spec = Spec {
+        sensor: Sensor {
+            lag: 0.005,
+            quantum: 0.0,
+        },
+        ..Spec::paper(
+            &truth,
+            3.0 * std::f64::consts::PI,
+            Columns::Heights,
+            0.01,
+            5,
+        )
+    };
+    let est = [synth::experiment(&spec, "w3pi.csv").unwrap()];
+    let opts = Options {
+        free: vec!["b_1".to_string()],
+        ..Options::default()
+    };
+    let id = identify(&start, &est, &[], &opts).unwrap();
+    // a lag found after the first fit: the conditions moved, and a second fit ran
+    let lag = id.conditions[0].conditions.lag;
+    assert!(lag > 0.0, "{lag}");
+    let b = id.params.get("b_1").unwrap();
+    assert_eq!(b, 20.0 * b_start, "b_1 = {:.2} × its start", b / b_start);
+}

@@ -421,12 +421,13 @@ fn describe(v: &DVector<f64>, coords: &[Coordinate]) -> (Option<String>, String)
     (None, terms.join(" "))
 }
 
-/// Fits one group. Directions of parameter space the data do not determine (a parameter
-/// without influence, or a combination such as a common scale of Kb, b and gamma1² that only
-/// moves the unobserved heave) are found from the covariance, held (at the start value, or
-/// where the fit had taken them: `opts.hold`), and the rest is fitted again.
+/// Fits one group from `base`. Directions of parameter space the data do not determine (a
+/// parameter without influence, or a combination such as a common scale of Kb, b and gamma1²
+/// that only moves the unobserved heave) are found from the covariance, held (at `base`'s value,
+/// or where the fit had taken them: `opts.hold`), and the rest is fitted again. The default
+/// bounds are around the `prior`, the caller's start.
 pub(super) fn fit_group(
-    base: &Params,
+    (prior, base): (&Params, &Params),
     group: &Group,
     experiments: &[Experiment],
     opts: &Options,
@@ -449,7 +450,7 @@ pub(super) fn fit_group(
         len,
     );
     let x0: Vec<f64> = coords.iter().map(|c| c.to_x((c.def.get)(base))).collect();
-    let bounds = parameter_bounds(&coords, base, opts);
+    let bounds = parameter_bounds(&coords, prior, opts);
     let (lo, hi) = coordinate_bounds(&coords, &bounds);
     let mut held: Vec<Held> = Vec::new();
     let mut iterations = 0;
@@ -833,12 +834,13 @@ fn simulations(problem: &Problem<'_>, precise: &Problem<'_>) -> usize {
         + precise.counter.load(std::sync::atomic::Ordering::Relaxed)
 }
 
-/// The bounds of each parameter: the caller's, or a default by the parameter's rule.
-fn parameter_bounds(coords: &[Coordinate], base: &Params, opts: &Options) -> Vec<(f64, f64)> {
+/// The bounds of each parameter: the caller's, or a default by the parameter's rule around its
+/// `prior` value.
+fn parameter_bounds(coords: &[Coordinate], prior: &Params, opts: &Options) -> Vec<(f64, f64)> {
     coords
         .iter()
         .map(|c| {
-            let prior = (c.def.get)(base);
+            let prior = (c.def.get)(prior);
             let default = match c.def.rule {
                 Rule::Positive | Rule::Limit => (prior / 20.0, prior * 20.0),
                 Rule::Weight => (0.0, f64::INFINITY),

@@ -261,7 +261,7 @@ pub fn identify(
     opts: &Options,
 ) -> Result<Identification, Error> {
     let Some(choice) = opts.conditions else {
-        return fit(start, estimation, validation, opts);
+        return fit(start, start, estimation, validation, opts);
     };
     let began = Instant::now();
     let found = |p: &Params, exps: &[Experiment], c: conditions::Choice| -> Result<Vec<_>, _> {
@@ -296,7 +296,7 @@ pub fn identify(
     };
     let mut est = under(estimation, &found(start, estimation, first)?);
     let mut val = validation.to_vec();
-    let mut id = fit(start, &est, &val, opts)?;
+    let mut id = fit(start, start, &est, &val, opts)?;
     // the start and the parameters pull on each other (a start off by a micrometre is a slow
     // transient the parameters would bend to): conditions and fit alternate until the
     // conditions stand still
@@ -322,7 +322,9 @@ pub fn identify(
         (est, val) = (under(estimation, e), under(validation, v));
         let (iterations, simulations) = (id.iterations, id.simulations);
         let before = std::mem::take(&mut id.estimation_before);
-        id = fit(&id.params, &est, &val, opts)?;
+        // from where the last fit ended (which held what the data leave undetermined), with
+        // the default bounds around the caller's start still
+        id = fit(start, &id.params, &est, &val, opts)?;
         // the start's fits under the conditions found, for comparison only: where the start
         // cannot be simulated under them (an effect's states estimated at the fit, which the
         // start's parameters drive elsewhere), the ones found before stand
@@ -335,11 +337,6 @@ pub fn identify(
     }
     id.seconds = began.elapsed().as_secs_f64();
     id.conditions = settled;
-    // each fit after the first starts where the one before ended: the start an estimate is
-    // shown beside is the caller's
-    for e in &mut id.estimates {
-        e.prior = start.get(&e.name)?;
-    }
     Ok(id)
 }
 
@@ -454,9 +451,13 @@ fn estimates(
         .collect()
 }
 
-/// Fits the free parameters on `estimation` from `start` under the experiments' conditions.
+/// Fits the free parameters on `estimation` from `from` under the experiments' conditions, with
+/// `prior` the start the caller gave: the default bounds are around it and the estimates are
+/// shown beside it; a direction the data do not determine is held at `from`
+/// ([`Hold::Start`], [`Hold::Prior`]), where a fit before this one had held it.
 fn fit(
-    start: &Params,
+    prior: &Params,
+    from: &Params,
     estimation: &[Experiment],
     validation: &[Experiment],
     opts: &Options,
@@ -466,10 +467,10 @@ fn fit(
         return Err(Error::NoEstimationExperiment);
     }
     let free = free_params(opts)?;
-    check_bounds(start, opts)?;
-    let estimation_before = fits_at(start, estimation, opts.rtol)?;
+    check_bounds(prior, opts)?;
+    let estimation_before = fits_at(from, estimation, opts.rtol)?;
 
-    let mut params = start.clone();
+    let mut params = from.clone();
     let (mut iterations, mut simulations) = (0, estimation.len());
     let mut out_of_budget = false;
     let mut estimated: Vec<(String, f64, f64, (f64, f64))> = Vec::new();
@@ -477,11 +478,11 @@ fn fit(
     let mut held_combinations = Vec::new();
     let mut blocks: Vec<Block> = Vec::new();
     let groups = groups(&free, estimation);
-    // each group is fitted from `start` on its own: side by side, in threads
+    // each group is fitted from `from` on its own: side by side, in threads
     let fitted_groups: Vec<_> = std::thread::scope(|s| {
         let handles: Vec<_> = groups
             .iter()
-            .map(|g| s.spawn(|| fit_group(start, g, estimation, opts)))
+            .map(|g| s.spawn(|| fit_group((prior, from), g, estimation, opts)))
             .collect();
         handles
             .into_iter()
@@ -503,7 +504,7 @@ fn fit(
     }
 
     let (names, corr, covariance) = joined_covariance(&blocks);
-    let estimates = estimates(&params, start, &free, &estimated);
+    let estimates = estimates(&params, prior, &free, &estimated);
     let mut simulated = Vec::new();
     let mut fit_all = |exps: &[Experiment]| -> Result<Vec<ExperimentFit>, Error> {
         exps.iter()
