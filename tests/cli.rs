@@ -219,6 +219,63 @@ fn packing_refuses_a_file_that_is_not_a_library() {
     assert!(!out.exists());
 }
 
+/// A fake library: the `header` bytes, then the names of the FMI functions it says it exports.
+fn fake_library(header: &[(usize, &[u8])]) -> Vec<u8> {
+    let mut bytes = vec![0u8; 64];
+    for (at, b) in header {
+        bytes[*at..*at + b.len()].copy_from_slice(b);
+    }
+    bytes.extend_from_slice(b"fmi2Instantiate fmi3InstantiateCoSimulation");
+    bytes
+}
+
+/// One build of the library exports FMI 2.0's and 3.0's functions: `--lib` alone packs both
+/// FMUs. A macOS universal library, which FMI 3.0 cannot take, is refused before either is
+/// written, with the flag that gives the FMI 3.0 FMU libraries of its own.
+#[test]
+fn one_library_packs_both_versions_fmus() {
+    let dir = scratch("pack_both");
+    let elf = fake_library(&[(0, b"\x7fELF"), (4, &[2, 1]), (16, &[3]), (18, &[62])]);
+    let lib = dir.join("libhasel_fmu.so");
+    std::fs::write(&lib, elf).unwrap();
+    let out = dir.join("p.fmu");
+    let o = hasel(&["fmu", "--lib", s(&lib), "--out", s(&out)]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    for (fmu, member) in [
+        (out, "binaries/linux64/HaselPlatform.so"),
+        (
+            dir.join("p-fmi3.fmu"),
+            "binaries/x86_64-linux/HaselPlatform.so",
+        ),
+    ] {
+        let mut zip = zip::ZipArchive::new(std::fs::File::open(&fmu).unwrap()).unwrap();
+        assert!(
+            zip.by_name(member).is_ok(),
+            "{} lacks {member}",
+            fmu.display()
+        );
+    }
+
+    let universal = fake_library(&[
+        (0, &[0xca, 0xfe, 0xba, 0xbe]),
+        (4, &2u32.to_be_bytes()),
+        (8, &0x0100_0007u32.to_be_bytes()),
+        (28, &0x0100_000cu32.to_be_bytes()),
+    ]);
+    let lib = dir.join("libhasel_fmu.dylib");
+    std::fs::write(&lib, universal).unwrap();
+    let out = dir.join("mac.fmu");
+    let o = hasel(&["fmu", "--lib", s(&lib), "--out", s(&out)]);
+    assert!(!o.status.success());
+    assert!(
+        stderr(&o).contains("FMI 3.0 takes one library per Mac architecture")
+            && stderr(&o).contains("--lib-fmi3"),
+        "{}",
+        stderr(&o)
+    );
+    assert!(!out.exists() && !dir.join("mac-fmi3.fmu").exists());
+}
+
 #[test]
 fn identify_refuses_bad_data_and_writes_nothing() {
     let dir = scratch("identify");

@@ -12,6 +12,17 @@ fn experiment(name: &str, omega: f64, columns: Columns, seed: u64, truth: &Param
     synth::experiment(&Spec::paper(truth, omega, columns, 0.01, seed), name).unwrap()
 }
 
+/// The paper's excitation of `truth` at 3π rad/s, heights with 1 % noise.
+fn heights_at_3pi(truth: &Params, seed: u64) -> Spec {
+    Spec::paper(
+        truth,
+        3.0 * std::f64::consts::PI,
+        Columns::Heights,
+        0.01,
+        seed,
+    )
+}
+
 /// 99.9 % quantiles of χ² with k degrees of freedom, k = 0..12.
 const CHI2_999: [f64; 13] = [
     0.0, 10.83, 13.82, 16.27, 18.47, 20.52, 22.46, 24.32, 26.12, 27.88, 29.59, 31.26, 32.91,
@@ -360,13 +371,7 @@ fn a_spectrum_s_weights_reach_zero_where_the_data_want_none() {
     truth.effects.creep.grid[2] = 0.06;
     let spec = Spec {
         t_end: 4.0,
-        ..Spec::paper(
-            &truth,
-            3.0 * std::f64::consts::PI,
-            Columns::Heights,
-            0.01,
-            7,
-        )
+        ..heights_at_3pi(&truth, 7)
     };
     let est = [synth::experiment(&spec, "w3pi.csv").unwrap()];
     let mut start = truth.clone();
@@ -489,13 +494,7 @@ fn the_default_bounds_stay_around_the_callers_start_in_every_fit() {
             lag: 0.005,
             quantum: 0.0,
         },
-        ..Spec::paper(
-            &truth,
-            3.0 * std::f64::consts::PI,
-            Columns::Heights,
-            0.01,
-            5,
-        )
+        ..heights_at_3pi(&truth, 5)
     };
     let est = [synth::experiment(&spec, "w3pi.csv").unwrap()];
     let opts = Options {

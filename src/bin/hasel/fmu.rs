@@ -161,11 +161,8 @@ pub fn run(a: Args) -> Result<(), Error> {
         .out
         .unwrap_or_else(|| PathBuf::from(format!("fmu/{}.fmu", a.model.identifier())));
     let v2 = or_beside_exe(a.lib, "libhasel_fmu.so")?;
-    let v3 = if a.lib_fmi3.is_empty() {
-        v2.clone()
-    } else {
-        a.lib_fmi3
-    };
+    let v3_from_lib = a.lib_fmi3.is_empty();
+    let v3 = if v3_from_lib { v2.clone() } else { a.lib_fmi3 };
     let jobs = match (a.fmi, a.model) {
         (Some(Fmi::V2), _) | (None, Model::Inverse) => vec![(FmiVersion::V2, v2, out)],
         (Some(Fmi::V3), _) => vec![(FmiVersion::V3, v3, out)],
@@ -181,7 +178,12 @@ pub fn run(a: Args) -> Result<(), Error> {
             .iter()
             .map(|lib| pack::read_library(lib, *version, a.model.feature()))
             .collect();
-        libraries.push(read?);
+        libraries.push(read.map_err(|mut e| {
+            if v3_from_lib && *version == FmiVersion::V3 {
+                e.message += " (the FMI 3.0 FMU takes --lib's libraries where --lib-fmi3 names none of its own)";
+            }
+            e
+        })?);
     }
     for ((version, libs, out), read) in jobs.into_iter().zip(libraries) {
         let packed: Vec<String> = read
