@@ -119,8 +119,8 @@ zigbuild_fmu_lib() {
 }
 
 # Builds the FMUs' shared libraries against glibc 2.17 (so they load on older hosts): the
-# platform's and the slow model's (each FMI 2.0's and 3.0's in one), the inverse FMU's, the CLI, and packs
-# fmu/HaselPlatform.fmu, fmu/HaselPlatform-fmi3.fmu, fmu/HaselPlatformReduced.fmu,
+# platform's and the slow model's (each FMI 2.0's and 3.0's in one), the inverse FMU's, the CLI,
+# and packs fmu/HaselPlatform.fmu, fmu/HaselPlatform-fmi3.fmu, fmu/HaselPlatformReduced.fmu,
 # fmu/HaselPlatformReduced-fmi3.fmu and fmu/HaselInverse.fmu.
 build_fmu() {
     ensure_venv
@@ -350,8 +350,8 @@ build_wheel() {
     (cd python && env "${env[@]}" nice -n 10 maturin build -q "${args[@]}" --out "$WHEELS")
 }
 
-# The three FMU libraries and the hasel command for Windows and both macOS architectures
-# (target/cross/SET/TRIPLE/CROSS_PROFILE/), and the five FMUs packed with them.
+# The three FMU libraries for Windows and both macOS architectures and the hasel command for
+# CROSS_CLI_TARGETS (target/cross/SET/TRIPLE/CROSS_PROFILE/), and the five FMUs packed with them.
 build_cross() {
     local set
     for set in platform reduced inverse; do
