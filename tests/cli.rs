@@ -186,6 +186,17 @@ fn bad_flags_are_named() {
     );
     let o = hasel(&["simulate", "--rtol", "2", "--t-end", "0.1"]);
     assert!(stderr(&o).contains("rtol = 2e0"), "{}", stderr(&o));
+    // refused before any case runs
+    for bad in ["--rtol=0", "--rtol=-1e-6", "--rtol=NaN", "--rtol=1"] {
+        let o = hasel(&["bench", "--diagnose", bad]);
+        assert!(!o.status.success());
+        assert!(stderr(&o).contains("must be in (0, 1)"), "{}", stderr(&o));
+        assert!(
+            o.stdout.is_empty(),
+            "{}",
+            String::from_utf8_lossy(&o.stdout)
+        );
+    }
 }
 
 #[test]

@@ -76,16 +76,28 @@ fn worst_gap(d: &diagnose::Diagnosis) -> f64 {
         .fold(f64::NEG_INFINITY, f64::max)
 }
 
+/// The diagnosis's options, with `rtol` in place of its tolerance where given (`--rtol`).
+pub fn options(rtol: Option<f64>) -> Result<Options, Error> {
+    match rtol {
+        Some(r) if !(r > 0.0 && r < 1.0) => Err(Error::flag("rtol", r, "must be in (0, 1)")),
+        Some(rtol) => Ok(Options {
+            rtol,
+            ..Options::default()
+        }),
+        None => Ok(Options::default()),
+    }
+}
+
 pub fn run(
     seeds: std::ops::RangeInclusive<u64>,
     columns: Columns,
     only: Option<String>,
-    artifacts: bool,
-    protocols: bool,
+    (artifacts, protocols): (bool, bool),
     reports: Option<std::path::PathBuf>,
+    opts: Options,
 ) -> Result<(), Error> {
     say!(
-        "diagnosis of hidden mechanisms: {} seed(s) per case ({}-{}), {columns:?} data{}, {}, target <= 30 s per diagnosis, median <= 5 s (issue #29)",
+        "diagnosis of hidden mechanisms: {} seed(s) per case ({}-{}), {columns:?} data{}, {}, simulated at rtol {:e}, target <= 30 s per diagnosis, median <= 5 s (issue #29)",
         seeds.clone().count(),
         seeds.start(),
         seeds.end(),
@@ -98,7 +110,8 @@ pub fn run(
             "a lab protocol drawn per case"
         } else {
             "two 6 s experiments at 1 ms (3pi and 11 rad/s)"
-        }
+        },
+        opts.rtol
     );
     let mut tally = Tally::default();
     for truth in Truth::all() {
@@ -123,7 +136,7 @@ pub fn run(
                 protocol = case.protocol_label();
             }
             let exps = case.experiments(columns, seed)?;
-            let d = diagnose::diagnose(&Params::default(), exps.clone(), &Options::default())?;
+            let d = diagnose::diagnose(&Params::default(), exps.clone(), &opts)?;
             if let Some(dir) = &reports {
                 diagnose::report::write(&dir.join(format!("{}-{seed}", truth.name())), &d)?;
             }
@@ -135,7 +148,7 @@ pub fn run(
             let short = !ok || gap > diagnose::AT_FLOOR;
             let truth_gaps = match case.true_model() {
                 Some(model) if short && !truth.effects().is_empty() => {
-                    Some(diagnose::truth_gaps(&model, exps, &Options::default())?)
+                    Some(diagnose::truth_gaps(&model, exps, &opts)?)
                 }
                 _ => None,
             };

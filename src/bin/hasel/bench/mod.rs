@@ -61,6 +61,11 @@ pub struct Args {
     /// DIR/CASE-SEED
     #[arg(long, value_name = "DIR")]
     reports: Option<std::path::PathBuf>,
+    /// With --diagnose: the simulations' relative tolerance in place of the diagnosis's (the
+    /// first line printed gives the one used), to measure what a looser one saves and what it
+    /// changes in the answers
+    #[arg(long)]
+    rtol: Option<f64>,
 }
 
 pub fn run(a: Args) -> Result<(), Error> {
@@ -69,9 +74,9 @@ pub fn run(a: Args) -> Result<(), Error> {
             a.first_seed..=a.first_seed.saturating_add(a.seeds).saturating_sub(1),
             crate::common::columns(&a.columns),
             a.only,
-            a.artifacts,
-            a.protocols,
+            (a.artifacts, a.protocols),
             a.reports,
+            diagnose::options(a.rtol)?,
         );
     }
     if a.identify {
