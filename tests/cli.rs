@@ -187,10 +187,16 @@ fn bad_flags_are_named() {
     let o = hasel(&["simulate", "--rtol", "2", "--t-end", "0.1"]);
     assert!(stderr(&o).contains("rtol = 2e0"), "{}", stderr(&o));
     // refused before any case runs
-    for bad in ["--rtol=0", "--rtol=-1e-6", "--rtol=NaN", "--rtol=1"] {
+    for bad in [
+        "--rtol=0",
+        "--rtol=-1e-6",
+        "--rtol=NaN",
+        "--rtol=1",
+        "--rtol=0.5",
+    ] {
         let o = hasel(&["bench", "--diagnose", bad]);
         assert!(!o.status.success());
-        assert!(stderr(&o).contains("must be in (0, 1)"), "{}", stderr(&o));
+        assert!(stderr(&o).contains("must be in (0, 0.1)"), "{}", stderr(&o));
         assert!(
             o.stdout.is_empty(),
             "{}",

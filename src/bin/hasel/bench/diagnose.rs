@@ -12,6 +12,7 @@ use hasel_fmu::diagnose::hidden::{self, Truth};
 use hasel_fmu::diagnose::{self, Options, Verdict};
 use hasel_fmu::identify::synth::Columns;
 use hasel_fmu::model::{Effect, Params};
+use hasel_fmu::simulation::check_rtol;
 
 use crate::error::Error;
 
@@ -76,14 +77,17 @@ fn worst_gap(d: &diagnose::Diagnosis) -> f64 {
         .fold(f64::NEG_INFINITY, f64::max)
 }
 
-/// The diagnosis's options, with `rtol` in place of its tolerance where given (`--rtol`).
+/// The diagnosis's options, with `rtol` in place of its tolerance where given (`--rtol`),
+/// checked by the simulations' own rule before any case runs.
 pub fn options(rtol: Option<f64>) -> Result<Options, Error> {
     match rtol {
-        Some(r) if !(r > 0.0 && r < 1.0) => Err(Error::flag("rtol", r, "must be in (0, 1)")),
-        Some(rtol) => Ok(Options {
-            rtol,
-            ..Options::default()
-        }),
+        Some(rtol) => {
+            check_rtol("--rtol", rtol)?;
+            Ok(Options {
+                rtol,
+                ..Options::default()
+            })
+        }
         None => Ok(Options::default()),
     }
 }
@@ -92,7 +96,8 @@ pub fn run(
     seeds: std::ops::RangeInclusive<u64>,
     columns: Columns,
     only: Option<String>,
-    (artifacts, protocols): (bool, bool),
+    artifacts: bool,
+    protocols: bool,
     reports: Option<std::path::PathBuf>,
     opts: Options,
 ) -> Result<(), Error> {

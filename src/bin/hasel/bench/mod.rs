@@ -74,7 +74,8 @@ pub fn run(a: Args) -> Result<(), Error> {
             a.first_seed..=a.first_seed.saturating_add(a.seeds).saturating_sub(1),
             crate::common::columns(&a.columns),
             a.only,
-            (a.artifacts, a.protocols),
+            a.artifacts,
+            a.protocols,
             a.reports,
             diagnose::options(a.rtol)?,
         );
