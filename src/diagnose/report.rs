@@ -38,6 +38,10 @@ fn candidate_json(c: &Candidate) -> Value {
             Value::Null,
             |(n, lo, hi)| json!({"parameter": n, "ci95": [lo, hi]}),
         );
+        if let Some((lr, quantile)) = r.likelihood_ratio {
+            v["likelihood_ratio"] =
+                json!({"statistic": round(lr, 1), "chi2_95": round(quantile, 2)});
+        }
         v["passes"] = json!(r.passes());
         v["failed"] = json!(r.failed);
         v["iterations"] = json!(r.id.iterations);
@@ -347,12 +351,13 @@ fn candidates_table(md: &mut String, cs: &[Candidate]) {
     for c in cs {
         match (&c.refit, &c.refit_error) {
             (Some(r), _) => {
-                let interval = r
-                    .interval
-                    .as_ref()
-                    .map_or("not determined".to_string(), |(n, lo, hi)| {
-                        format!("{n} in [{lo:.4e}, {hi:.4e}]")
-                    });
+                let interval = match (&r.interval, r.likelihood_ratio) {
+                    (Some((n, lo, hi)), _) => format!("{n} in [{lo:.4e}, {hi:.4e}]"),
+                    (None, Some((lr, quantile))) => format!(
+                        "held beside a base parameter; likelihood ratio {lr:.1} against the neutral value (95 %: {quantile:.1})"
+                    ),
+                    (None, None) => "not determined".to_string(),
+                };
                 let _ = writeln!(
                     md,
                     "| {} | {} | {:.3} | {:.1}{} | {:+.2} | {:.0} % | {} | {} |",
