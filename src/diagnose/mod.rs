@@ -753,18 +753,12 @@ fn refit_plan(candidates: &[Candidate], refits: usize, excess_share: f64) -> Vec
     plan
 }
 
-/// The forms of the family that leads the round after its refits (the lowest BIC) that
-/// [`refit_plan`] did not refit:
-/// - those the screening could not tell from its best, where the leader was not ranked first
-///   (the plan refits them for the first only): a family ranked lower may still lead, in a form
-///   that is not its right one (`amplifier_lag+stiffening` seeds 4 and 5 of the suite: a charge
-///   drift ranked first, the lag's one-pole form leading and its two-pole form, the truth's,
-///   never refitted);
-/// - those that contain its leading form ([`Form::contains`]): a richer law of the same place,
-///   which the screening from a base fitted a little off may rank far below (a one-pole lag
-///   leading with the two-pole form unrefitted, and a delay added in the next round for what the
-///   missing pole leaves: `amplifier_lag_second_order` tip seed 1 at a tolerance of 1e-6).
-fn leader_forms(candidates: &[Candidate]) -> Vec<PlannedRefit> {
+/// The forms the screening could not tell from the best of the family that leads the round
+/// after its refits (the lowest BIC), where [`refit_plan`] did not refit them: it does for the
+/// first-ranked family only, and a family ranked lower may still lead, in a form that is not
+/// its right one (`amplifier_lag+stiffening` seeds 4 and 5 of the suite: a charge drift ranked
+/// first, the lag's one-pole form leading and its two-pole form, the truth's, never refitted).
+fn leader_close_forms(candidates: &[Candidate]) -> Vec<PlannedRefit> {
     let leader = candidates
         .iter()
         .enumerate()
@@ -774,24 +768,14 @@ fn leader_forms(candidates: &[Candidate]) -> Vec<PlannedRefit> {
                 .filter_map(move |(_, d)| Some((k, *d.as_ref().ok()?)))
         })
         .min_by(|a, b| a.1.total_cmp(&b.1));
-    let Some((k, _)) = leader else {
-        return Vec::new();
-    };
-    let c = &candidates[k];
-    let close = c.alternatives.iter().filter(|_| k > 0);
-    let richer = c
-        .alternatives
-        .iter()
-        .chain(&c.far_forms)
-        .filter(|(f, _)| f.contains(c.form));
-    let tried = |f: &Form| c.forms_tried.iter().any(|(name, _)| *name == f.name);
-    let mut plan: Vec<PlannedRefit> = Vec::new();
-    for (form, start) in close.chain(richer) {
-        if !tried(form) && !plan.iter().any(|(_, f, _)| f.name == form.name) {
-            plan.push((k, *form, start.clone()));
-        }
+    match leader {
+        Some((k, _)) if k > 0 => candidates[k]
+            .alternatives
+            .iter()
+            .map(|(form, start)| (k, *form, start.clone()))
+            .collect(),
+        _ => Vec::new(),
     }
-    plan
 }
 
 /// Each refitted candidate in the form of its family with the lowest BIC (src/diagnose/
@@ -1121,7 +1105,7 @@ impl Search {
             |form: &Form, id| judge(form, id, &self.current, estimation, held, &self.forms);
         // a refit that cannot run (the model leaves its domain) fails its form
         settle_forms(&mut candidates, &plan, refit_in(&plan)?, judged);
-        let close = leader_forms(&candidates);
+        let close = leader_close_forms(&candidates);
         if !close.is_empty() {
             settle_forms(&mut candidates, &close, refit_in(&close)?, judged);
         }
@@ -2050,10 +2034,9 @@ mod tests {
     }
 
     /// A family ranked below the first that leads after the refits has the forms its screening
-    /// could not tell apart refitted (the first-ranked family's were in the plan), and any
-    /// leader the forms that contain its leading one.
+    /// could not tell apart refitted; the first-ranked family's were in the plan.
     #[test]
-    fn the_leading_family_has_its_close_and_richer_forms_refitted() {
+    fn a_lower_ranked_family_that_leads_has_its_close_forms_refitted() {
         let candidate = |effect: Effect, delta_bic: Option<f64>| Candidate {
             effect,
             form: &effect.forms()[0],
@@ -2073,7 +2056,7 @@ mod tests {
         };
         let lag = Effect::AmplifierLag;
         let close = |candidates: &[Candidate]| -> Vec<(usize, &str)> {
-            leader_forms(candidates)
+            leader_close_forms(candidates)
                 .iter()
                 .map(|(k, form, _)| (*k, form.name))
                 .collect()
@@ -2090,18 +2073,6 @@ mod tests {
             candidate(lag, Some(-900.0)),
         ];
         assert!(close(&leading_first).is_empty());
-        // the first-ranked family leading in a form that others of its family contain, which
-        // the screening ranked far below: those are refitted, the others are not
-        let mut one_pole = candidate(lag, Some(-1000.0));
-        one_pole.far_forms = std::mem::take(&mut one_pole.alternatives);
-        let mut hysteresis = candidate(Effect::Hysteresis, Some(-1000.0));
-        hysteresis.far_forms = std::mem::take(&mut hysteresis.alternatives);
-        assert_eq!(
-            close(&[one_pole]),
-            [(0, "second_order"), (0, "slew")],
-            "a one-pole lag leads"
-        );
-        assert_eq!(close(&[hysteresis]), [(0, "rate_dependent")]);
     }
 
     /// Near the noise floor a first effect is asked half the gap, a later one [`MIN_GAIN`] unless

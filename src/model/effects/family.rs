@@ -137,16 +137,6 @@ impl Form {
     pub fn is_library(&self) -> bool {
         self.name == self.effect.forms()[0].name
     }
-
-    /// Does this form contain `other` as a special case: another form of the same family that
-    /// frees every parameter `other` frees and sets what it sets (a second-order lag the
-    /// one-pole lag, a shaped saturation the hard one)?
-    pub fn contains(&self, other: &Form) -> bool {
-        self.effect == other.effect
-            && self.name != other.name
-            && other.free.iter().all(|p| self.free.contains(p))
-            && other.settings.iter().all(|s| self.settings.contains(s))
-    }
 }
 
 /// The neutral value of a family's magnitude.
