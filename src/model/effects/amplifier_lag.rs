@@ -156,10 +156,7 @@ pub const FAMILY: Family = Family {
     law: |p, u_peak| Some(law(p, u_peak)),
 };
 
-/// One stage, and two of two thirds and one third of the time, at a fast and a slow time (two
-/// equal stages would start the refit where the model is symmetric in them: there the two
-/// stages' sensitivities are one column, and the fit holds their difference wherever the data
-/// would take it); a slewing stage at a fast
+/// One stage, and two of half the time, at a fast and a slow time; a slewing stage at a fast
 /// and a slow time, slewing at 4, 6 or 8 times the peak command per second (the paper's 60 V
 /// sines change by up to 11 times it), kept as they are: a slew's change does not scale
 /// (book/src/diagnose.md, "Screening"). A lag and a slew both delay the response: the
@@ -169,9 +166,10 @@ fn probes(_: &Params, u_peak: f64) -> Vec<Probe> {
     let mut out = Vec::new();
     for tau in [0.01, 0.04] {
         out.push(Probe::one(&FORMS[0], vec![("tau_a", tau)]));
+        let half = 0.5 * tau;
         out.push(Probe::one(
             &FORMS[1],
-            vec![("tau_a", tau * 2.0 / 3.0), ("tau_a2", tau / 3.0)],
+            vec![("tau_a", half), ("tau_a2", half)],
         ));
     }
     for tau in [0.005, 0.02] {
