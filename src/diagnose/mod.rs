@@ -193,7 +193,7 @@ pub struct Refit {
     pub interval: Option<(String, f64, f64)>,
     /// Where the fit held every magnitude (undetermined beside a base parameter: no interval),
     /// the likelihood ratio against the model without the effect and its 95 % χ² quantile
-    /// ([`held_magnitude_ratio`]).
+    /// (book/src/diagnose.md, "The decision rule", test 4).
     pub likelihood_ratio: Option<(f64, f64)>,
     pub interval_excludes_neutral: bool,
     /// Why it failed, if it did.
