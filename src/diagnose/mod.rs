@@ -502,9 +502,13 @@ fn degrees(free: &[String], params: &Params) -> usize {
 /// BIC on one experiment with one variance for its channels in units of their noise:
 /// N ln(RSS_w / N) + k ln N, RSS_w the weighted sum the fits minimise ([`rss`]).
 fn bic(exp: &Experiment, sim: &[crate::simulation::Sample], k: usize) -> f64 {
-    let n: usize = exp.channels.iter().map(|(_, y)| y.len()).sum();
-    let n = n as f64;
+    let n = samples(exp);
     n * (rss(exp, sim) / n).ln() + k as f64 * n.ln()
+}
+
+/// The samples of `exp` a BIC counts: every channel's.
+fn samples(exp: &Experiment) -> f64 {
+    exp.channels.iter().map(|(_, y)| y.len()).sum::<usize>() as f64
 }
 
 /// The BIC on `exp` (the estimation record) of `id`, a model with the effects' `forms`: its
@@ -1733,14 +1737,13 @@ fn judge(
             "held-out fit gain {fit_gain:.2} points, less than {required:.2}"
         ));
     }
-    match likelihood_ratio {
-        _ if excludes => {}
-        Some((lr, quantile)) => failed.push(format!(
-            "its magnitude, held beside a base parameter, has a likelihood ratio of {lr:.1} against the neutral value, not above {quantile:.1}"
-        )),
-        None => {
-            failed.push("the 95 % interval of its magnitude includes the neutral value".into())
-        }
+    if !excludes {
+        failed.push(match likelihood_ratio {
+            Some((lr, quantile)) => format!(
+                "its magnitude, held beside a base parameter, has a likelihood ratio of {lr:.1} against the neutral value, not above {quantile:.1}"
+            ),
+            None => "the 95 % interval of its magnitude includes the neutral value".into(),
+        });
     }
     // one cause at a time: a further effect must close what the first left on the held-out
     // data, not only shave the estimation's BIC (book/src/diagnose.md, "The decision rule")
@@ -1851,8 +1854,7 @@ fn held_magnitude_ratio(
         unknowns(id, degrees(&free_list(forms), &id.params)) as f64
     };
     let extra = (k(id, with) - k(before, forms)).max(1.0);
-    let n: usize = exp.channels.iter().map(|(_, y)| y.len()).sum();
-    let ratio = (n as f64) * (rss(exp, &before.simulated[0]) / rss(exp, &id.simulated[0])).ln();
+    let ratio = samples(exp) * (rss(exp, &before.simulated[0]) / rss(exp, &id.simulated[0])).ln();
     Some((ratio, chi2_95(extra)))
 }
 
