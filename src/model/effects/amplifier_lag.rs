@@ -94,6 +94,8 @@ const FORMS: [Form; 3] = [
     Form::new(Effect::AmplifierLag, "first_order", &["tau_a"], &[]),
     Form {
         magnitudes: &["tau_a", "tau_a2"],
+        exchangeable: Some(("tau_a", "tau_a2")),
+        refines: Some("first_order"),
         ..Form::new(
             Effect::AmplifierLag,
             "second_order",

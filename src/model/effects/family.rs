@@ -109,6 +109,14 @@ pub struct Form {
     pub magnitudes: &'static [&'static str],
     /// Parameters set to select the form, never fitted (e.g. `drift_site`).
     pub settings: &'static [(&'static str, f64)],
+    /// Two magnitudes the outputs are symmetric in (two linear stages in cascade, whose order
+    /// the outputs cannot see), or none: at equal values their sensitivities are one column,
+    /// and a refit started there leaves them equal but for rounding.
+    pub exchangeable: Option<(&'static str, &'static str)>,
+    /// The form of the family this one refines: the same change of the outputs to first order
+    /// in its magnitudes (a second stage, to first order in the times, is a longer first one),
+    /// so the screening's linear projection cannot rank the two, however it scores them.
+    pub refines: Option<&'static str>,
 }
 
 impl Form {
@@ -125,6 +133,8 @@ impl Form {
             free,
             magnitudes: free.split_at(1).0,
             settings,
+            exchangeable: None,
+            refines: None,
         }
     }
 

@@ -425,6 +425,28 @@ fn every_form_is_in_the_table_and_neutral_until_its_magnitude() {
 }
 
 #[test]
+fn a_refined_form_is_nested_and_exchangeable_magnitudes_are_magnitudes() {
+    for e in Effect::ALL {
+        for f in e.forms() {
+            if let Some(name) = f.refines {
+                let simpler = e.forms().iter().find(|g| g.name == name);
+                let simpler = simpler.unwrap_or_else(|| panic!("{e}/{}: no form {name}", f.name));
+                assert!(simpler.name != f.name, "{e}/{}", f.name);
+                for p in simpler.free {
+                    assert!(f.free.contains(p), "{e}/{}: {p} of {name}", f.name);
+                }
+            }
+            if let Some((a, b)) = f.exchangeable {
+                assert!(a != b, "{e}/{}", f.name);
+                for m in [a, b] {
+                    assert!(f.magnitudes.contains(&m), "{e}/{}: {m}", f.name);
+                }
+            }
+        }
+    }
+}
+
+#[test]
 fn state_positions_agree_with_the_names() {
     for (_, p) in configurations() {
         let m = Platform::new(p).unwrap();
