@@ -191,8 +191,8 @@ pub struct Refit {
     pub gap_closed: f64,
     /// The magnitude's 95 % interval, and whether it excludes the neutral value.
     pub interval: Option<(String, f64, f64)>,
-    /// Where the fit held every magnitude (undetermined beside a base parameter: no interval),
-    /// the likelihood ratio against the model without the effect and its 95 % χ² quantile
+    /// Where the interval does not exclude the neutral value and the fit held every magnitude
+    /// (undetermined beside a base parameter: no Wald interval), the likelihood ratio against the model without the effect and its 95 % χ² quantile
     /// (book/src/diagnose.md, "The decision rule", test 4).
     pub likelihood_ratio: Option<(f64, f64)>,
     pub interval_excludes_neutral: bool,
@@ -1750,8 +1750,9 @@ fn judge(
     let held_gain = held_out_gain(held, before, &id);
     let (fit_gain, gap_closed) = (held_gain.gain, held_gain.closed);
     let (interval, excludes) = magnitude_interval(form, &id, estimation);
-    let likelihood_ratio = interval
-        .is_none()
+    // the held magnitudes decide, not the interval's absence: a sum of held weights has one
+    // of width 0, which never excludes the neutral value
+    let likelihood_ratio = (!excludes)
         .then(|| held_magnitude_ratio(form, &id, before, &estimation[0], &with, forms))
         .flatten();
     let excludes = excludes || likelihood_ratio.is_some_and(|(lr, quantile)| lr > quantile);

@@ -352,10 +352,10 @@ fn candidates_table(md: &mut String, cs: &[Candidate]) {
         match (&c.refit, &c.refit_error) {
             (Some(r), _) => {
                 let interval = match (&r.interval, r.likelihood_ratio) {
-                    (Some((n, lo, hi)), _) => format!("{n} in [{lo:.4e}, {hi:.4e}]"),
-                    (None, Some((lr, quantile))) => format!(
+                    (_, Some((lr, quantile))) => format!(
                         "held beside a base parameter; likelihood ratio {lr:.1} against the neutral value (95 %: {quantile:.1})"
                     ),
+                    (Some((n, lo, hi)), None) => format!("{n} in [{lo:.4e}, {hi:.4e}]"),
                     (None, None) => "not determined".to_string(),
                 };
                 let _ = writeln!(
