@@ -1413,7 +1413,8 @@ fn converged(
 /// noise floor; the model without the effect, when it lowers the BIC so and leaves no held-out
 /// fit farther from its floor than the model with it (book/src/diagnose.md, "Two mechanisms
 /// at once"). The earlier choice was made while the later effect's share of the data was still
-/// unexplained.
+/// unexplained. An effect a revisit swapped in has no round of its own and is tried only against
+/// nothing.
 fn revisit(
     rounds: &[Round],
     forms: &mut Vec<&'static Form>,
@@ -1424,13 +1425,19 @@ fn revisit(
     opts: &Options,
 ) -> Result<Vec<Revisit>, Error> {
     let mut out = Vec::new();
-    for round in rounds {
-        let Some(pos) = forms.iter().position(|f| Some(f.effect) == round.added) else {
+    // every effect in the model before this round's, by what it is and not by the round that
+    // added it: one a revisit swapped in is revisited too, one a later round added again once
+    let earlier: Vec<Effect> = forms.iter().rev().skip(1).rev().map(|f| f.effect).collect();
+    for effect in earlier {
+        let Some(pos) = forms.iter().position(|f| f.effect == effect) else {
             continue;
         };
-        let runner_up = round
-            .candidates
+        let runner_up = rounds
             .iter()
+            .rev()
+            .find(|r| r.added == Some(effect))
+            .into_iter()
+            .flat_map(|round| &round.candidates)
             .filter(|c| forms.iter().all(|f| f.effect != c.effect))
             .filter_map(|c| c.refit.as_ref().filter(|r| r.passes()).map(|r| (c.form, r)))
             .min_by(|a, b| a.1.delta_bic.total_cmp(&b.1.delta_bic));
