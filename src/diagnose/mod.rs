@@ -192,8 +192,9 @@ pub struct Refit {
     /// The magnitude's 95 % interval, and whether it excludes the neutral value.
     pub interval: Option<(String, f64, f64)>,
     /// Where the interval does not exclude the neutral value and the fit held every magnitude
-    /// (undetermined beside a base parameter: no Wald interval), the likelihood ratio against the model without the effect and its 95 % χ² quantile
-    /// (book/src/diagnose.md, "The decision rule", test 4).
+    /// (undetermined beside a base parameter: no Wald interval), the likelihood ratio against
+    /// the model without the effect and its 95 % χ² quantile (book/src/diagnose.md, "The
+    /// decision rule", test 4).
     pub likelihood_ratio: Option<(f64, f64)>,
     pub interval_excludes_neutral: bool,
     /// Why it failed, if it did.
@@ -1427,7 +1428,10 @@ fn revisit(
     let mut out = Vec::new();
     // every effect in the model before this round's, by what it is and not by the round that
     // added it: one a revisit swapped in is revisited too, one a later round added again once
-    let earlier: Vec<Effect> = forms.iter().rev().skip(1).rev().map(|f| f.effect).collect();
+    let earlier: Vec<Effect> = forms[..forms.len().saturating_sub(1)]
+        .iter()
+        .map(|f| f.effect)
+        .collect();
     for effect in earlier {
         let Some(pos) = forms.iter().position(|f| f.effect == effect) else {
             continue;
