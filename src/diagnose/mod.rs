@@ -179,6 +179,13 @@ pub struct Candidate {
     pub refit_error: Option<Error>,
 }
 
+impl Candidate {
+    /// Whether a refit of this round tried `form`, passing or failing.
+    fn tried(&self, form: &Form) -> bool {
+        self.forms_tried.iter().any(|(name, _)| *name == form.name)
+    }
+}
+
 /// A candidate added to the model and re-identified.
 #[derive(Clone, Debug)]
 pub struct Refit {
@@ -821,7 +828,7 @@ fn leader_far_forms(candidates: &[Candidate]) -> Vec<PlannedRefit> {
     let c = &candidates[k];
     c.far_forms
         .iter()
-        .filter(|(f, _)| c.forms_tried.iter().all(|(name, _)| *name != f.name))
+        .filter(|(f, _)| !c.tried(f))
         .map(|(form, start)| (k, *form, start.clone()))
         .collect()
 }
@@ -1167,9 +1174,15 @@ impl Search {
             |form: &Form, id| judge(form, id, &self.current, estimation, held, &self.forms);
         // a refit that cannot run (the model leaves its domain) fails its form
         settle_forms(&mut candidates, &plan, refit_in(&plan)?, judged);
-        let mut close = leader_close_forms(&candidates);
-        if !close.is_empty() {
-            settle_forms(&mut candidates, &close, refit_in(&close)?, judged);
+        // the leader's other forms, refitted once the refits have named the leader
+        let mut second_pass = leader_close_forms(&candidates);
+        if !second_pass.is_empty() {
+            settle_forms(
+                &mut candidates,
+                &second_pass,
+                refit_in(&second_pass)?,
+                judged,
+            );
         }
         let none_passes = candidates
             .iter()
@@ -1181,13 +1194,13 @@ impl Search {
             let far = leader_far_forms(&candidates);
             if !far.is_empty() {
                 settle_forms(&mut candidates, &far, refit_in(&far)?, judged);
-                close.extend(far);
+                second_pass.extend(far);
             }
         }
         timing.push((
             format!(
                 "refit {} candidate forms (round {})",
-                plan.len() + close.len(),
+                plan.len() + second_pass.len(),
                 self.rounds.len() + 1
             ),
             t0.elapsed().as_secs_f64(),
@@ -1583,8 +1596,7 @@ fn revisit_forms(
             continue;
         };
         for (g, start) in c.alternatives.iter().chain(&c.far_forms) {
-            let refitted = c.forms_tried.iter().any(|(name, _)| *name == g.name);
-            if refitted || revisited(g) || same(g, forms[pos]) {
+            if c.tried(g) || revisited(g) || same(g, forms[pos]) {
                 continue;
             }
             let mut p = current.params.clone();
