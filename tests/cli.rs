@@ -203,6 +203,15 @@ fn bad_flags_are_named() {
             String::from_utf8_lossy(&o.stdout)
         );
     }
+    // a diagnosis refuses it before reading the records or writing anything
+    let out = scratch("diagnose_rtol").join("out");
+    let o = hasel(&["diagnose", "missing.csv", "--out", s(&out), "--rtol=0"]);
+    assert!(
+        stderr(&o).contains("--rtol = 0e0: must be in (0, 0.1)"),
+        "{}",
+        stderr(&o)
+    );
+    assert!(!out.exists());
 }
 
 #[test]

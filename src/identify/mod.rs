@@ -38,7 +38,7 @@ pub fn default_free() -> Vec<String> {
         .collect()
 }
 
-/// Relative tolerance of the simulations of an identification (and of a diagnosis): 100 times
+/// Relative tolerance of the simulations of an identification: 100 times
 /// tighter than the default, so that finite differences of the outputs see the parameters and
 /// not the step-size control.
 pub const FIT_RTOL: f64 = DEFAULT_RTOL * 1e-2;

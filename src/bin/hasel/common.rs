@@ -3,13 +3,14 @@
 
 use std::path::PathBuf;
 
+use hasel_fmu::diagnose;
 use hasel_fmu::identify::Experiment;
 use hasel_fmu::identify::conditions::{Choice, LagChoice, StartChoice};
 use hasel_fmu::identify::synth::Columns;
 use hasel_fmu::io::{input_file, params_file};
 use hasel_fmu::model::{Params, Platform, Reduction};
 use hasel_fmu::simulation::input::PAPER_PHASES;
-use hasel_fmu::simulation::{Input, Interpolation, Tone};
+use hasel_fmu::simulation::{Input, Interpolation, Tone, check_rtol};
 
 use crate::error::Error;
 
@@ -46,6 +47,17 @@ impl ModelArgs {
     pub fn build(&self, params: Params) -> Result<Platform, Error> {
         Ok(Platform::reduced(params, self.reduction()?)?)
     }
+}
+
+/// A diagnosis's options, with `rtol` in place of its tolerance where given (`--rtol`),
+/// checked by the simulations' own rule before anything runs.
+pub fn diagnose_options(rtol: Option<f64>) -> Result<diagnose::Options, Error> {
+    let mut opts = diagnose::Options::default();
+    if let Some(rtol) = rtol {
+        check_rtol("--rtol", rtol)?;
+        opts.rtol = rtol;
+    }
+    Ok(opts)
 }
 
 /// The experiment files, read and checked.

@@ -4,7 +4,7 @@ use std::path::PathBuf;
 
 use hasel_fmu::diagnose::{self, Options, report};
 
-use crate::common::{ConditionArgs, load_params, read_all};
+use crate::common::{ConditionArgs, diagnose_options, load_params, read_all};
 use crate::error::Error;
 
 #[derive(clap::Args)]
@@ -35,13 +35,16 @@ pub struct Args {
     /// the verdict does not depend on the machine's load
     #[arg(long, value_name = "SECONDS")]
     refit_budget: Option<f64>,
+    /// Relative tolerance of the simulations (default 1e-6, the model's; a tighter one changes
+    /// the fitted values' last digits and takes longer)
+    #[arg(long)]
+    rtol: Option<f64>,
     #[command(flatten)]
     conditions: ConditionArgs,
 }
 
 pub fn run(a: Args) -> Result<(), Error> {
     let start = load_params(&a.params)?;
-    let experiments = read_all(&a.experiments)?;
     if !(a.base_range.is_finite() && a.base_range > 1.0) {
         return Err(Error::flag("base-range", a.base_range, "must be > 1"));
     }
@@ -62,8 +65,10 @@ pub fn run(a: Args) -> Result<(), Error> {
         base_range: a.base_range,
         refit_budget: a.refit_budget.map(std::time::Duration::from_secs_f64),
         conditions: a.conditions.choice(&start)?,
-        ..Options::default()
+        ..diagnose_options(a.rtol)?
     };
+    // the flags are checked before the records are read
+    let experiments = read_all(&a.experiments)?;
     let d = diagnose::diagnose(&start, experiments, &opts)?;
     report::write(&a.out, &d)?;
     if a.json {

@@ -12,7 +12,6 @@ use hasel_fmu::diagnose::hidden::{self, Truth};
 use hasel_fmu::diagnose::{self, Options, Verdict};
 use hasel_fmu::identify::synth::Columns;
 use hasel_fmu::model::{Effect, Params};
-use hasel_fmu::simulation::check_rtol;
 
 use crate::error::Error;
 
@@ -75,21 +74,6 @@ fn worst_gap(d: &diagnose::Diagnosis) -> f64 {
                 .filter_map(|(name, v)| floor.get(name).map(|floor| floor - v))
         })
         .fold(f64::NEG_INFINITY, f64::max)
-}
-
-/// The diagnosis's options, with `rtol` in place of its tolerance where given (`--rtol`),
-/// checked by the simulations' own rule before any case runs.
-pub fn options(rtol: Option<f64>) -> Result<Options, Error> {
-    match rtol {
-        Some(rtol) => {
-            check_rtol("--rtol", rtol)?;
-            Ok(Options {
-                rtol,
-                ..Options::default()
-            })
-        }
-        None => Ok(Options::default()),
-    }
 }
 
 pub fn run(

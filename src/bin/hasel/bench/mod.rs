@@ -77,7 +77,7 @@ pub fn run(a: Args) -> Result<(), Error> {
             a.artifacts,
             a.protocols,
             a.reports,
-            diagnose::options(a.rtol)?,
+            crate::common::diagnose_options(a.rtol)?,
         );
     }
     if a.identify {
