@@ -176,10 +176,10 @@ pub struct Candidate {
     /// Share of the residual its form's probe explains beyond the base parameters.
     pub score: f64,
     /// Start values of its parameters from the screening.
-    pub start: Vec<(&'static str, f64)>,
+    pub start: StartValues,
     /// The other forms and their start values, refitted too when the screening cannot tell
     /// them from the best (`FORM_RUNNER_UP`), best first.
-    pub alternatives: Vec<(&'static Form, Vec<(&'static str, f64)>)>,
+    pub alternatives: Vec<(&'static Form, StartValues)>,
     /// The family's forms the screening ranked below those, with their start values and
     /// screening worth: tried in the chosen form's place when a later round finds nothing and
     /// the model still misses the noise floor (book/src/diagnose.md, "Families of forms").
@@ -495,7 +495,7 @@ fn nested_refit(
 /// For a form with exchangeable magnitudes, `start` with their sum split the other way: in two
 /// equal halves where `start` splits it unequally (the screening scales only the first), and
 /// 2 : 1 where it splits it equally (book/src/diagnose.md, "Nested refits").
-fn other_split(form: &Form, start: &[(&'static str, f64)]) -> Option<Vec<(&'static str, f64)>> {
+fn other_split(form: &Form, start: &[(&'static str, f64)]) -> Option<StartValues> {
     let (a, b) = form.exchangeable?;
     let value = |name| start.iter().find(|(n, _)| *n == name).map(|&(_, v)| v);
     let sum = value(a)? + value(b)?;
@@ -780,7 +780,7 @@ fn refit_conditions(forms: &[&Form]) -> Choice {
 }
 
 /// One refit of a round: the candidate's index, the form refitted and its start values.
-type PlannedRefit = (usize, &'static Form, Vec<(&'static str, f64)>);
+type PlannedRefit = (usize, &'static Form, StartValues);
 
 /// What a round refits (candidate index, form, start values): the best form of each of the
 /// `refits` best candidates and, for the best candidate, each other form the screening could
@@ -835,7 +835,8 @@ fn leader_close_forms(candidates: &[Candidate]) -> Vec<PlannedRefit> {
 /// leader's own, which the screening ranked on a linearized model (a film's charge drift beside
 /// a hysteresis, closing 37 % of the gap in its spectrum form). Only the forms of some worth on
 /// the round's model: one that explains less than its parameters' price there is no long shot
-/// (a slew beside a charge drift's spectrum, worth −29.4, took 47 s to raise the BIC).
+/// (at rtol 1e-6, a slew beside a charge drift's spectrum, worth −29.4, took 47 s to raise the
+/// BIC).
 fn leader_far_forms(candidates: &[Candidate]) -> Vec<PlannedRefit> {
     let Some(k) = leader(candidates) else {
         return Vec::new();
