@@ -100,9 +100,8 @@ const BLIND_RUNNER_UP: f64 = 0.5;
 
 /// Relative tolerance of a diagnosis's simulations: an identification's [`identify::FIT_RTOL`].
 /// At the model's 1e-6 the hidden-mechanism benchmark answers as here in about half the time,
-/// but a diagnosis on a lab's protocol does not: an amplifier lag with a stiffening recorded from
-/// the tip on two voltage levels, mid-run, is named `charge_drift` at 1e-6, its fits' paths
-/// taking other turns (book/src/hidden-effects.md, "The simulations' tolerance").
+/// but on the lab protocols it names a wrong family in four of the 26 cases, all recorded
+/// mid-run (book/src/hidden-effects.md, "The simulations' tolerance").
 /// `hasel diagnose --rtol` loosens it where a user accepts that.
 pub const DIAGNOSE_RTOL: f64 = identify::FIT_RTOL;
 
