@@ -44,9 +44,9 @@ trap 'kill "$python_tests" 2>/dev/null || true' EXIT
 # second; only the sanitizer's findings need a campaign (ci/fuzz.sh)
 step "Rust tests (tests/fuzz_replay.rs replays every fuzz target's committed corpus)"
 cargo test --profile release-tests --all-targets
-step "the book (mdbook build book; tests/docs.rs above checked its links and the code's citations), the API documentation without a warning, its examples"
+step "the book (mdbook build book; tests/docs.rs above checked its links and the code's citations), the API documentation without a warning (the library's and the CLI's), its examples"
 mdbook build book
-RUSTDOCFLAGS="-D warnings" cargo doc -q --no-deps --lib
+RUSTDOCFLAGS="-D warnings" cargo doc -q --no-deps --lib --bins
 cargo test -q --profile release-tests --doc
 step "Python tests of the packed FMUs: the report"
 python_status=0

@@ -68,6 +68,8 @@ pub fn read_all(paths: &[PathBuf]) -> Result<Vec<Experiment>, Error> {
 /// How the records were taken, shared by `identify` and `diagnose` (book/src/identify.md,
 /// "Records that start mid-run" and "Sensor lag").
 #[derive(clap::Args)]
+// the fields' docs are their --help text, which gives units in brackets
+#[allow(rustdoc::broken_intra_doc_links)]
 pub struct ConditionArgs {
     /// Where each record starts: auto (estimated where the first sample is not the rest
     /// state's), rest, estimate, or FILE.toml giving the heights h1, h2, h3 [m] at the first
@@ -120,6 +122,8 @@ pub fn columns(name: &str) -> Columns {
 
 /// The input voltages of a run, shared by `simulate` and `synth`.
 #[derive(clap::Args)]
+// the fields' docs are their --help text, which gives units in brackets
+#[allow(rustdoc::broken_intra_doc_links)]
 pub struct InputArgs {
     /// The paper's excitation U0·sin(ω t + φ_i), φ = 0°, 120°, 240° [V, rad/s] (the default: 60,3π)
     #[arg(long, value_name = "U0,OMEGA", conflicts_with_all = ["offset_sine", "multisine", "input"])]

@@ -73,7 +73,7 @@ pub enum Error {
 pub struct UnreachablePoint {
     /// 1-based line of the file.
     pub line: usize,
-    /// Its time [s].
+    /// Its time \[s\].
     pub t: f64,
     pub why: String,
 }

@@ -61,6 +61,8 @@ pub struct Args {
 }
 
 #[derive(clap::Args)]
+// the fields' docs are their --help text, which gives units in brackets
+#[allow(rustdoc::broken_intra_doc_links)]
 pub struct SynthArgs {
     #[command(flatten)]
     input: InputArgs,

@@ -14,6 +14,8 @@ use crate::common::load_params;
 use crate::error::{Error, UnreachablePoint};
 
 #[derive(clap::Args)]
+// the fields' docs are their --help text, which gives units in brackets
+#[allow(rustdoc::broken_intra_doc_links)]
 pub struct Args {
     /// The tip path: CSV with columns t,tip_x,tip_y[,tip_z] [s, m] (tip_z for closed and exact)
     #[arg(long, value_name = "PATH.csv")]

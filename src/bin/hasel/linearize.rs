@@ -18,6 +18,8 @@ use crate::common::{InputArgs, load_params};
 use crate::error::Error;
 
 #[derive(clap::Args)]
+// the fields' docs are their --help text, which gives units in brackets
+#[allow(rustdoc::broken_intra_doc_links)]
 pub struct Args {
     /// The constant voltages of the equilibrium to linearize at [V]
     #[arg(
@@ -55,9 +57,9 @@ pub struct Args {
     rtol: f64,
 }
 
-/// Frequencies of the small-signal check [Hz]: below, between and above the slow modes.
+/// Frequencies of the small-signal check \[Hz\]: below, between and above the slow modes.
 const SINE_FREQUENCIES: [f64; 3] = [0.2, 2.0, 20.0];
-/// Amplitude of the small-signal check [V].
+/// Amplitude of the small-signal check \[V\].
 const SINE_AMPLITUDE: f64 = 0.5;
 
 fn voltages_error(text: &str) -> Error {

@@ -15,6 +15,8 @@ use crate::common::{InputArgs, ModelArgs, load_params};
 use crate::error::Error;
 
 #[derive(clap::Args)]
+// the fields' docs are their --help text, which gives units in brackets
+#[allow(rustdoc::broken_intra_doc_links)]
 pub struct Args {
     #[command(flatten)]
     input: InputArgs,

@@ -61,7 +61,7 @@ fn confidence(effect: Effect, d: &diagnose::Diagnosis) -> f64 {
         .unwrap_or(0.0)
 }
 
-/// The largest distance of a held-out fit below its noise floor [points].
+/// The largest distance of a held-out fit below its noise floor \[points\].
 fn worst_gap(d: &diagnose::Diagnosis) -> f64 {
     let (first, fits) = d.last.held_out();
     let floors = &d.fits.floor[first..];

@@ -26,7 +26,7 @@ const SIMULATE: [&str; 7] = [
 ];
 
 /// Issue #14's yardstick: the Python implementation of the same model with SUNDIALS CVODE and
-/// an analytic Jacobian, integration only, 10 s of the default excitation [ms] (measured by the
+/// an analytic Jacobian, integration only, 10 s of the default excitation \[ms\] (measured by the
 /// issue's author; the Python code is not part of this repository).
 const PYTHON_CVODE_MS: f64 = 468.0;
 /// The whole process with `--out` must be this many times faster than that.

@@ -13,7 +13,7 @@ use crate::error::Error;
 /// the integrator's.
 const RTOL: f64 = 1e-9;
 
-/// Where the comparison after the start-up is taken from [s]: past the boundary layer that a
+/// Where the comparison after the start-up is taken from \[s\]: past the boundary layer that a
 /// jump of the command at t = 0 leaves in the slow model's angle (module doc of
 /// src/model/reduced.rs).
 const AFTER: f64 = 0.05;
@@ -69,7 +69,7 @@ fn run(model: &Platform, case: &Case, rtol: f64) -> Result<Vec<Sample>, Error> {
     Ok(samples)
 }
 
-/// The issue 26 target of one held 1 ms co-simulation step of the slow model [µs].
+/// The issue 26 target of one held 1 ms co-simulation step of the slow model \[µs\].
 const SLOW_STEP_TARGET_US: f64 = 0.2;
 
 pub fn run_all(repeat: usize) -> Result<(), Error> {

@@ -35,7 +35,7 @@ pub fn reference(dir: Option<&Path>, name: &str) -> Result<Table, Error> {
     }
 }
 
-/// Largest |Δh| and |Δtip| [µm] against a reference trajectory, over the rows both have;
+/// Largest |Δh| and |Δtip| \[µm\] against a reference trajectory, over the rows both have;
 /// `None` when its columns or times do not match the samples.
 pub fn error_against(table: &Table, samples: &[Sample]) -> Option<(f64, f64)> {
     let cols: Vec<usize> = ["h1", "h2", "h3", "tip_x", "tip_y", "tip_z"]

@@ -12,7 +12,7 @@ use super::reference::{error_against, reference};
 use super::timing::best;
 use crate::error::Error;
 
-/// The issue #14 target of one held 1 ms co-simulation step [µs].
+/// The issue #14 target of one held 1 ms co-simulation step \[µs\].
 const HELD_STEP_TARGET_US: f64 = 2.4;
 
 fn report(name: &str, wall: Duration, stats: Stats, error: Option<(f64, f64)>, target_ms: f64) {
