@@ -1249,11 +1249,9 @@ impl Search {
             added_form = None;
         }
         let mut revisits = revisits;
-        if added.is_none()
-            && revisits.is_empty()
-            && !self.forms.is_empty()
-            && worst_gap_to_floor(held, &self.current) > AT_FLOOR
-        {
+        // a later round runs only where the model is beyond its floor (above), and one that
+        // added nothing left the model as it found it
+        if added.is_none() && revisits.is_empty() && !self.forms.is_empty() {
             revisits = revisit_forms(
                 &self.rounds,
                 &mut self.forms,
@@ -1572,8 +1570,9 @@ fn revisit(
     Ok(out)
 }
 
-/// When a round adds nothing and a held-out fit is still beyond [`AT_FLOOR`] of its noise floor
-/// (the nearness a named family is asked to reach), each earlier effect is tried in the forms
+/// When a later round adds nothing (it runs only where a held-out fit is beyond [`AT_FLOOR`] of
+/// its noise floor, the nearness a named family is asked to reach, or leaves more than
+/// [`HELD_OUT_EXCESS`] of its noise unexplained), each earlier effect is tried in the forms
 /// of its family that its round did not refit (nor a revisit since), in place of the one it has
 /// (book/src/diagnose.md, "Families of forms"): the screening ranked the forms on the model of
 /// that round linearized, which a law far from it misjudges (a slewing amplifier's first-order

@@ -636,7 +636,7 @@ fn round_section(md: &mut String, k: usize, r: &Round) {
                 f.free.join(", ")
             ),
             (Some(e), _) => format!("Added: `{}`, {}.", e.name(), e.form()),
-            (None, _) if r.revisits.iter().any(|v| v.by.is_some_and(|f| f.effect == v.replaced)) => format!("Nothing added in this round, and a held-out fit is still beyond {} point(s) of its noise floor: each earlier effect was tried in the forms of its family its round had not refitted (below).", super::AT_FLOOR),
+            (None, _) if r.revisits.iter().any(|v| v.by.is_some_and(|f| f.effect == v.replaced)) => "Nothing added in this round, and the model still beyond its noise floor (the round ran for that): each earlier effect was tried in the forms of its family its round had not refitted (below).".into(),
             (None, _) if !r.revisits.is_empty() => "Nothing added in this round: its best candidate, failing only by leaving a held-out fit beyond the tolerance of its noise floor, was tried tentatively with the earlier effects revisited beside it (below), and none of them was replaced.".into(),
             (None, _) => "Nothing added in this round.".into(),
         }
