@@ -480,6 +480,17 @@ fn an_amplifier_lag_and_stiffening_are_both_named() {
             && revisits.iter().all(|v| !v.swapped),
         "{revisits:?}"
     );
+    // and the stiffening, the round's own, against the model without it: kept, by far
+    let own = revisits
+        .iter()
+        .find(|v| v.replaced == Effect::Stiffening && v.by.is_none())
+        .expect("the round's own effect revisited");
+    assert!(
+        own.delta_bic
+            .as_ref()
+            .is_ok_and(|b| *b > diagnose::BIC_MARGIN),
+        "{own:?}"
+    );
 }
 
 #[test]

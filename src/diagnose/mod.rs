@@ -91,6 +91,15 @@ const FORM_RUNNER_UP: f64 = 0.8;
 /// stand-in (a delay for an amplifier lag).
 const REFIT_ITERATIONS: usize = 100;
 
+/// Iterations a round's own effect's revisit against nothing may take ([`revisit`]): the
+/// earlier effects start where the fit beside it put them, and where they explain the data as
+/// well without it they are near their optimum there. Twice what the case that called for it
+/// took (`saturation_unequal` seed 2, its sensitivities moved by 1e-15 of their size: a drop,
+/// ΔBIC −18.7, in 5; book/src/diagnose.md, "Two mechanisms at once"); the right second effects
+/// of `hasel bench --diagnose --only two --seeds 3` took 11 to 72 to converge, kept by 3,389 to
+/// 18,967.
+const OWN_REVISIT_ITERATIONS: usize = 10;
+
 /// The screening is blind below this share of the disagreement beyond the noise ([`refit_plan`]).
 const BLIND_SCREENING: f64 = 0.2;
 
@@ -1231,10 +1240,10 @@ impl Search {
         let revisits = if added.is_some() && self.effects.len() > 1 {
             revisit(
                 &self.rounds,
+                added.filter(|_| tentative.is_none()),
                 &mut self.forms,
                 &mut self.current,
-                estimation,
-                held,
+                (estimation, held),
                 id_opts,
                 opts,
             )?
@@ -1249,10 +1258,15 @@ impl Search {
             added_form = None;
         }
         let mut revisits = revisits;
+        // this round's effect dropped by its own revisit: the earlier ones, refitted from where
+        // the fit beside it put them, explain the data as well without it; the round then ends
+        // as one that added nothing
+        let dropped = added.is_some_and(|e| !self.forms.iter().any(|f| f.effect == e));
         // a later round runs only where the model is beyond its floor (above), and one that
-        // added nothing left the model as it found it
-        if added.is_none() && revisits.is_empty() && !self.forms.is_empty() {
-            revisits = revisit_forms(
+        // added nothing left the model as it found it (or, having dropped its own, refitted)
+        let mut form_swapped = false;
+        if (dropped || (added.is_none() && revisits.is_empty())) && !self.forms.is_empty() {
+            let by_forms = revisit_forms(
                 &self.rounds,
                 &mut self.forms,
                 &mut self.current,
@@ -1260,8 +1274,9 @@ impl Search {
                 id_opts,
                 opts,
             )?;
+            form_swapped = by_forms.iter().any(|v| v.swapped);
+            revisits.extend(by_forms);
         }
-        let form_swapped = added.is_none() && revisits.iter().any(|v| v.swapped);
         if !revisits.is_empty() {
             self.effects = self.forms.iter().map(|f| f.effect).collect();
             timing.push((
@@ -1278,7 +1293,7 @@ impl Search {
             revisits,
             provisional,
         });
-        Ok(added.is_some() || form_swapped)
+        Ok((added.is_some() && !dropped) || form_swapped)
     }
 
     /// Acts on a round's `decision`: a tie is recorded with the experiments that would
@@ -1475,37 +1490,44 @@ fn converged(
 /// fit farther from its floor than the model with it (book/src/diagnose.md, "Two mechanisms
 /// at once"). The earlier choice was made while the later effect's share of the data was still
 /// unexplained. An effect a revisit swapped in has no round of its own and is tried only against
-/// nothing.
+/// nothing. Last, `just_added`, the effect this round took on (not one taken on tentatively,
+/// which the revisits themselves decide), is tried against nothing too, the earlier effects
+/// refitted from where the fit beside it put them: the round judged it against their fit of
+/// the round before, which may have stopped in a worse minimum whose misfit the new effect
+/// then stands in for (a saturation's unequal limits ten times its best residual sum away).
 fn revisit(
     rounds: &[Round],
+    just_added: Option<Effect>,
     forms: &mut Vec<&'static Form>,
     current: &mut Identification,
-    estimation: &[Experiment],
-    held: &[Experiment],
+    (estimation, held): (&[Experiment], &[Experiment]),
     id_opts: &dyn Fn(&[&Form]) -> IdOptions,
     opts: &Options,
 ) -> Result<Vec<Revisit>, Error> {
     let mut out = Vec::new();
     // every effect in the model before this round's, by what it is and not by the round that
-    // added it: one a revisit swapped in is revisited too, one a later round added again once
-    let earlier: Vec<Effect> = forms[..forms.len().saturating_sub(1)]
+    // added it: one a revisit swapped in is revisited too, one a later round added again once;
+    // then this round's own, against nothing alone
+    let effects: Vec<Effect> = forms
         .iter()
         .map(|f| f.effect)
+        .filter(|&e| e != forms[forms.len() - 1].effect || just_added == Some(e))
         .collect();
-    for effect in earlier {
+    for effect in effects {
         let Some(pos) = forms.iter().position(|f| f.effect == effect) else {
             continue;
         };
         let runner_up = rounds
             .iter()
             .rev()
-            .find(|r| r.added == Some(effect))
+            .find(|r| r.added == Some(effect) && Some(effect) != just_added)
             .into_iter()
             .flat_map(|round| &round.candidates)
             .filter(|c| forms.iter().all(|f| f.effect != c.effect))
             .filter_map(|c| c.refit.as_ref().filter(|r| r.passes()).map(|r| (c.form, r)))
             .min_by(|a, b| a.1.delta_bic.total_cmp(&b.1.delta_bic));
         let replaced = forms[pos].effect;
+        let own = just_added == Some(replaced);
         // first the model without the effect, its parameters neutral (off): when the later
         // effects explain all it stood in for, a runner-up swapped in would be a spurious second
         // effect that happens to fit; then the runner-up in its place, its parameters as its
@@ -1537,9 +1559,16 @@ fn revisit(
             }
             let mut o = id_opts(&with);
             o.lm.deadline = opts.refit_budget.map(|b| Instant::now() + b);
-            // judged against a model fitted to convergence, the try is fitted so too
-            let refit = identify::identify(&start, estimation, held, &o)
-                .map(|id| converged(id, estimation, held, &o, opts.refit_budget));
+            let refit = if own {
+                // the round's own effect: a drop shown within the budget holds for the fit
+                // gone on (the fit never rises), and one not shown keeps the effect
+                o.iteration_budget = Some(OWN_REVISIT_ITERATIONS);
+                identify::identify(&start, estimation, held, &o)
+            } else {
+                // judged against a model fitted to convergence, the try is fitted so too
+                identify::identify(&start, estimation, held, &o)
+                    .map(|id| converged(id, estimation, held, &o, opts.refit_budget))
+            };
             let (delta_bic, swapped) = match refit {
                 Ok(id) => {
                     let delta = model_bic(&estimation[0], &id, &with) - bic_now;
@@ -1570,11 +1599,12 @@ fn revisit(
     Ok(out)
 }
 
-/// When a later round adds nothing (it runs only where a held-out fit is beyond [`AT_FLOOR`] of
-/// its noise floor, the nearness a named family is asked to reach, or leaves more than
-/// [`HELD_OUT_EXCESS`] of its noise unexplained), each earlier effect is tried in the forms
-/// of its family that its round did not refit (nor a revisit since), in place of the one it has
-/// (book/src/diagnose.md, "Families of forms"): the screening ranked the forms on the model of
+/// When a later round adds nothing, or drops on its revisit the effect it added ([`revisit`])
+/// (it runs only where a held-out fit is beyond [`AT_FLOOR`] of its noise floor, the nearness
+/// a named family is asked to reach, or leaves more than [`HELD_OUT_EXCESS`] of its noise
+/// unexplained), each earlier effect is tried in the forms of its family that its round did
+/// not refit (nor a revisit since), in place of the one it has (book/src/diagnose.md,
+/// "Families of forms"): the screening ranked the forms on the model of
 /// that round linearized, which a law far from it misjudges (a slewing amplifier's first-order
 /// lag, seen from the paper's model), and no later family closes what the chosen form leaves.
 /// The try that lowers the BIC most, by at least [`BIC_MARGIN`], and brings the worst held-out

@@ -672,10 +672,20 @@ fn round_section(md: &mut String, k: usize, r: &Round) {
             ),
             None => "the model without it".into(),
         };
+        let tried = if v.by.is_none() && Some(v.replaced) == r.added {
+            format!(
+                "`{}`, this round's own, against the model without it, the earlier effects refitted from where the fit beside it put them",
+                v.replaced.name()
+            )
+        } else {
+            format!(
+                "`{}` against {against} refitted beside the later effects",
+                v.replaced.name()
+            )
+        };
         let _ = writeln!(
             md,
-            "Revisited: `{}` against {against} refitted beside the later effects: {}.\n",
-            v.replaced.name(),
+            "Revisited: {tried}: {}.\n",
             match (&v.delta_bic, v.swapped) {
                 (Ok(b), true) if v.by.is_none() => format!("ΔBIC {b:.1}, dropped"),
                 (Ok(b), true) if v.by.is_some_and(|f| f.effect == v.replaced) => {
