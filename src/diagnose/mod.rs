@@ -1508,26 +1508,23 @@ fn revisit(
     // every effect in the model before this round's, by what it is and not by the round that
     // added it: one a revisit swapped in is revisited too, one a later round added again once;
     // then this round's own, against nothing alone
-    let effects: Vec<Effect> = forms
-        .iter()
-        .map(|f| f.effect)
-        .filter(|&e| e != forms[forms.len() - 1].effect || just_added == Some(e))
-        .collect();
+    let revisited = forms.len() - usize::from(just_added.is_none());
+    let effects: Vec<Effect> = forms[..revisited].iter().map(|f| f.effect).collect();
     for effect in effects {
         let Some(pos) = forms.iter().position(|f| f.effect == effect) else {
             continue;
         };
+        let own = just_added == Some(effect);
         let runner_up = rounds
             .iter()
             .rev()
-            .find(|r| r.added == Some(effect) && Some(effect) != just_added)
+            .find(|r| r.added == Some(effect) && !own)
             .into_iter()
             .flat_map(|round| &round.candidates)
             .filter(|c| forms.iter().all(|f| f.effect != c.effect))
             .filter_map(|c| c.refit.as_ref().filter(|r| r.passes()).map(|r| (c.form, r)))
             .min_by(|a, b| a.1.delta_bic.total_cmp(&b.1.delta_bic));
         let replaced = forms[pos].effect;
-        let own = just_added == Some(replaced);
         // first the model without the effect, its parameters neutral (off): when the later
         // effects explain all it stood in for, a runner-up swapped in would be a spurious second
         // effect that happens to fit; then the runner-up in its place, its parameters as its
