@@ -51,6 +51,10 @@ pub struct Sensitivities {
     stage_jac: Vec<f64>,
     stage_fp: Vec<f64>,
     y_stage: Vec<f64>,
+    /// The nonzeros (row, column, value) of one block of each stage's Jacobian, column by
+    /// column, and which of the block's states they link.
+    nz: [Vec<(usize, usize, f64)>; 3],
+    linked: Vec<bool>,
     /// The stage equations of one block, factored; the order of its states in them, and
     /// each state's place in that order.
     lu: lu::SparseLu,
@@ -83,6 +87,8 @@ impl Sensitivities {
             stage_jac: vec![0.0; 3 * n * n],
             stage_fp: vec![0.0; 3 * n * m],
             y_stage: vec![0.0; n],
+            nz: Default::default(),
+            linked: Vec::new(),
             lu: lu::SparseLu::default(),
             order: Vec::with_capacity(n),
             pos: Vec::with_capacity(n),
@@ -130,38 +136,24 @@ impl Sensitivities {
         let mut o = 0;
         for &mb in st.blocks {
             let dim = 3 * mb;
-            let jac =
-                |l: usize, r: usize, c: usize| self.stage_jac[l * n * n + (o + c) * n + o + r];
-            // unknown (stage l, state c) at 3 pos[c] + l: the states with the fewest couplings
-            // first (an effect's own, coupled only to the actuator's), whose elimination then
-            // fills in little, each state's three stages side by side
-            let degree = |c: usize| {
-                (0..mb)
-                    .filter(|&r| {
-                        r != c && (0..3).any(|l| jac(l, r, c) != 0.0 || jac(l, c, r) != 0.0)
-                    })
-                    .count()
-            };
-            let (order, pos) = (&mut self.order, &mut self.pos);
-            pos.clear();
-            pos.extend((0..mb).map(degree));
-            order.clear();
-            order.extend(0..mb);
-            order.sort_by_key(|&c| pos[c]);
-            for (q, &c) in order.iter().enumerate() {
-                pos[c] = q;
-            }
+            self.block_entries(o, mb);
+            self.order_states(mb);
+            let (nz, pos) = (&self.nz, &self.pos);
             let mat = self.lu.matrix(dim);
-            for l in 0..3 {
-                for c in 0..mb {
+            // unknown (stage l, state c) at 3 pos[c] + l; equation (stage k, state r) at
+            // 3 pos[r] + k: σ_k − h Σ_l a_kl J_l σ_l
+            for r in 0..mb {
+                for k in 0..3 {
+                    mat[(3 * pos[r] + k) * dim + 3 * pos[r] + k] = 1.0;
+                }
+            }
+            for (l, entries) in nz.iter().enumerate() {
+                for &(r, c, jrc) in entries {
                     for k in 0..3 {
-                        let ha = h * A[k][l];
-                        for r in 0..mb {
-                            let v = ha * jac(l, r, c);
+                        let v = h * A[k][l] * jrc;
+                        if v != 0.0 {
                             let unit = if k == l && r == c { 1.0 } else { 0.0 };
-                            if v != 0.0 || unit != 0.0 {
-                                mat[(3 * pos[c] + l) * dim + 3 * pos[r] + k] = unit - v;
-                            }
+                            mat[(3 * pos[c] + l) * dim + 3 * pos[r] + k] = unit - v;
                         }
                     }
                 }
@@ -179,18 +171,16 @@ impl Sensitivities {
                 }
                 // g_l = J_l s + ∂f/∂θ_j (Y_l) on this block; right-hand side h Σ_l a_kl g_l
                 let g = &mut self.g[..mb];
-                for l in 0..3 {
+                let s = &self.s[j * n + o..j * n + o + mb];
+                for (l, entries) in self.nz.iter().enumerate() {
                     for (r, gr) in g.iter_mut().enumerate() {
                         gr[l] = self.stage_fp[l * n * m + j * n + o + r];
                     }
-                    // J_l s column by column: each column of J_l is contiguous
-                    for c in 0..mb {
-                        let sc = self.s[j * n + o + c];
+                    // J_l s over J_l's nonzeros, column by column
+                    for &(r, c, jrc) in entries {
+                        let sc = s[c];
                         if sc != 0.0 {
-                            let col = &self.stage_jac[l * n * n + (o + c) * n + o..][..mb];
-                            for (gr, &jrc) in g.iter_mut().zip(col) {
-                                gr[l] += jrc * sc;
-                            }
+                            g[r][l] += jrc * sc;
                         }
                     }
                 }
@@ -237,6 +227,54 @@ impl Sensitivities {
         self.h_old = h;
         self.have_poly = true;
         Ok(())
+    }
+
+    /// The nonzeros of the block of `mb` states from `o` of each stage's Jacobian into `nz`:
+    /// every product and entry of the stage equations is over them alone (a block's Jacobian
+    /// is mostly zeros: an effect's states touch the actuator's few).
+    fn block_entries(&mut self, o: usize, mb: usize) {
+        let n = self.n;
+        for (l, entries) in self.nz.iter_mut().enumerate() {
+            entries.clear();
+            for c in 0..mb {
+                let col = &self.stage_jac[l * n * n + (o + c) * n + o..][..mb];
+                entries.extend(
+                    col.iter()
+                        .enumerate()
+                        .filter(|&(_, &v)| v != 0.0)
+                        .map(|(r, &v)| (r, c, v)),
+                );
+            }
+        }
+    }
+
+    /// The order of the block's states in its stage equations (`order`, and each state's place
+    /// in it, `pos`): the states with the fewest couplings first (an effect's own, coupled only
+    /// to the actuator's), whose elimination then fills in little, each state's three stages
+    /// side by side.
+    fn order_states(&mut self, mb: usize) {
+        let linked = &mut self.linked;
+        linked.clear();
+        linked.resize(mb * mb, false);
+        for &(r, c, _) in self.nz.iter().flatten() {
+            if r != c {
+                linked[c * mb + r] = true;
+                linked[r * mb + c] = true;
+            }
+        }
+        let (order, pos) = (&mut self.order, &mut self.pos);
+        pos.clear();
+        pos.extend(
+            linked
+                .chunks(mb)
+                .map(|row| row.iter().filter(|&&l| l).count()),
+        );
+        order.clear();
+        order.extend(0..mb);
+        order.sort_by_key(|&c| pos[c]);
+        for (q, &c) in order.iter().enumerate() {
+            pos[c] = q;
+        }
     }
 
     /// Adds `ds` (column-major n × m) to ∂y/∂θ at the current point: the jump where a
