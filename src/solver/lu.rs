@@ -225,6 +225,11 @@ pub(super) struct SparseLu {
     /// Column-major; after [`SparseLu::factor`] L below the diagonal, U above, 1/U_kk on it.
     lu: Vec<f64>,
     piv: Vec<usize>,
+    /// Per row, the columns that may hold a nonzero, a bit each in `words` words: the
+    /// elimination reads row k's entries right of the pivot through them rather than across
+    /// every column (a read per column, a cache line apart).
+    pattern: Vec<u64>,
+    words: usize,
     /// Per column k, the rows of its nonzeros below the diagonal (L) and above it (U), at
     /// `rows[starts[k].0..starts[k].1]` and `rows[starts[k].1..starts[k].2]`.
     starts: Vec<(usize, usize, usize)>,
@@ -232,26 +237,36 @@ pub(super) struct SparseLu {
 }
 
 impl SparseLu {
-    /// The m × m matrix to factor, zeroed, column-major.
-    pub fn matrix(&mut self, m: usize) -> &mut [f64] {
+    /// Starts an m × m matrix to factor, zero but for the entries [`SparseLu::set`] then gives.
+    pub fn start(&mut self, m: usize) {
         self.m = m;
         self.lu.clear();
         self.lu.resize(m * m, 0.0);
-        &mut self.lu
+        self.words = m.div_ceil(64);
+        self.pattern.clear();
+        self.pattern.resize(m * self.words, 0);
     }
 
-    /// Factors the matrix [`SparseLu::matrix`] was given, with partial pivoting.
+    /// Entry (`row`, `col`) of the matrix to factor.
+    pub fn set(&mut self, row: usize, col: usize, v: f64) {
+        self.lu[col * self.m + row] = v;
+        self.pattern[row * self.words + col / 64] |= 1 << (col % 64);
+    }
+
+    /// Factors the matrix [`SparseLu::set`] gave, with partial pivoting.
     pub fn factor(&mut self) -> Result<(), Singular> {
-        let (m, a) = (self.m, &mut self.lu);
+        let (m, w, a) = (self.m, self.words, &mut self.lu);
+        let pattern = &mut self.pattern;
         self.piv.resize(m, 0);
         for k in 0..m {
+            let col = &a[k * m..(k + 1) * m];
             let mut p = k;
             for i in k + 1..m {
-                if a[k * m + i].abs() > a[k * m + p].abs() {
+                if col[i].abs() > col[p].abs() {
                     p = i;
                 }
             }
-            let best = a[k * m + p].abs();
+            let best = col[p].abs();
             if best == 0.0 || !best.is_finite() {
                 return Err(Singular(k));
             }
@@ -260,21 +275,47 @@ impl SparseLu {
                 for j in 0..m {
                     a.swap(j * m + k, j * m + p);
                 }
+                for q in 0..w {
+                    pattern.swap(k * w + q, p * w + q);
+                }
             }
-            let inv = 1.0 / a[k * m + k];
-            a[k * m + k] = inv;
+            let (left, right) = a.split_at_mut((k + 1) * m);
+            let col = &mut left[k * m..];
+            let inv = 1.0 / col[k];
+            col[k] = inv;
             self.rows.clear();
-            for i in k + 1..m {
-                if a[k * m + i] != 0.0 {
-                    a[k * m + i] *= inv;
+            for (i, v) in col.iter_mut().enumerate().skip(k + 1) {
+                if *v != 0.0 {
+                    *v *= inv;
                     self.rows.push(i);
                 }
             }
-            for j in k + 1..m {
-                let akj = a[j * m + k];
-                if akj != 0.0 {
-                    for &i in &self.rows {
-                        a[j * m + i] -= a[k * m + i] * akj;
+            // row k's columns right of the pivot, and the rows eliminated fill in where it has
+            // entries
+            let (above, below) = pattern.split_at_mut((k + 1) * w);
+            let row_k = &above[k * w..];
+            for &i in &self.rows {
+                for (b, &rk) in below[(i - k - 1) * w..(i - k) * w].iter_mut().zip(row_k) {
+                    *b |= rk;
+                }
+            }
+            for (q, &word) in row_k.iter().enumerate() {
+                let mut bits = if q == (k + 1) / 64 {
+                    word & (u64::MAX << ((k + 1) % 64))
+                } else if q < (k + 1) / 64 {
+                    0
+                } else {
+                    word
+                };
+                while bits != 0 {
+                    let j = q * 64 + bits.trailing_zeros() as usize;
+                    bits &= bits - 1;
+                    let col_j = &mut right[(j - k - 1) * m..(j - k) * m];
+                    let akj = col_j[k];
+                    if akj != 0.0 {
+                        for &i in &self.rows {
+                            col_j[i] -= col[i] * akj;
+                        }
                     }
                 }
             }
@@ -404,7 +445,15 @@ mod tests {
         let x = DVector::from_fn(n, |i, _| i as f64 - 4.5);
         let b = &m * &x;
         let mut lu = SparseLu::default();
-        lu.matrix(n).copy_from_slice(m.as_slice());
+        lu.start(n);
+        for ((r, c), &v) in (0..n)
+            .flat_map(|c| (0..n).map(move |r| (r, c)))
+            .zip(m.as_slice())
+        {
+            if v != 0.0 {
+                lu.set(r, c, v);
+            }
+        }
         lu.factor().unwrap();
         let mut rhs = b.as_slice().to_vec();
         lu.solve(&mut rhs);
@@ -412,7 +461,10 @@ mod tests {
             assert!((rhs[i] - x[i]).abs() < 1e-12, "{rhs:?}");
         }
         let mut singular = SparseLu::default();
-        singular.matrix(2).copy_from_slice(&[1.0, 2.0, 2.0, 4.0]);
+        singular.start(2);
+        for (r, c, v) in [(0, 0, 1.0), (1, 0, 2.0), (0, 1, 2.0), (1, 1, 4.0)] {
+            singular.set(r, c, v);
+        }
         assert_eq!(singular.factor(), Err(Singular(1)));
     }
 

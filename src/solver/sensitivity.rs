@@ -138,13 +138,13 @@ impl Sensitivities {
             let dim = 3 * mb;
             self.block_entries(o, mb);
             self.order_states(mb);
-            let (nz, pos) = (&self.nz, &self.pos);
-            let mat = self.lu.matrix(dim);
+            let (nz, pos, lu) = (&self.nz, &self.pos, &mut self.lu);
+            lu.start(dim);
             // unknown (stage l, state c) at 3 pos[c] + l; equation (stage k, state r) at
             // 3 pos[r] + k: σ_k − h Σ_l a_kl J_l σ_l
             for r in 0..mb {
                 for k in 0..3 {
-                    mat[(3 * pos[r] + k) * dim + 3 * pos[r] + k] = 1.0;
+                    lu.set(3 * pos[r] + k, 3 * pos[r] + k, 1.0);
                 }
             }
             for (l, entries) in nz.iter().enumerate() {
@@ -153,7 +153,7 @@ impl Sensitivities {
                         let v = h * A[k][l] * jrc;
                         if v != 0.0 {
                             let unit = if k == l && r == c { 1.0 } else { 0.0 };
-                            mat[(3 * pos[c] + l) * dim + 3 * pos[r] + k] = unit - v;
+                            lu.set(3 * pos[r] + k, 3 * pos[c] + l, unit - v);
                         }
                     }
                 }
