@@ -14,8 +14,9 @@ use crate::fmi_common::model_api::{FmuCore, InstanceKind};
 
 const MAGIC: &[u8; 8] = b"FMI2RSST";
 /// 3: a Co-Simulation run holds which integrator it steps with (Radau IIA or the explicit
-/// pair, src/simulation/mod.rs), where 2 held Radau IIA alone.
-const FORMAT_VERSION: u32 = 3;
+/// pair, src/simulation/mod.rs), where 2 held Radau IIA alone. 4: Radau IIA's factors hold
+/// where the nonzeros of their blocks beyond eight states are (src/solver/lu.rs).
+const FORMAT_VERSION: u32 = 4;
 
 /// An FMU state of this shell.
 pub type Snapshot<M> = fmu_state::Snapshot<M, Phase>;

@@ -1,7 +1,8 @@
 //! LU factorisation with partial pivoting of small dense blocks, in place on preallocated
 //! column-major storage, for real and complex matrices (the Radau IIA iteration needs one of
 //! each per step size), of block-diagonal matrices block by block ([`BlockLu`]), and of the
-//! sensitivities' stage equations, mostly zeros, by a sparse elimination (`SparseLu`).
+//! sensitivities' stage equations (`SparseLu`). Blocks beyond `UNROLLED` rows and the stage
+//! equations, mostly zeros, are eliminated and solved over their nonzeros alone.
 //!
 //! Written here rather than taken from nalgebra because nalgebra's `LU` owns and reallocates
 //! its matrix, and the solver must not allocate per step. Blocks of up to `UNROLLED` rows are
@@ -74,18 +75,16 @@ fn factor<T: Entry>(a: &mut [T], piv: &mut [usize]) -> Result<(), Singular> {
     by_size!(piv.len(), factor_m(a, piv))
 }
 
-// For the sizes up to UNROLLED the loops run over the whole block with the triangle as a
-// condition inside: with m a constant, the compiler then unrolls them all and drops the
-// conditions, which it does not do for loops that start at k + 1. Larger blocks (an effect's
-// states beside the actuator's) start there and skip the zeros of sparse columns.
+// The loops run over the whole block with the triangle as a condition inside: with m a
+// constant, the compiler then unrolls them all and drops the conditions, which it does not do
+// for loops that start at k + 1. (Larger blocks go to [`factor_sparse`].)
 #[inline(always)]
 fn factor_m<T: Entry>(m: usize, a: &mut [T], piv: &mut [usize]) -> Result<(), Singular> {
     let (a, piv) = (&mut a[..m * m], &mut piv[..m]);
     for k in 0..m {
-        let below = if m <= UNROLLED { 0 } else { k + 1 };
         let mut p = k;
         let mut best = a[k * m + k].norm1();
-        for i in below..m {
+        for i in 0..m {
             let v = a[k * m + i].norm1();
             if i > k && v > best {
                 best = v;
@@ -103,15 +102,15 @@ fn factor_m<T: Entry>(m: usize, a: &mut [T], piv: &mut [usize]) -> Result<(), Si
         }
         let inv = a[k * m + k].recip();
         a[k * m + k] = inv;
-        for i in below..m {
+        for i in 0..m {
             if i > k {
                 a[k * m + i] = a[k * m + i] * inv;
             }
         }
-        for j in below..m {
+        for j in 0..m {
             let akj = a[j * m + k];
-            if j > k && (m <= UNROLLED || akj != T::from(0.0)) {
-                for i in below..m {
+            if j > k {
+                for i in 0..m {
                     if i > k {
                         a[j * m + i] = a[j * m + i] - a[k * m + i] * akj;
                     }
@@ -134,12 +133,8 @@ fn solve_m<T: Entry>(m: usize, lu: &[T], piv: &[usize], b: &mut [T]) {
     for (k, &p) in piv.iter().enumerate() {
         b.swap(k, p);
     }
-    let sparse = m > UNROLLED;
     for k in 0..m {
         let bk = b[k];
-        if sparse && bk == T::from(0.0) {
-            continue;
-        }
         for i in k + 1..m {
             b[i] = b[i] - lu[k * m + i] * bk;
         }
@@ -147,11 +142,159 @@ fn solve_m<T: Entry>(m: usize, lu: &[T], piv: &[usize], b: &mut [T]) {
     for k in (0..m).rev() {
         let bk = b[k] * lu[k * m + k];
         b[k] = bk;
-        if sparse && bk == T::from(0.0) {
-            continue;
-        }
         for i in 0..k {
             b[i] = b[i] - lu[k * m + i] * bk;
+        }
+    }
+}
+
+/// Where the nonzeros of a matrix factored by [`factor_sparse`] are. Before the factoring, each
+/// row's columns that may hold one, a bit each (`words` per row): the elimination reads row k
+/// right of the pivot through them rather than across every column (a read per column, a
+/// cache line apart). After it, per column k, the rows of its nonzeros below the diagonal (L)
+/// and above it (U), at `rows[starts[k].0..starts[k].1]` and `rows[starts[k].1..starts[k].2]`,
+/// which the solves follow.
+#[derive(Clone, Debug, Default, Serialize, Deserialize)]
+struct Pattern {
+    #[serde(skip)]
+    bits: Vec<u64>,
+    #[serde(skip)]
+    words: usize,
+    /// Scratch: the rows column k eliminates.
+    #[serde(skip)]
+    eliminated: Vec<usize>,
+    starts: Vec<(usize, usize, usize)>,
+    rows: Vec<usize>,
+}
+
+impl Pattern {
+    /// No entry yet of an m × m matrix (the factors' pattern of earlier blocks is kept).
+    fn clear_bits(&mut self, m: usize) {
+        self.words = m.div_ceil(64);
+        self.bits.clear();
+        self.bits.resize(m * self.words, 0);
+    }
+
+    fn mark(&mut self, row: usize, col: usize) {
+        self.bits[row * self.words + col / 64] |= 1 << (col % 64);
+    }
+}
+
+/// Factors the m × m matrix `a` (column-major, m = `piv.len()`) into P A = L U in place as
+/// [`factor`] does, with partial pivoting, the entries given in `pattern`'s bits; the factors'
+/// pattern is appended to `pattern` for [`solve_sparse`]. Only the nonzeros are eliminated and
+/// substituted, so that a block whose sparsest rows and columns come first (an effect's own
+/// states, coupled to the actuator's few) costs little more than its dense part; the results
+/// are [`factor`]'s, whose other products are by zero.
+fn factor_sparse<T: Entry>(
+    a: &mut [T],
+    piv: &mut [usize],
+    pattern: &mut Pattern,
+) -> Result<(), Singular> {
+    let (m, w) = (piv.len(), pattern.words);
+    let zero = T::from(0.0);
+    let mut rows = std::mem::take(&mut pattern.eliminated);
+    for k in 0..m {
+        let col = &a[k * m..(k + 1) * m];
+        let mut p = k;
+        let mut best = col[k].norm1();
+        for (i, v) in col.iter().enumerate().skip(k + 1) {
+            if v.norm1() > best {
+                best = v.norm1();
+                p = i;
+            }
+        }
+        piv[k] = p;
+        if best == 0.0 || !best.is_finite() {
+            return Err(Singular(k));
+        }
+        if p != k {
+            for j in 0..m {
+                a.swap(j * m + k, j * m + p);
+            }
+            for q in 0..w {
+                pattern.bits.swap(k * w + q, p * w + q);
+            }
+        }
+        let (left, right) = a.split_at_mut((k + 1) * m);
+        let col = &mut left[k * m..];
+        let inv = col[k].recip();
+        col[k] = inv;
+        rows.clear();
+        for (i, v) in col.iter_mut().enumerate().skip(k + 1) {
+            if *v != zero {
+                *v = *v * inv;
+                rows.push(i);
+            }
+        }
+        // the rows eliminated fill in where row k has entries
+        let (above, below) = pattern.bits.split_at_mut((k + 1) * w);
+        let row_k = &above[k * w..];
+        for &i in &rows {
+            for (b, &rk) in below[(i - k - 1) * w..(i - k) * w].iter_mut().zip(row_k) {
+                *b |= rk;
+            }
+        }
+        for (q, &word) in row_k.iter().enumerate().skip((k + 1) / 64) {
+            let mut bits = if q == (k + 1) / 64 {
+                word & (u64::MAX << ((k + 1) % 64))
+            } else {
+                word
+            };
+            while bits != 0 {
+                let j = q * 64 + bits.trailing_zeros() as usize;
+                bits &= bits - 1;
+                let col_j = &mut right[(j - k - 1) * m..(j - k) * m];
+                let akj = col_j[k];
+                if akj != zero {
+                    for &i in &rows {
+                        col_j[i] = col_j[i] - col[i] * akj;
+                    }
+                }
+            }
+        }
+    }
+    // the pattern the solves follow, read off the final factors (a later pivot's swap moves
+    // the rows of earlier columns)
+    for k in 0..m {
+        let col = &a[k * m..(k + 1) * m];
+        let start = pattern.rows.len();
+        pattern.rows.extend((k + 1..m).filter(|&i| col[i] != zero));
+        let mid = pattern.rows.len();
+        pattern.rows.extend((0..k).filter(|&i| col[i] != zero));
+        pattern.starts.push((start, mid, pattern.rows.len()));
+    }
+    pattern.eliminated = rows;
+    Ok(())
+}
+
+/// Solves A x = b in place with the factors of [`factor_sparse`], whose columns' patterns are
+/// `starts` (m = `b.len()`).
+fn solve_sparse<T: Entry>(
+    lu: &[T],
+    piv: &[usize],
+    (starts, rows): (&[(usize, usize, usize)], &[usize]),
+    b: &mut [T],
+) {
+    let (m, zero) = (b.len(), T::from(0.0));
+    for (k, &p) in piv.iter().enumerate() {
+        b.swap(k, p);
+    }
+    for (k, &(lo, mid, _)) in starts.iter().enumerate() {
+        let bk = b[k];
+        if bk != zero {
+            for &i in &rows[lo..mid] {
+                b[i] = b[i] - lu[k * m + i] * bk;
+            }
+        }
+    }
+    for (k, &(_, mid, hi)) in starts.iter().enumerate().rev() {
+        let bk = b[k] * lu[k * m + k];
+        b[k] = bk;
+        if bk != zero {
+            for &i in &rows[mid..hi] {
+                b[i] = b[i] - lu[k * m + i] * bk;
+            }
         }
     }
 }
@@ -164,6 +307,9 @@ pub struct BlockLu<T> {
     blocks: Vec<usize>,
     lu: Vec<T>,
     piv: Vec<usize>,
+    /// The nonzeros of the blocks larger than [`UNROLLED`] (an effect's states beside the
+    /// actuator's), one after another, factored and solved sparse.
+    pattern: Pattern,
 }
 
 impl<T: Entry> BlockLu<T> {
@@ -172,6 +318,7 @@ impl<T: Entry> BlockLu<T> {
             lu: vec![T::from(0.0); blocks.iter().map(|m| m * m).sum()],
             piv: vec![0; blocks.iter().sum()],
             blocks,
+            pattern: Pattern::default(),
         }
     }
 
@@ -184,16 +331,32 @@ impl<T: Entry> BlockLu<T> {
     pub fn factor_shifted(&mut self, sigma: T, jac: &[f64]) -> Result<(), Singular> {
         let n = self.piv.len();
         let (mut o, mut at) = (0, 0);
+        let pattern = &mut self.pattern;
+        pattern.starts.clear();
+        pattern.rows.clear();
         for &m in &self.blocks {
             let a = &mut self.lu[at..at + m * m];
+            let sparse = m > UNROLLED;
+            if sparse {
+                pattern.clear_bits(m);
+            }
             for c in 0..m {
                 let col = &jac[(o + c) * n + o..(o + c) * n + o + m];
                 for (r, &v) in col.iter().enumerate() {
                     a[c * m + r] = T::from(-v);
+                    if sparse && (v != 0.0 || r == c) {
+                        pattern.mark(r, c);
+                    }
                 }
                 a[c * m + c] = a[c * m + c] + sigma;
             }
-            factor(a, &mut self.piv[o..o + m]).map_err(|Singular(k)| Singular(o + k))?;
+            let piv = &mut self.piv[o..o + m];
+            if sparse {
+                factor_sparse(a, piv, pattern)
+            } else {
+                factor(a, piv)
+            }
+            .map_err(|Singular(k)| Singular(o + k))?;
             o += m;
             at += m * m;
         }
@@ -202,13 +365,20 @@ impl<T: Entry> BlockLu<T> {
 
     /// Solves (σ I − J) x = b in place with the factors of [`BlockLu::factor_shifted`].
     pub fn solve(&self, b: &mut [T]) {
-        let (mut o, mut at) = (0, 0);
+        let (mut o, mut at, mut sparse_at) = (0, 0, 0);
         for &m in &self.blocks {
-            solve(
+            let (lu, piv, b) = (
                 &self.lu[at..at + m * m],
                 &self.piv[o..o + m],
                 &mut b[o..o + m],
             );
+            if m > UNROLLED {
+                let starts = &self.pattern.starts[sparse_at..sparse_at + m];
+                solve_sparse(lu, piv, (starts, &self.pattern.rows), b);
+                sparse_at += m;
+            } else {
+                solve(lu, piv, b);
+            }
             o += m;
             at += m * m;
         }
@@ -216,148 +386,43 @@ impl<T: Entry> BlockLu<T> {
 }
 
 /// The LU factors (P A = L U) of a real m × m matrix with many zeros, in dense storage: the
-/// elimination and the solves touch only the nonzeros, so a matrix whose rows and columns are
-/// ordered with the sparsest first (an effect's own states in the sensitivities' stage
-/// equations) costs little more than its dense part.
+/// elimination and the solves touch only the nonzeros ([`factor_sparse`]), so a matrix whose
+/// rows and columns are ordered with the sparsest first (an effect's own states in the
+/// sensitivities' stage equations) costs little more than its dense part.
 #[derive(Clone, Debug, Default)]
 pub(super) struct SparseLu {
-    m: usize,
     /// Column-major; after [`SparseLu::factor`] L below the diagonal, U above, 1/U_kk on it.
     lu: Vec<f64>,
     piv: Vec<usize>,
-    /// Per row, the columns that may hold a nonzero, a bit each in `words` words: the
-    /// elimination reads row k's entries right of the pivot through them rather than across
-    /// every column (a read per column, a cache line apart).
-    pattern: Vec<u64>,
-    words: usize,
-    /// Per column k, the rows of its nonzeros below the diagonal (L) and above it (U), at
-    /// `rows[starts[k].0..starts[k].1]` and `rows[starts[k].1..starts[k].2]`.
-    starts: Vec<(usize, usize, usize)>,
-    rows: Vec<usize>,
+    pattern: Pattern,
 }
 
 impl SparseLu {
     /// Starts an m × m matrix to factor, zero but for the entries [`SparseLu::set`] then gives.
     pub fn start(&mut self, m: usize) {
-        self.m = m;
         self.lu.clear();
         self.lu.resize(m * m, 0.0);
-        self.words = m.div_ceil(64);
-        self.pattern.clear();
-        self.pattern.resize(m * self.words, 0);
+        self.piv.resize(m, 0);
+        self.pattern.clear_bits(m);
     }
 
     /// Entry (`row`, `col`) of the matrix to factor.
     pub fn set(&mut self, row: usize, col: usize, v: f64) {
-        self.lu[col * self.m + row] = v;
-        self.pattern[row * self.words + col / 64] |= 1 << (col % 64);
+        self.lu[col * self.piv.len() + row] = v;
+        self.pattern.mark(row, col);
     }
 
     /// Factors the matrix [`SparseLu::set`] gave, with partial pivoting.
     pub fn factor(&mut self) -> Result<(), Singular> {
-        let (m, w, a) = (self.m, self.words, &mut self.lu);
-        let pattern = &mut self.pattern;
-        self.piv.resize(m, 0);
-        for k in 0..m {
-            let col = &a[k * m..(k + 1) * m];
-            let mut p = k;
-            for i in k + 1..m {
-                if col[i].abs() > col[p].abs() {
-                    p = i;
-                }
-            }
-            let best = col[p].abs();
-            if best == 0.0 || !best.is_finite() {
-                return Err(Singular(k));
-            }
-            self.piv[k] = p;
-            if p != k {
-                for j in 0..m {
-                    a.swap(j * m + k, j * m + p);
-                }
-                for q in 0..w {
-                    pattern.swap(k * w + q, p * w + q);
-                }
-            }
-            let (left, right) = a.split_at_mut((k + 1) * m);
-            let col = &mut left[k * m..];
-            let inv = 1.0 / col[k];
-            col[k] = inv;
-            self.rows.clear();
-            for (i, v) in col.iter_mut().enumerate().skip(k + 1) {
-                if *v != 0.0 {
-                    *v *= inv;
-                    self.rows.push(i);
-                }
-            }
-            // row k's columns right of the pivot, and the rows eliminated fill in where it has
-            // entries
-            let (above, below) = pattern.split_at_mut((k + 1) * w);
-            let row_k = &above[k * w..];
-            for &i in &self.rows {
-                for (b, &rk) in below[(i - k - 1) * w..(i - k) * w].iter_mut().zip(row_k) {
-                    *b |= rk;
-                }
-            }
-            for (q, &word) in row_k.iter().enumerate() {
-                let mut bits = if q == (k + 1) / 64 {
-                    word & (u64::MAX << ((k + 1) % 64))
-                } else if q < (k + 1) / 64 {
-                    0
-                } else {
-                    word
-                };
-                while bits != 0 {
-                    let j = q * 64 + bits.trailing_zeros() as usize;
-                    bits &= bits - 1;
-                    let col_j = &mut right[(j - k - 1) * m..(j - k) * m];
-                    let akj = col_j[k];
-                    if akj != 0.0 {
-                        for &i in &self.rows {
-                            col_j[i] -= col[i] * akj;
-                        }
-                    }
-                }
-            }
-        }
-        // the pattern the solves follow, read off the final factors (a later pivot's swap moves
-        // the rows of earlier columns)
-        self.rows.clear();
-        self.starts.clear();
-        for k in 0..m {
-            let col = &a[k * m..(k + 1) * m];
-            let start = self.rows.len();
-            self.rows.extend((k + 1..m).filter(|&i| col[i] != 0.0));
-            let mid = self.rows.len();
-            self.rows.extend((0..k).filter(|&i| col[i] != 0.0));
-            self.starts.push((start, mid, self.rows.len()));
-        }
-        Ok(())
+        self.pattern.starts.clear();
+        self.pattern.rows.clear();
+        factor_sparse(&mut self.lu, &mut self.piv, &mut self.pattern)
     }
 
     /// Solves A x = b in place with the factors.
     pub fn solve(&self, b: &mut [f64]) {
-        let (m, lu) = (self.m, &self.lu);
-        for (k, &p) in self.piv[..m].iter().enumerate() {
-            b.swap(k, p);
-        }
-        for (k, &(lo, mid, _)) in self.starts.iter().enumerate() {
-            let bk = b[k];
-            if bk != 0.0 {
-                for &i in &self.rows[lo..mid] {
-                    b[i] -= lu[k * m + i] * bk;
-                }
-            }
-        }
-        for (k, &(_, mid, hi)) in self.starts.iter().enumerate().rev() {
-            let bk = b[k] * lu[k * m + k];
-            b[k] = bk;
-            if bk != 0.0 {
-                for &i in &self.rows[mid..hi] {
-                    b[i] -= lu[k * m + i] * bk;
-                }
-            }
-        }
+        let p = &self.pattern;
+        solve_sparse(&self.lu, &self.piv, (&p.starts, &p.rows), b);
     }
 }
 
@@ -466,6 +531,54 @@ mod tests {
             singular.set(r, c, v);
         }
         assert_eq!(singular.factor(), Err(Singular(1)));
+    }
+
+    /// A block of 70 states beside one of 3 (its rows' patterns two words each), mostly zeros
+    /// with a dense corner and pivots that swap rows up from it: [`BlockLu`] factors it sparse,
+    /// and its solution is the dense factors' to the bit.
+    #[test]
+    fn sparse_blocks_solve_as_the_dense_ones_to_the_bit() {
+        let (small, big) = (3, 70);
+        let n = small + big;
+        let mut jac = DMatrix::from_fn(n, n, |r, c| match (r, c) {
+            _ if (r < small) != (c < small) => 0.0,
+            _ if r == c => -2.0 - r as f64 * 0.1,
+            _ if r < small => 0.5,
+            _ if r >= 60 && c >= 60 => ((r * 3 + c) % 5) as f64 - 2.0,
+            _ if (r >= 60 || c >= 60) && (r + c) % 4 == 0 => 0.5 + ((r + c) % 3) as f64,
+            _ if r == c + 1 => 0.3,
+            _ => 0.0,
+        });
+        jac[(66, small)] = 40.0;
+        jac[(small + 1, 67)] = -50.0;
+        let sigma = Complex::new(3.0, 1.0);
+        let x = DVector::from_fn(n, |i, _| Complex::new(i as f64 - 30.5, 1.0));
+        let shifted = DMatrix::from_fn(n, n, |r, c| {
+            let s = if r == c {
+                sigma
+            } else {
+                Complex::new(0.0, 0.0)
+            };
+            s - Complex::new(jac[(r, c)], 0.0)
+        });
+        let b = &shifted * &x;
+        let mut lu = BlockLu::new(vec![small, big]);
+        lu.factor_shifted(sigma, jac.as_slice()).unwrap();
+        let mut sparse = b.as_slice().to_vec();
+        lu.solve(&mut sparse);
+        let mut dense = b.as_slice()[small..].to_vec();
+        let (mut a, mut piv) = (vec![Complex::new(0.0, 0.0); big * big], vec![0; big]);
+        for c in 0..big {
+            for r in 0..big {
+                a[c * big + r] = shifted[(small + r, small + c)];
+            }
+        }
+        factor(&mut a, &mut piv).unwrap();
+        solve(&a, &piv, &mut dense);
+        assert_eq!(&sparse[small..], &dense[..]);
+        for i in 0..n {
+            assert!((sparse[i] - x[i]).norm() < 1e-10, "x{i}: {}", sparse[i]);
+        }
     }
 
     #[test]
