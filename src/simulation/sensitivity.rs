@@ -128,6 +128,8 @@ struct Follower<'a> {
     s: Vec<f64>,
     /// ∂g/∂x as its entries (output, state, value): a dozen of 6 × n, the heights' angles
     dg: Vec<(usize, usize, f64)>,
+    /// The states `dg` reads, whose sensitivities alone a sample interpolates.
+    read: Vec<usize>,
     out: Sensitive,
 }
 
@@ -153,11 +155,15 @@ impl Observer for Follower<'_> {
 
     fn sampled(&mut self, sample: &Sample, x: &[f64]) {
         let n = x.len();
-        self.sens.interpolate(sample.t, &mut self.s);
         // ∂y/∂θ = ∂g/∂x s + ∂g/∂θ (the outputs' own dependence, for a geometric parameter)
         self.dg.clear();
         self.base
             .output_jacobian_entries(x, |o, c, v| self.dg.push((o, c, v)));
+        self.read.clear();
+        self.read.extend(self.dg.iter().map(|&(_, c, _)| c));
+        self.read.sort_unstable();
+        self.read.dedup();
+        self.sens.interpolate(sample.t, &self.read, &mut self.s);
         let y = self.base.outputs(x);
         for (j, (model, step)) in self.models.iter().zip(self.steps).enumerate() {
             let s = &self.s[j * n..(j + 1) * n];
@@ -266,6 +272,7 @@ pub fn simulate_sensitive(
         sens: Sensitivities::new(n, models.len(), t0, &s0),
         s: vec![0.0; n * models.len()],
         dg: Vec::new(),
+        read: Vec::new(),
         out: Sensitive {
             samples: Vec::with_capacity(times.len()),
             directions: models.len(),

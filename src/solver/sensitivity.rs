@@ -301,17 +301,23 @@ impl Sensitivities {
             })
     }
 
-    /// ∂y/∂θ at `t` in the last step (dense output, as the state's), column-major n × m.
-    pub fn interpolate(&self, t: f64, out: &mut [f64]) {
+    /// ∂y/∂θ at `t` in the last step (dense output, as the state's), column-major n × m, of
+    /// the states `states` alone (the others in `out` are left as they are: a sample's outputs
+    /// read a few states).
+    pub fn interpolate(&self, t: f64, states: &[usize], out: &mut [f64]) {
+        let n = self.n;
         if !self.have_poly || self.h_old == 0.0 {
-            out.copy_from_slice(&self.s);
+            for j in 0..self.m {
+                for &i in states {
+                    out[j * n + i] = self.s[j * n + i];
+                }
+            }
             return;
         }
-        let n = self.n;
         let u = (t - self.t) / self.h_old;
         for j in 0..self.m {
             let cont = &self.cont[3 * n * j..3 * n * (j + 1)];
-            for i in 0..n {
+            for &i in states {
                 let (a1, a2, a3) = (cont[i], cont[n + i], cont[2 * n + i]);
                 out[j * n + i] = self.s[j * n + i] + u * (a1 + (u - C2M1) * (a2 + (u - C1M1) * a3));
             }
@@ -367,7 +373,7 @@ mod tests {
         while k < times.len() {
             while k < times.len() && times[k] <= solver.t() {
                 solver.interpolate(times[k], &mut y);
-                sens.interpolate(times[k], &mut s);
+                sens.interpolate(times[k], &[0, 1], &mut s);
                 ys.push(y);
                 ss.push(s);
                 k += 1;
