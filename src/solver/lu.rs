@@ -82,24 +82,7 @@ fn factor<T: Entry>(a: &mut [T], piv: &mut [usize]) -> Result<(), Singular> {
 fn factor_m<T: Entry>(m: usize, a: &mut [T], piv: &mut [usize]) -> Result<(), Singular> {
     let (a, piv) = (&mut a[..m * m], &mut piv[..m]);
     for k in 0..m {
-        let mut p = k;
-        let mut best = a[k * m + k].norm1();
-        for i in 0..m {
-            let v = a[k * m + i].norm1();
-            if i > k && v > best {
-                best = v;
-                p = i;
-            }
-        }
-        piv[k] = p;
-        if best == 0.0 || !best.is_finite() {
-            return Err(Singular(k));
-        }
-        if p != k {
-            for j in 0..m {
-                a.swap(j * m + k, j * m + p);
-            }
-        }
+        piv[k] = pivot(a, m, k, 0)?;
         let inv = a[k * m + k].recip();
         a[k * m + k] = inv;
         for i in 0..m {
@@ -119,6 +102,32 @@ fn factor_m<T: Entry>(m: usize, a: &mut [T], piv: &mut [usize]) -> Result<(), Si
         }
     }
     Ok(())
+}
+
+/// Partial pivoting at column k of the m × m matrix `a`: the row of the column's largest entry
+/// at or below the diagonal (the first of equal ones), swapped with row k across the matrix.
+/// Rows from `from` are searched, those above k not counted: 0 lets the compiler unroll the
+/// whole column of a block of constant size.
+#[inline(always)]
+fn pivot<T: Entry>(a: &mut [T], m: usize, k: usize, from: usize) -> Result<usize, Singular> {
+    let mut p = k;
+    let mut best = a[k * m + k].norm1();
+    for i in from..m {
+        let v = a[k * m + i].norm1();
+        if i > k && v > best {
+            best = v;
+            p = i;
+        }
+    }
+    if best == 0.0 || !best.is_finite() {
+        return Err(Singular(k));
+    }
+    if p != k {
+        for j in 0..m {
+            a.swap(j * m + k, j * m + p);
+        }
+    }
+    Ok(p)
 }
 
 /// Solves A x = b in place with the factors of [`factor`] (m = `b.len()`).
@@ -195,23 +204,9 @@ fn factor_sparse<T: Entry>(
     let zero = T::from(0.0);
     let mut rows = std::mem::take(&mut pattern.eliminated);
     for k in 0..m {
-        let col = &a[k * m..(k + 1) * m];
-        let mut p = k;
-        let mut best = col[k].norm1();
-        for (i, v) in col.iter().enumerate().skip(k + 1) {
-            if v.norm1() > best {
-                best = v.norm1();
-                p = i;
-            }
-        }
+        let p = pivot(a, m, k, k + 1)?;
         piv[k] = p;
-        if best == 0.0 || !best.is_finite() {
-            return Err(Singular(k));
-        }
         if p != k {
-            for j in 0..m {
-                a.swap(j * m + k, j * m + p);
-            }
             for q in 0..w {
                 pattern.bits.swap(k * w + q, p * w + q);
             }
