@@ -142,15 +142,13 @@ impl Sensitivities {
             lu.start(dim);
             // unknown (stage l, state c) at 3 pos[c] + l; equation (stage k, state r) at
             // 3 pos[r] + k: σ_k − h Σ_l a_kl J_l σ_l
-            for r in 0..mb {
-                for k in 0..3 {
-                    lu.set(3 * pos[r] + k, 3 * pos[r] + k, 1.0);
-                }
+            for d in 0..dim {
+                lu.set(d, d, 1.0);
             }
             for (l, entries) in nz.iter().enumerate() {
                 for &(r, c, jrc) in entries {
-                    for k in 0..3 {
-                        let v = h * A[k][l] * jrc;
+                    for (k, a_k) in A.iter().enumerate() {
+                        let v = h * a_k[l] * jrc;
                         if v != 0.0 {
                             let unit = if k == l && r == c { 1.0 } else { 0.0 };
                             lu.set(3 * pos[r] + k, 3 * pos[c] + l, unit - v);
