@@ -456,6 +456,18 @@ mod tests {
         }
     }
 
+    /// σ I − J.
+    fn shifted(sigma: Complex<f64>, jac: &DMatrix<f64>) -> DMatrix<Complex<f64>> {
+        DMatrix::from_fn(jac.nrows(), jac.ncols(), |r, c| {
+            let s = if r == c {
+                sigma
+            } else {
+                Complex::new(0.0, 0.0)
+            };
+            s - Complex::new(jac[(r, c)], 0.0)
+        })
+    }
+
     #[test]
     fn block_diagonal_factors_ignore_what_lies_outside_the_blocks() {
         let n = 5;
@@ -469,15 +481,7 @@ mod tests {
         });
         let sigma = Complex::new(2.0, -1.5);
         let x = DVector::from_fn(n, |i, _| Complex::new(1.0 + i as f64, 0.5));
-        let shifted = DMatrix::from_fn(n, n, |r, c| {
-            let s = if r == c {
-                sigma
-            } else {
-                Complex::new(0.0, 0.0)
-            };
-            s - Complex::new(m[(r, c)], 0.0)
-        });
-        let b = &shifted * &x;
+        let b = &shifted(sigma, &m) * &x;
         // garbage off the blocks must not matter
         let jac = DMatrix::from_fn(n, n, |r, c| if inside(r, c) { m[(r, c)] } else { 1e6 });
         let mut lu = BlockLu::new(vec![2, 3]);
@@ -548,14 +552,7 @@ mod tests {
         jac[(small + 1, 67)] = -50.0;
         let sigma = Complex::new(3.0, 1.0);
         let x = DVector::from_fn(n, |i, _| Complex::new(i as f64 - 30.5, 1.0));
-        let shifted = DMatrix::from_fn(n, n, |r, c| {
-            let s = if r == c {
-                sigma
-            } else {
-                Complex::new(0.0, 0.0)
-            };
-            s - Complex::new(jac[(r, c)], 0.0)
-        });
+        let shifted = shifted(sigma, &jac);
         let b = &shifted * &x;
         let mut lu = BlockLu::new(vec![small, big]);
         lu.factor_shifted(sigma, jac.as_slice()).unwrap();
