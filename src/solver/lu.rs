@@ -263,32 +263,67 @@ fn factor_sparse<T: Entry>(
     Ok(())
 }
 
-/// Solves A x = b in place with the factors of [`factor_sparse`], whose columns' patterns are
-/// `starts` (m = `b.len()`).
+/// Solves A X = B in place with the factors of [`factor_sparse`], whose columns' patterns are
+/// `starts`, for the `q` right-hand sides of `b`, row by row (row i's q values at
+/// `b[i q..(i + 1) q]`; m = `piv.len()`): one pass over the factors for all of them, each row
+/// operation over q values side by side. A row of zeros is skipped.
 fn solve_sparse<T: Entry>(
+    lu: &[T],
+    piv: &[usize],
+    pattern: (&[(usize, usize, usize)], &[usize]),
+    b: &mut [T],
+    q: usize,
+) {
+    // one right-hand side (the state's Newton solves) compiled apart: no loops of length q
+    if q == 1 {
+        solve_sparse_q(lu, piv, pattern, b, 1)
+    } else {
+        solve_sparse_q(lu, piv, pattern, b, q)
+    }
+}
+
+#[inline(always)]
+fn solve_sparse_q<T: Entry>(
     lu: &[T],
     piv: &[usize],
     (starts, rows): (&[(usize, usize, usize)], &[usize]),
     b: &mut [T],
+    q: usize,
 ) {
-    let (m, zero) = (b.len(), T::from(0.0));
+    let (m, zero) = (piv.len(), T::from(0.0));
     for (k, &p) in piv.iter().enumerate() {
-        b.swap(k, p);
+        if p != k {
+            let (head, tail) = b.split_at_mut(p * q);
+            head[k * q..(k + 1) * q].swap_with_slice(&mut tail[..q]);
+        }
     }
     for (k, &(lo, mid, _)) in starts.iter().enumerate() {
-        let bk = b[k];
-        if bk != zero {
-            for &i in &rows[lo..mid] {
-                b[i] = b[i] - lu[k * m + i] * bk;
+        let (head, below) = b.split_at_mut((k + 1) * q);
+        let bk = &head[k * q..];
+        if bk.iter().all(|&v| v == zero) {
+            continue;
+        }
+        for &i in &rows[lo..mid] {
+            let l = lu[k * m + i];
+            for (bi, &v) in below[(i - k - 1) * q..(i - k) * q].iter_mut().zip(bk) {
+                *bi = *bi - l * v;
             }
         }
     }
     for (k, &(_, mid, hi)) in starts.iter().enumerate().rev() {
-        let bk = b[k] * lu[k * m + k];
-        b[k] = bk;
-        if bk != zero {
-            for &i in &rows[mid..hi] {
-                b[i] = b[i] - lu[k * m + i] * bk;
+        let (above, tail) = b.split_at_mut(k * q);
+        let bk = &mut tail[..q];
+        let d = lu[k * m + k];
+        for v in bk.iter_mut() {
+            *v = *v * d;
+        }
+        if bk.iter().all(|&v| v == zero) {
+            continue;
+        }
+        for &i in &rows[mid..hi] {
+            let u = lu[k * m + i];
+            for (bi, &v) in above[i * q..(i + 1) * q].iter_mut().zip(bk.iter()) {
+                *bi = *bi - u * v;
             }
         }
     }
@@ -369,7 +404,7 @@ impl<T: Entry> BlockLu<T> {
             );
             if m > UNROLLED {
                 let starts = &self.pattern.starts[sparse_at..sparse_at + m];
-                solve_sparse(lu, piv, (starts, &self.pattern.rows), b);
+                solve_sparse(lu, piv, (starts, &self.pattern.rows), b, 1);
                 sparse_at += m;
             } else {
                 solve(lu, piv, b);
@@ -414,10 +449,11 @@ impl SparseLu {
         factor_sparse(&mut self.lu, &mut self.piv, &mut self.pattern)
     }
 
-    /// Solves A x = b in place with the factors.
-    pub fn solve(&self, b: &mut [f64]) {
+    /// Solves A X = B in place with the factors for the `q` right-hand sides of `b`, row by
+    /// row (row i's q values side by side).
+    pub fn solve(&self, b: &mut [f64], q: usize) {
         let p = &self.pattern;
-        solve_sparse(&self.lu, &self.piv, (&p.starts, &p.rows), b);
+        solve_sparse(&self.lu, &self.piv, (&p.starts, &p.rows), b, q);
     }
 }
 
@@ -494,7 +530,8 @@ mod tests {
     }
 
     /// An arrowhead (the sparse rows and columns first, the dense part last), with a pivot
-    /// that swaps a dense row up: the sparse factors solve it as the dense ones do.
+    /// that swaps a dense row up: the sparse factors solve it as the dense ones do, and
+    /// several right-hand sides at once each as it is solved alone, to the bit.
     #[test]
     fn sparse_factors_solve_as_the_dense_ones() {
         let n = 12;
@@ -520,9 +557,18 @@ mod tests {
         }
         lu.factor().unwrap();
         let mut rhs = b.as_slice().to_vec();
-        lu.solve(&mut rhs);
+        lu.solve(&mut rhs, 1);
         for i in 0..n {
             assert!((rhs[i] - x[i]).abs() < 1e-12, "{rhs:?}");
+        }
+        // three right-hand sides at once, one of them zero: each as it is solved alone
+        let b2 = b.map(|v| 2.0 * v - 1.0);
+        let mut alone = b2.as_slice().to_vec();
+        lu.solve(&mut alone, 1);
+        let mut many: Vec<f64> = (0..n).flat_map(|i| [b[i], 0.0, b2[i]]).collect();
+        lu.solve(&mut many, 3);
+        for i in 0..n {
+            assert_eq!(many[3 * i..3 * i + 3], [rhs[i], 0.0, alone[i]]);
         }
         let mut singular = SparseLu::default();
         singular.start(2);

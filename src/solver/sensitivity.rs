@@ -60,12 +60,15 @@ pub struct Sensitivities {
     lu: lu::SparseLu,
     order: Vec<usize>,
     pos: Vec<usize>,
-    /// One parameter's stage increments of one block, in the order of the equations; the
-    /// increments σ (3 n per parameter, block by block, each block stage by stage).
+    /// The parameters whose σ on one block is not zero, solved together: their s there, state
+    /// by state, and J_l s + ∂f/∂θ_j (Y_l) there, per state and stage (l = 0, 1, 2), side by
+    /// side; their stage increments in the order of the equations, each row side by side.
+    active: Vec<usize>,
+    s_block: Vec<f64>,
+    g: Vec<f64>,
     x: Vec<f64>,
+    /// The increments σ (3 n per parameter, block by block, each block stage by stage).
     sigma: Vec<f64>,
-    /// J_l s + ∂f/∂θ_j (Y_l) of one block, per state (l = 0, 1, 2).
-    g: Vec<[f64; 3]>,
 }
 
 impl Sensitivities {
@@ -92,9 +95,11 @@ impl Sensitivities {
             lu: lu::SparseLu::default(),
             order: Vec::with_capacity(n),
             pos: Vec::with_capacity(n),
-            x: vec![0.0; 3 * n],
+            active: Vec::with_capacity(m),
+            s_block: Vec::with_capacity(n * m),
+            g: Vec::with_capacity(3 * n * m),
+            x: Vec::with_capacity(3 * n * m),
             sigma: vec![0.0; 3 * n * m],
-            g: vec![[0.0; 3]; n],
         }
     }
 
@@ -159,44 +164,7 @@ impl Sensitivities {
             self.lu
                 .factor()
                 .map_err(|lu::Singular(row)| SensitivityError::Singular { t: t_end, row })?;
-            for j in 0..m {
-                let untouched = self.untouched(j, o..o + mb);
-                let b = &mut self.sigma[j * 3 * n + 3 * o..j * 3 * n + 3 * o + dim];
-                if untouched {
-                    // a parameter of another block: its σ here solves a zero right-hand side
-                    b.fill(0.0);
-                    continue;
-                }
-                // g_l = J_l s + ∂f/∂θ_j (Y_l) on this block; right-hand side h Σ_l a_kl g_l
-                let g = &mut self.g[..mb];
-                let s = &self.s[j * n + o..j * n + o + mb];
-                for (l, entries) in self.nz.iter().enumerate() {
-                    for (r, gr) in g.iter_mut().enumerate() {
-                        gr[l] = self.stage_fp[l * n * m + j * n + o + r];
-                    }
-                    // J_l s over J_l's nonzeros, column by column
-                    for &(r, c, jrc) in entries {
-                        let sc = s[c];
-                        if sc != 0.0 {
-                            g[r][l] += jrc * sc;
-                        }
-                    }
-                }
-                let x = &mut self.x[..dim];
-                for (r, gr) in g.iter().enumerate() {
-                    for k in 0..3 {
-                        x[3 * self.pos[r] + k] =
-                            h * (A[k][0] * gr[0] + A[k][1] * gr[1] + A[k][2] * gr[2]);
-                    }
-                }
-                self.lu.solve(x);
-                // σ block by block, each block stage by stage
-                for r in 0..mb {
-                    for k in 0..3 {
-                        b[k * mb + r] = x[3 * self.pos[r] + k];
-                    }
-                }
-            }
+            self.solve_block(o, mb, h);
             o += mb;
         }
         // commit: s ← s + σ_3 and the collocation polynomial, as the state's
@@ -225,6 +193,66 @@ impl Sensitivities {
         self.h_old = h;
         self.have_poly = true;
         Ok(())
+    }
+
+    /// The stage increments σ on the block of `mb` states from `o`, its stage equations
+    /// factored, of every parameter at once: the right-hand sides h Σ_l a_kl g_l with
+    /// g_l = J_l s + ∂f/∂θ_j (Y_l), the products over J_l's nonzeros, solved in one pass. A
+    /// parameter of another block (its s and ∂f/∂θ zero here) has σ = 0 here.
+    fn solve_block(&mut self, o: usize, mb: usize, h: f64) {
+        let (n, m, dim) = (self.n, self.m, 3 * mb);
+        self.active.clear();
+        for j in 0..m {
+            if self.untouched(j, o..o + mb) {
+                self.sigma[j * 3 * n + 3 * o..j * 3 * n + 3 * o + dim].fill(0.0);
+            } else {
+                self.active.push(j);
+            }
+        }
+        let q = self.active.len();
+        if q == 0 {
+            return;
+        }
+        let (s_block, g) = (&mut self.s_block, &mut self.g);
+        s_block.resize(mb * q, 0.0);
+        g.resize(3 * mb * q, 0.0);
+        for (a, &j) in self.active.iter().enumerate() {
+            for r in 0..mb {
+                s_block[r * q + a] = self.s[j * n + o + r];
+                for l in 0..3 {
+                    g[(3 * r + l) * q + a] = self.stage_fp[l * n * m + j * n + o + r];
+                }
+            }
+        }
+        for (l, entries) in self.nz.iter().enumerate() {
+            for &(r, c, jrc) in entries {
+                let gr = &mut g[(3 * r + l) * q..(3 * r + l + 1) * q];
+                for (g, &sc) in gr.iter_mut().zip(&s_block[c * q..(c + 1) * q]) {
+                    *g += jrc * sc;
+                }
+            }
+        }
+        let x = &mut self.x;
+        x.resize(dim * q, 0.0);
+        for r in 0..mb {
+            for k in 0..3 {
+                let row = &mut x[(3 * self.pos[r] + k) * q..(3 * self.pos[r] + k + 1) * q];
+                for (a, xa) in row.iter_mut().enumerate() {
+                    let gl = |l: usize| g[(3 * r + l) * q + a];
+                    *xa = h * (A[k][0] * gl(0) + A[k][1] * gl(1) + A[k][2] * gl(2));
+                }
+            }
+        }
+        self.lu.solve(x, q);
+        // σ block by block, each block stage by stage
+        for (a, &j) in self.active.iter().enumerate() {
+            let b = &mut self.sigma[j * 3 * n + 3 * o..j * 3 * n + 3 * o + dim];
+            for r in 0..mb {
+                for k in 0..3 {
+                    b[k * mb + r] = x[(3 * self.pos[r] + k) * q + a];
+                }
+            }
+        }
     }
 
     /// The nonzeros of the block of `mb` states from `o` of each stage's Jacobian into `nz`:
