@@ -121,12 +121,15 @@ impl Problem<'_> {
                         Channel::H(i) => i,
                         Channel::Tip(i) => 3 + i,
                     };
-                    for k in 0..exp.t.len() {
-                        for j in 0..x.len() {
-                            jac[(row, j)] = f * runs[j / part].output(k, j % part)[o];
+                    // column by column: the Jacobian is stored so
+                    for j in 0..x.len() {
+                        let (run, jj) = (&runs[j / part], j % part);
+                        let mut column = jac.column_mut(j);
+                        for k in 0..exp.t.len() {
+                            column[row + k] = f * run.output(k, jj)[o];
                         }
-                        row += 1;
                     }
+                    row += exp.t.len();
                 }
             }
         }

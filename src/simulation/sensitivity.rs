@@ -164,14 +164,15 @@ impl Observer for Follower<'_> {
         self.read.sort_unstable();
         self.read.dedup();
         self.sens.interpolate(sample.t, &self.read, &mut self.s);
-        let y = self.base.outputs(x);
+        // the outputs themselves only where a direction moves their map
+        let y = (!self.same_map.iter().all(|&same| same)).then(|| self.base.outputs(x));
         for (j, (model, step)) in self.models.iter().zip(self.steps).enumerate() {
             let s = &self.s[j * n..(j + 1) * n];
             let mut d = [0.0; 6];
             for &(o, c, v) in &self.dg {
                 d[o] += v * s[c];
             }
-            if !self.same_map[j] {
+            if let (false, Some(y)) = (self.same_map[j], &y) {
                 let yj = model.outputs(x);
                 for o in 0..6 {
                     d[o] += (yj[o] - y[o]) / step;
