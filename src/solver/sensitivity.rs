@@ -226,20 +226,27 @@ impl Sensitivities {
         }
         for (l, entries) in self.nz.iter().enumerate() {
             for &(r, c, jrc) in entries {
+                let sc = &s_block[c * q..(c + 1) * q];
+                if sc.iter().all(|&v| v == 0.0) {
+                    continue;
+                }
                 let gr = &mut g[(3 * r + l) * q..(3 * r + l + 1) * q];
-                for (g, &sc) in gr.iter_mut().zip(&s_block[c * q..(c + 1) * q]) {
+                for (g, &sc) in gr.iter_mut().zip(sc) {
                     *g += jrc * sc;
                 }
             }
         }
         let x = &mut self.x;
         x.resize(dim * q, 0.0);
-        for r in 0..mb {
-            for k in 0..3 {
-                let row = &mut x[(3 * self.pos[r] + k) * q..(3 * self.pos[r] + k + 1) * q];
-                for (a, xa) in row.iter_mut().enumerate() {
-                    let gl = |l: usize| g[(3 * r + l) * q + a];
-                    *xa = h * (A[k][0] * gl(0) + A[k][1] * gl(1) + A[k][2] * gl(2));
+        for (r, gr) in g.chunks_exact(3 * q).enumerate() {
+            let (g0, g12) = gr.split_at(q);
+            let (g1, g2) = g12.split_at(q);
+            for (k, a_k) in A.iter().enumerate() {
+                let row = 3 * self.pos[r] + k;
+                for (((xa, &g0), &g1), &g2) in
+                    x[row * q..(row + 1) * q].iter_mut().zip(g0).zip(g1).zip(g2)
+                {
+                    *xa = h * (a_k[0] * g0 + a_k[1] * g1 + a_k[2] * g2);
                 }
             }
         }
