@@ -77,12 +77,12 @@ fn factor<T: Entry>(a: &mut [T], piv: &mut [usize]) -> Result<(), Singular> {
 
 // The loops run over the whole block with the triangle as a condition inside: with m a
 // constant, the compiler then unrolls them all and drops the conditions, which it does not do
-// for loops that start at k + 1. (Larger blocks go to [`factor_sparse`].)
+// for loops that start at k + 1. (Larger blocks go to an [`Elimination`].)
 #[inline(always)]
 fn factor_m<T: Entry>(m: usize, a: &mut [T], piv: &mut [usize]) -> Result<(), Singular> {
     let (a, piv) = (&mut a[..m * m], &mut piv[..m]);
     for k in 0..m {
-        piv[k] = pivot(a, m, k, 0)?;
+        piv[k] = pivot(a, m, k)?;
         let inv = a[k * m + k].recip();
         a[k * m + k] = inv;
         for i in 0..m {
@@ -106,13 +106,13 @@ fn factor_m<T: Entry>(m: usize, a: &mut [T], piv: &mut [usize]) -> Result<(), Si
 
 /// Partial pivoting at column k of the m × m matrix `a`: the row of the column's largest entry
 /// at or below the diagonal (the first of equal ones), swapped with row k across the matrix.
-/// Rows from `from` are searched, those above k not counted: 0 lets the compiler unroll the
-/// whole column of a block of constant size.
+/// The whole column is searched, the rows above k not counted, so that the compiler unrolls
+/// it for a block of constant size.
 #[inline(always)]
-fn pivot<T: Entry>(a: &mut [T], m: usize, k: usize, from: usize) -> Result<usize, Singular> {
+fn pivot<T: Entry>(a: &mut [T], m: usize, k: usize) -> Result<usize, Singular> {
     let mut p = k;
     let mut best = a[k * m + k].norm1();
-    for i in from..m {
+    for i in 0..m {
         let v = a[k * m + i].norm1();
         if i > k && v > best {
             best = v;
@@ -157,113 +157,254 @@ fn solve_m<T: Entry>(m: usize, lu: &[T], piv: &[usize], b: &mut [T]) {
     }
 }
 
-/// Where the nonzeros of a matrix factored by [`factor_sparse`] are. Before the factoring, each
-/// row's columns that may hold one, a bit each (`words` per row): the elimination reads row k
-/// right of the pivot through them rather than across every column (a read per column, a
-/// cache line apart). After it, per column k, the rows of its nonzeros below the diagonal (L)
-/// and above it (U), at `rows[starts[k].0..starts[k].1]` and `rows[starts[k].1..starts[k].2]`,
-/// which the solves follow.
+/// Where the nonzeros of factors made by an [`Elimination`] may be: per column k, the rows
+/// below the diagonal (L) and above it (U), at `rows[starts[k].0..starts[k].1]` and
+/// `rows[starts[k].1..starts[k].2]`, which the solves follow.
 #[derive(Clone, Debug, Default, Serialize, Deserialize)]
 struct Pattern {
-    #[serde(skip)]
-    bits: Vec<u64>,
-    #[serde(skip)]
-    words: usize,
-    /// Scratch: the rows column k eliminates.
-    #[serde(skip)]
-    eliminated: Vec<usize>,
     starts: Vec<(usize, usize, usize)>,
     rows: Vec<usize>,
 }
 
-impl Pattern {
-    /// No entry yet of an m × m matrix (the factors' pattern of earlier blocks is kept).
-    fn clear_bits(&mut self, m: usize) {
-        self.words = m.div_ceil(64);
-        self.bits.clear();
-        self.bits.resize(m * self.words, 0);
-    }
-
-    fn mark(&mut self, row: usize, col: usize) {
-        self.bits[row * self.words + col / 64] |= 1 << (col % 64);
-    }
+/// One step k of an [`Elimination`]: the pivot's row and the ends of the step's lists.
+#[derive(Clone, Copy, Debug)]
+struct Step {
+    pivot: usize,
+    rows: usize,
+    cols: usize,
+    swaps: usize,
 }
 
-/// Factors the m × m matrix `a` (column-major, m = `piv.len()`) into P A = L U in place as
-/// [`factor`] does, with partial pivoting, the entries given in `pattern`'s bits; the factors'
-/// pattern is appended to `pattern` for [`solve_sparse`]. Only the nonzeros are eliminated and
-/// substituted, so that a block whose sparsest rows and columns come first (an effect's own
-/// states, coupled to the actuator's few) costs little more than its dense part; the results
-/// are [`factor`]'s, whose other products are by zero.
-fn factor_sparse<T: Entry>(
-    a: &mut [T],
-    piv: &mut [usize],
-    pattern: &mut Pattern,
-) -> Result<(), Singular> {
-    let (m, w) = (piv.len(), pattern.words);
-    let zero = T::from(0.0);
-    let mut rows = std::mem::take(&mut pattern.eliminated);
-    for k in 0..m {
-        let p = pivot(a, m, k, k + 1)?;
-        piv[k] = p;
-        if p != k {
-            for q in 0..w {
-                pattern.bits.swap(k * w + q, p * w + q);
+/// The elimination of a matrix with many zeros (LU with partial pivoting), kept so that the
+/// next matrix of the same pattern is factored by repeating it over the same entries (the
+/// symbolic work done once, the numeric many times): the sensitivities' stage equations and
+/// the iteration matrices of a step keep their pattern and, mostly, their pivots from step to
+/// step. Where a pivot differs the elimination is made again, so that the factors are always
+/// those of partial pivoting ([`factor`]'s, whose other products are by zero).
+#[derive(Clone, Debug, Default)]
+struct Elimination {
+    /// The order of the matrix it was made for (0: none yet, or it ended singular) and that
+    /// matrix's entries, their positions c m + r in the order given.
+    m: usize,
+    given: Vec<usize>,
+    steps: Vec<Step>,
+    /// Per step k: the rows below the diagonal of column k that may hold nonzeros (the pivot's
+    /// candidates, then the rows eliminated), the columns right of the diagonal of row k that
+    /// may, and the columns where the two rows the pivot swaps may.
+    rows: Vec<usize>,
+    cols: Vec<usize>,
+    swaps: Vec<usize>,
+    /// The factors' pattern.
+    factors: Pattern,
+    /// Scratch of [`Elimination::make`]: each row's columns that may hold a nonzero, a bit each.
+    bits: Vec<u64>,
+}
+
+impl Elimination {
+    /// Factors the m × m matrix `a` (column-major, m = `piv.len()`), zero but at the positions
+    /// `given`, into P A = L U in place as [`factor`] does, the diagonal holding 1/U_kk: by
+    /// repeating the kept elimination when it was made for this pattern, as far as partial
+    /// pivoting picks its pivots again, and by a new one from there on.
+    fn factor<T: Entry>(
+        &mut self,
+        a: &mut [T],
+        piv: &mut [usize],
+        given: &[usize],
+    ) -> Result<(), Singular> {
+        let from = if self.m == piv.len() && self.given == given {
+            match self.repeat(a, piv) {
+                Ok(()) => return Ok(()),
+                Err(k) => k,
             }
-        }
-        let (left, right) = a.split_at_mut((k + 1) * m);
-        let col = &mut left[k * m..];
-        let inv = col[k].recip();
-        col[k] = inv;
-        rows.clear();
-        for (i, v) in col.iter_mut().enumerate().skip(k + 1) {
-            if *v != zero {
-                *v = *v * inv;
-                rows.push(i);
+        } else {
+            0
+        };
+        self.make(a, piv, given, from)
+    }
+
+    /// The kept elimination over `a`, or the first step k whose pivot partial pivoting picks
+    /// otherwise (or finds none): `a` is then eliminated up to k.
+    fn repeat<T: Entry>(&self, a: &mut [T], piv: &mut [usize]) -> Result<(), usize> {
+        let m = self.m;
+        let (mut rows_at, mut cols_at, mut swaps_at) = (0, 0, 0);
+        for (k, step) in self.steps.iter().enumerate() {
+            let rows = &self.rows[rows_at..step.rows];
+            let cols = &self.cols[cols_at..step.cols];
+            let swaps = &self.swaps[swaps_at..step.swaps];
+            (rows_at, cols_at, swaps_at) = (step.rows, step.cols, step.swaps);
+            if pivot_of(a, m, k, rows) != Some(step.pivot) {
+                return Err(k);
             }
-        }
-        // the rows eliminated fill in where row k has entries
-        let (above, below) = pattern.bits.split_at_mut((k + 1) * w);
-        let row_k = &above[k * w..];
-        for &i in &rows {
-            for (b, &rk) in below[(i - k - 1) * w..(i - k) * w].iter_mut().zip(row_k) {
-                *b |= rk;
+            piv[k] = step.pivot;
+            for &j in swaps {
+                a.swap(j * m + k, j * m + step.pivot);
             }
+            eliminate(a, m, k, rows, cols);
         }
-        for (q, &word) in row_k.iter().enumerate().skip((k + 1) / 64) {
-            let mut bits = if q == (k + 1) / 64 {
-                word & (u64::MAX << ((k + 1) % 64))
-            } else {
-                word
-            };
-            while bits != 0 {
-                let j = q * 64 + bits.trailing_zeros() as usize;
-                bits &= bits - 1;
-                let col_j = &mut right[(j - k - 1) * m..(j - k) * m];
-                let akj = col_j[k];
-                if akj != zero {
-                    for &i in &rows {
-                        col_j[i] = col_j[i] - col[i] * akj;
-                    }
+        Ok(())
+    }
+
+    /// A new elimination of `a` from step `from` on (its steps before kept, `a` eliminated up
+    /// to there), made and kept: each row's pattern as bits, column k's rows that may be
+    /// nonzero read off them, row k's pattern right of the pivot added to the rows it
+    /// eliminates.
+    fn make<T: Entry>(
+        &mut self,
+        a: &mut [T],
+        piv: &mut [usize],
+        given: &[usize],
+        from: usize,
+    ) -> Result<(), Singular> {
+        let m = piv.len();
+        let w = m.div_ceil(64);
+        self.m = 0;
+        let Elimination {
+            given: kept,
+            steps,
+            rows,
+            cols,
+            swaps,
+            factors,
+            bits,
+            ..
+        } = self;
+        kept.clear();
+        kept.extend_from_slice(given);
+        let bit = |bits: &[u64], row: usize, col: usize| {
+            bits[row * w + col / 64] & (1 << (col % 64)) != 0
+        };
+        let mark =
+            |bits: &mut [u64], row: usize, col: usize| bits[row * w + col / 64] |= 1 << (col % 64);
+        let fill = |bits: &mut [u64], rows: &[usize], cols: &[usize]| {
+            for &i in rows {
+                for &j in cols {
+                    mark(bits, i, j);
                 }
             }
+        };
+        bits.clear();
+        bits.resize(m * w, 0);
+        for &at in given {
+            mark(bits, at % m, at / m);
         }
+        for k in 0..m {
+            mark(bits, k, k);
+        }
+        // the pattern as the kept steps left it
+        steps.truncate(from);
+        let ends = steps
+            .last()
+            .map_or((0, 0, 0), |s| (s.rows, s.cols, s.swaps));
+        rows.truncate(ends.0);
+        cols.truncate(ends.1);
+        swaps.truncate(ends.2);
+        let (mut rows_at, mut cols_at) = (0, 0);
+        for (k, step) in steps.iter().enumerate() {
+            for q in 0..w {
+                bits.swap(k * w + q, step.pivot * w + q);
+            }
+            fill(bits, &rows[rows_at..step.rows], &cols[cols_at..step.cols]);
+            (rows_at, cols_at) = (step.rows, step.cols);
+        }
+        for (k, pk) in piv.iter_mut().enumerate().skip(from) {
+            let rows_from = rows.len();
+            rows.extend((k + 1..m).filter(|&i| bit(bits, i, k)));
+            let p = pivot_of(a, m, k, &rows[rows_from..]).ok_or(Singular(k))?;
+            *pk = p;
+            if p != k {
+                let from = swaps.len();
+                swaps.extend((0..m).filter(|&j| bit(bits, k, j) || bit(bits, p, j)));
+                for &j in &swaps[from..] {
+                    a.swap(j * m + k, j * m + p);
+                }
+                for q in 0..w {
+                    bits.swap(k * w + q, p * w + q);
+                }
+            }
+            let cols_from = cols.len();
+            cols.extend((k + 1..m).filter(|&j| bit(bits, k, j)));
+            // the rows eliminated fill in where row k has entries right of the pivot
+            fill(bits, &rows[rows_from..], &cols[cols_from..]);
+            eliminate(a, m, k, &rows[rows_from..], &cols[cols_from..]);
+            steps.push(Step {
+                pivot: p,
+                rows: rows.len(),
+                cols: cols.len(),
+                swaps: swaps.len(),
+            });
+        }
+        // the factors' pattern: a later pivot's swap moved the rows of earlier columns, with
+        // their bits
+        factors.starts.clear();
+        factors.rows.clear();
+        for k in 0..m {
+            let start = factors.rows.len();
+            factors.rows.extend((k + 1..m).filter(|&i| bit(bits, i, k)));
+            let mid = factors.rows.len();
+            factors.rows.extend((0..k).filter(|&i| bit(bits, i, k)));
+            factors.starts.push((start, mid, factors.rows.len()));
+        }
+        self.m = m;
+        Ok(())
     }
-    // the pattern the solves follow, read off the final factors (a later pivot's swap moves
-    // the rows of earlier columns)
-    for k in 0..m {
-        let col = &a[k * m..(k + 1) * m];
-        let start = pattern.rows.len();
-        pattern.rows.extend((k + 1..m).filter(|&i| col[i] != zero));
-        let mid = pattern.rows.len();
-        pattern.rows.extend((0..k).filter(|&i| col[i] != zero));
-        pattern.starts.push((start, mid, pattern.rows.len()));
-    }
-    pattern.eliminated = rows;
-    Ok(())
 }
 
-/// Solves A X = B in place with the factors of [`factor_sparse`], whose columns' patterns are
+/// Partial pivoting's row at column k of `a` (m × m, column-major), whose entries below the
+/// diagonal are zero but in `rows` (ascending): the row of the largest entry at or below the
+/// diagonal, the first of equal ones as [`pivot`] picks it; none where all are zero.
+#[inline(always)]
+fn pivot_of<T: Entry>(a: &[T], m: usize, k: usize, rows: &[usize]) -> Option<usize> {
+    let (mut p, mut best) = (k, a[k * m + k].norm1());
+    for &i in rows {
+        let v = a[k * m + i].norm1();
+        if v > best {
+            best = v;
+            p = i;
+        }
+    }
+    (best != 0.0 && best.is_finite()).then_some(p)
+}
+
+/// Step k of the elimination of `a` (m × m, column-major, row k the pivot's): column k's
+/// `rows` scaled by 1/U_kk, which the diagonal keeps, and subtracted from the columns `cols`
+/// right of it (a product by a zero of row k skipped, as the dense code's is by zero).
+#[inline(always)]
+fn eliminate<T: Entry>(a: &mut [T], m: usize, k: usize, rows: &[usize], cols: &[usize]) {
+    let zero = T::from(0.0);
+    let (left, right) = a.split_at_mut((k + 1) * m);
+    let col = &mut left[k * m..];
+    let inv = col[k].recip();
+    col[k] = inv;
+    for &i in rows {
+        let v = col[i];
+        if v != zero {
+            col[i] = v * inv;
+        }
+    }
+    for &j in cols {
+        let col_j = &mut right[(j - k - 1) * m..(j - k) * m];
+        let akj = col_j[k];
+        if akj != zero {
+            for &i in rows {
+                col_j[i] = col_j[i] - col[i] * akj;
+            }
+        }
+    }
+}
+
+/// Sets the entries of `a` (m × m, column-major) where factors of `pattern` may be nonzero, the
+/// diagonal among them, to zero: `a` is then zero everywhere.
+fn clear<T: Entry>(a: &mut [T], pattern: &Pattern) {
+    let m = pattern.starts.len();
+    for (k, &(lo, _, hi)) in pattern.starts.iter().enumerate() {
+        a[k * m + k] = T::from(0.0);
+        for &i in &pattern.rows[lo..hi] {
+            a[k * m + i] = T::from(0.0);
+        }
+    }
+}
+
+/// Solves A X = B in place with the factors of an [`Elimination`], whose columns' patterns are
 /// `starts`, for the `q` right-hand sides of `b`, row by row (row i's q values at
 /// `b[i q..(i + 1) q]`; m = `piv.len()`): one pass over the factors for all of them, each row
 /// operation over q values side by side. A row of zeros is skipped.
@@ -337,9 +478,15 @@ pub struct BlockLu<T> {
     blocks: Vec<usize>,
     lu: Vec<T>,
     piv: Vec<usize>,
-    /// The nonzeros of the blocks larger than [`UNROLLED`] (an effect's states beside the
-    /// actuator's), one after another, factored and solved sparse.
+    /// The factors' patterns of the blocks larger than [`UNROLLED`] (an effect's states beside
+    /// the actuator's), one after another: those blocks are factored and solved sparse.
     pattern: Pattern,
+    /// Their eliminations, one per such block, and the scratch of a block's pattern (a restored
+    /// state makes them anew at its next factorization).
+    #[serde(skip)]
+    eliminations: Vec<Elimination>,
+    #[serde(skip)]
+    given: Vec<usize>,
 }
 
 impl<T: Entry> BlockLu<T> {
@@ -349,6 +496,8 @@ impl<T: Entry> BlockLu<T> {
             piv: vec![0; blocks.iter().sum()],
             blocks,
             pattern: Pattern::default(),
+            eliminations: Vec::new(),
+            given: Vec::new(),
         }
     }
 
@@ -360,33 +509,37 @@ impl<T: Entry> BlockLu<T> {
     /// are not read). A singular block reports its column in J.
     pub fn factor_shifted(&mut self, sigma: T, jac: &[f64]) -> Result<(), Singular> {
         let n = self.piv.len();
-        let (mut o, mut at) = (0, 0);
-        let pattern = &mut self.pattern;
-        pattern.starts.clear();
-        pattern.rows.clear();
+        let (mut o, mut at, mut sparse) = (0, 0, 0);
+        self.pattern.starts.clear();
+        self.pattern.rows.clear();
         for &m in &self.blocks {
             let a = &mut self.lu[at..at + m * m];
-            let sparse = m > UNROLLED;
-            if sparse {
-                pattern.clear_bits(m);
-            }
-            for c in 0..m {
-                let col = &jac[(o + c) * n + o..(o + c) * n + o + m];
-                for (r, &v) in col.iter().enumerate() {
-                    a[c * m + r] = T::from(-v);
-                    if sparse && (v != 0.0 || r == c) {
-                        pattern.mark(r, c);
-                    }
-                }
-                a[c * m + c] = a[c * m + c] + sigma;
-            }
             let piv = &mut self.piv[o..o + m];
-            if sparse {
-                factor_sparse(a, piv, pattern)
+            shifted(a, sigma, jac, n, o);
+            if m > UNROLLED {
+                self.given.clear();
+                for c in 0..m {
+                    let col = &jac[(o + c) * n + o..(o + c) * n + o + m];
+                    let nonzero = col.iter().enumerate().filter(|&(r, &v)| v != 0.0 || r == c);
+                    self.given.extend(nonzero.map(|(r, _)| c * m + r));
+                }
+                if self.eliminations.len() == sparse {
+                    self.eliminations.push(Elimination::default());
+                }
+                let elimination = &mut self.eliminations[sparse];
+                elimination
+                    .factor(a, piv, &self.given)
+                    .map_err(|Singular(k)| Singular(o + k))?;
+                let (factors, base) = (&elimination.factors, self.pattern.rows.len());
+                let shift = |(lo, mid, hi)| (base + lo, base + mid, base + hi);
+                self.pattern
+                    .starts
+                    .extend(factors.starts.iter().map(|&s| shift(s)));
+                self.pattern.rows.extend_from_slice(&factors.rows);
+                sparse += 1;
             } else {
-                factor(a, piv)
+                factor(a, piv).map_err(|Singular(k)| Singular(o + k))?;
             }
-            .map_err(|Singular(k)| Singular(o + k))?;
             o += m;
             at += m * m;
         }
@@ -415,44 +568,71 @@ impl<T: Entry> BlockLu<T> {
     }
 }
 
+/// The diagonal block of σ I − J from row and column `o` into `a` (its size m × m,
+/// column-major), J dense column-major n × n.
+fn shifted<T: Entry>(a: &mut [T], sigma: T, jac: &[f64], n: usize, o: usize) {
+    let m = a.len().isqrt();
+    for c in 0..m {
+        let col = &jac[(o + c) * n + o..(o + c) * n + o + m];
+        for (entry, &v) in a[c * m..(c + 1) * m].iter_mut().zip(col) {
+            *entry = T::from(-v);
+        }
+        a[c * m + c] = a[c * m + c] + sigma;
+    }
+}
+
 /// The LU factors (P A = L U) of a real m × m matrix with many zeros, in dense storage: the
-/// elimination and the solves touch only the nonzeros ([`factor_sparse`]), so a matrix whose
+/// elimination and the solves touch only the nonzeros ([`Elimination`]), so a matrix whose
 /// rows and columns are ordered with the sparsest first (an effect's own states in the
-/// sensitivities' stage equations) costs little more than its dense part.
+/// sensitivities' stage equations) costs little more than its dense part, and the next matrix
+/// of the same pattern repeats the elimination.
 #[derive(Clone, Debug, Default)]
 pub(super) struct SparseLu {
     /// Column-major; after [`SparseLu::factor`] L below the diagonal, U above, 1/U_kk on it.
     lu: Vec<f64>,
     piv: Vec<usize>,
-    pattern: Pattern,
+    /// The positions c m + r of the entries [`SparseLu::set`] gave.
+    given: Vec<usize>,
+    elimination: Elimination,
 }
 
 impl SparseLu {
     /// Starts an m × m matrix to factor, zero but for the entries [`SparseLu::set`] then gives.
     pub fn start(&mut self, m: usize) {
-        self.lu.clear();
-        self.lu.resize(m * m, 0.0);
-        self.piv.resize(m, 0);
-        self.pattern.clear_bits(m);
+        if self.piv.len() == m && self.elimination.m == m {
+            // the last factors are nonzero only where their pattern says
+            clear(&mut self.lu, &self.elimination.factors);
+        } else {
+            self.lu.clear();
+            self.lu.resize(m * m, 0.0);
+            self.piv.resize(m, 0);
+        }
+        self.given.clear();
     }
 
     /// Entry (`row`, `col`) of the matrix to factor.
     pub fn set(&mut self, row: usize, col: usize, v: f64) {
-        self.lu[col * self.piv.len() + row] = v;
-        self.pattern.mark(row, col);
+        let at = col * self.piv.len() + row;
+        self.lu[at] = v;
+        self.given.push(at);
     }
 
     /// Factors the matrix [`SparseLu::set`] gave, with partial pivoting.
     pub fn factor(&mut self) -> Result<(), Singular> {
-        self.pattern.starts.clear();
-        self.pattern.rows.clear();
-        factor_sparse(&mut self.lu, &mut self.piv, &mut self.pattern)
+        let result = self
+            .elimination
+            .factor(&mut self.lu, &mut self.piv, &self.given);
+        if result.is_err() {
+            // partly eliminated, its pattern not made: the next start clears it all
+            self.piv.clear();
+        }
+        result
     }
 
     /// Solves A X = B in place with the factors for the `q` right-hand sides of `b`, row by
     /// row (row i's q values side by side).
     pub fn solve(&self, b: &mut [f64], q: usize) {
-        let p = &self.pattern;
+        let p = &self.elimination.factors;
         solve_sparse(&self.lu, &self.piv, (&p.starts, &p.rows), b, q);
     }
 }
@@ -616,6 +796,98 @@ mod tests {
         assert_eq!(&sparse[small..], &dense[..]);
         for i in 0..n {
             assert!((sparse[i] - x[i]).norm() < 1e-10, "x{i}: {}", sparse[i]);
+        }
+    }
+
+    /// A solution and the pivots that made it.
+    type Solved = (Vec<f64>, Vec<usize>);
+
+    /// The solution of `m x = b` by the dense factors, and by `lu` given m's nonzeros.
+    fn dense_and_sparse(m: &DMatrix<f64>, b: &DVector<f64>, lu: &mut SparseLu) -> (Solved, Solved) {
+        let n = m.nrows();
+        let (mut a, mut piv, mut dense) =
+            (m.as_slice().to_vec(), vec![0; n], b.as_slice().to_vec());
+        factor(&mut a, &mut piv).unwrap();
+        solve(&a, &piv, &mut dense);
+        lu.start(n);
+        for c in 0..n {
+            for r in 0..n {
+                if m[(r, c)] != 0.0 {
+                    lu.set(r, c, m[(r, c)]);
+                }
+            }
+        }
+        lu.factor().unwrap();
+        let mut sparse = b.as_slice().to_vec();
+        lu.solve(&mut sparse, 1);
+        ((dense, piv), (sparse, lu.piv.clone()))
+    }
+
+    /// A matrix of the pattern an elimination was made for repeats it (the pivots the same),
+    /// repeats it up to the first pivot partial pivoting picks otherwise and eliminates anew
+    /// from there, or (another pattern) is eliminated anew: each time the dense factors'
+    /// solution to the bit.
+    #[test]
+    fn repeated_eliminations_solve_as_new_ones() {
+        let n = 12;
+        let arrow = |scale: f64, big: f64| {
+            let mut m = DMatrix::from_fn(n, n, |r, c| match (r, c) {
+                _ if r == c => 2.0 + r as f64 * 0.1,
+                _ if r >= 8 && c >= 8 => scale * (((r * 3 + c) % 5) as f64 - 2.0),
+                _ if r >= 8 || c >= 8 => scale * (0.5 + ((r + c) % 3) as f64),
+                _ => 0.0,
+            });
+            m[(8, 0)] = 40.0;
+            m[(11, 9)] = big;
+            m
+        };
+        let b = DVector::from_fn(n, |i, _| 1.0 + (i as f64).sin());
+        let mut lu = SparseLu::default();
+        let mut pivots = Vec::new();
+        let mut other_pattern = arrow(1.0, 0.5);
+        other_pattern[(3, 9)] = 0.25;
+        for (m, what) in [
+            (arrow(1.0, 0.5), "made"),
+            (arrow(1.0, 0.6), "repeated"),
+            (arrow(1.0, 90.0), "repeated, then made from column 9"),
+            (other_pattern, "another pattern"),
+        ] {
+            let ((dense, dense_piv), (sparse, piv)) = dense_and_sparse(&m, &b, &mut lu);
+            assert_eq!(sparse, dense, "{what}");
+            assert_eq!(piv, dense_piv, "{what}");
+            pivots.push(piv);
+        }
+        assert_eq!(pivots[0], pivots[1]);
+        assert_eq!(pivots[1][..9], pivots[2][..9]);
+        assert_ne!(pivots[1][9..], pivots[2][9..]);
+    }
+
+    /// [`BlockLu`] factoring σ I − J anew for another σ repeats its blocks' eliminations: the
+    /// dense factors' solution to the bit.
+    #[test]
+    fn block_factors_repeated_for_another_shift_solve_as_the_dense_ones() {
+        let n = 10;
+        let jac = DMatrix::from_fn(n, n, |r, c| match (r, c) {
+            _ if r == c => -1.0 - r as f64,
+            _ if r >= 6 || c >= 6 => 0.3 * ((r + 2 * c) % 4) as f64 - 0.4,
+            _ => 0.0,
+        });
+        let mut lu = BlockLu::new(vec![n]);
+        for sigma in [
+            Complex::new(2.0, 1.0),
+            Complex::new(0.5, -3.0),
+            Complex::new(9.0, 0.1),
+        ] {
+            let shifted = shifted(sigma, &jac);
+            let b = DVector::from_fn(n, |i, _| Complex::new(i as f64, 1.0));
+            lu.factor_shifted(sigma, jac.as_slice()).unwrap();
+            let mut sparse = b.as_slice().to_vec();
+            lu.solve(&mut sparse);
+            let (mut a, mut piv) = (shifted.as_slice().to_vec(), vec![0; n]);
+            factor(&mut a, &mut piv).unwrap();
+            let mut dense = b.as_slice().to_vec();
+            solve(&a, &piv, &mut dense);
+            assert_eq!(sparse, dense, "σ = {sigma}");
         }
     }
 

@@ -55,9 +55,10 @@ pub struct Sensitivities {
     /// column, and which of the block's states they link.
     nz: [Vec<(usize, usize, f64)>; 3],
     linked: Vec<bool>,
-    /// The stage equations of one block, factored; the order of its states in them, and
-    /// each state's place in that order.
-    lu: lu::SparseLu,
+    /// The stage equations of each block, factored (each block's own: the next step's
+    /// repeat its elimination); the order of a block's states in them, and each state's place
+    /// in that order.
+    lu: Vec<lu::SparseLu>,
     order: Vec<usize>,
     pos: Vec<usize>,
     /// The parameters whose σ on one block is not zero, solved together: their s there, state
@@ -92,7 +93,7 @@ impl Sensitivities {
             y_stage: vec![0.0; n],
             nz: Default::default(),
             linked: Vec::new(),
-            lu: lu::SparseLu::default(),
+            lu: Vec::new(),
             order: Vec::with_capacity(n),
             pos: Vec::with_capacity(n),
             active: Vec::with_capacity(m),
@@ -139,11 +140,12 @@ impl Sensitivities {
         }
         // J is block diagonal: each block's states and stages form a system of their own
         let mut o = 0;
-        for &mb in st.blocks {
+        self.lu.resize_with(st.blocks.len(), Default::default);
+        for (b, &mb) in st.blocks.iter().enumerate() {
             let dim = 3 * mb;
             self.block_entries(o, mb);
             self.order_states(mb);
-            let (nz, pos, lu) = (&self.nz, &self.pos, &mut self.lu);
+            let (nz, pos, lu) = (&self.nz, &self.pos, &mut self.lu[b]);
             lu.start(dim);
             // unknown (stage l, state c) at 3 pos[c] + l; equation (stage k, state r) at
             // 3 pos[r] + k: σ_k − h Σ_l a_kl J_l σ_l
@@ -161,10 +163,9 @@ impl Sensitivities {
                     }
                 }
             }
-            self.lu
-                .factor()
+            lu.factor()
                 .map_err(|lu::Singular(row)| SensitivityError::Singular { t: t_end, row })?;
-            self.solve_block(o, mb, h);
+            self.solve_block(b, o, mb, h);
             o += mb;
         }
         // commit: s ← s + σ_3 and the collocation polynomial, as the state's
@@ -195,11 +196,11 @@ impl Sensitivities {
         Ok(())
     }
 
-    /// The stage increments σ on the block of `mb` states from `o`, its stage equations
+    /// The stage increments σ on block `b`, of `mb` states from `o`, its stage equations
     /// factored, of every parameter at once: the right-hand sides h Σ_l a_kl g_l with
     /// g_l = J_l s + ∂f/∂θ_j (Y_l), the products over J_l's nonzeros, solved in one pass. A
     /// parameter of another block (its s and ∂f/∂θ zero here) has σ = 0 here.
-    fn solve_block(&mut self, o: usize, mb: usize, h: f64) {
+    fn solve_block(&mut self, b: usize, o: usize, mb: usize, h: f64) {
         let (n, m, dim) = (self.n, self.m, 3 * mb);
         self.active.clear();
         for j in 0..m {
@@ -250,7 +251,7 @@ impl Sensitivities {
                 }
             }
         }
-        self.lu.solve(x, q);
+        self.lu[b].solve(x, q);
         // σ block by block, each block stage by stage
         for (a, &j) in self.active.iter().enumerate() {
             let b = &mut self.sigma[j * 3 * n + 3 * o..j * 3 * n + 3 * o + dim];
