@@ -862,6 +862,34 @@ mod tests {
         assert_ne!(pivots[1][9..], pivots[2][9..]);
     }
 
+    /// Matrices of one random pattern (a sparse head, a denser tail) with random values, one
+    /// after another through one [`SparseLu`]: whether each repeats the kept elimination or
+    /// meets a pivot partial pivoting picks otherwise and is eliminated anew from there, the
+    /// dense factors' solution and pivots to the bit.
+    #[test]
+    fn random_matrices_of_one_pattern_solve_as_the_dense_ones() {
+        let mut seed = 0x2545_f491_4f6c_dd1du64;
+        let mut next = move || {
+            seed ^= seed << 13;
+            seed ^= seed >> 7;
+            seed ^= seed << 17;
+            (seed >> 11) as f64 / (1u64 << 53) as f64
+        };
+        let n = 14;
+        let pattern =
+            DMatrix::from_fn(n, n, |r, c| r == c || (r + 2 * c) % 5 == 0 || r.min(c) >= 9);
+        let (mut lu, mut orders) = (SparseLu::default(), std::collections::BTreeSet::new());
+        for draw in 0..200 {
+            let m = pattern.map(|p| if p { next() - 0.5 } else { 0.0 });
+            let b = DVector::from_fn(n, |i, _| i as f64 - 3.0);
+            let ((dense, dense_piv), (sparse, piv)) = dense_and_sparse(&m, &b, &mut lu);
+            assert_eq!(sparse, dense, "draw {draw}");
+            assert_eq!(piv, dense_piv, "draw {draw}");
+            orders.insert(piv);
+        }
+        assert!(orders.len() > 50, "{} pivot orders", orders.len());
+    }
+
     /// [`BlockLu`] factoring σ I − J anew for another σ repeats its blocks' eliminations: the
     /// dense factors' solution to the bit.
     #[test]
