@@ -2,7 +2,8 @@
 //! column-major storage, for real and complex matrices (the Radau IIA iteration needs one of
 //! each per step size), of block-diagonal matrices block by block ([`BlockLu`]), and of the
 //! sensitivities' stage equations (`SparseLu`). Blocks beyond `UNROLLED` rows and the stage
-//! equations, mostly zeros, are eliminated and solved over their nonzeros alone.
+//! equations, mostly zeros, are eliminated and solved over their nonzeros alone, the
+//! elimination kept and repeated on the next matrix of the same pattern (`Elimination`).
 //!
 //! Written here rather than taken from nalgebra because nalgebra's `LU` owns and reallocates
 //! its matrix, and the solver must not allocate per step. Blocks of up to `UNROLLED` rows are
@@ -179,8 +180,9 @@ struct Step {
 /// next matrix of the same pattern is factored by repeating it over the same entries (the
 /// symbolic work done once, the numeric many times): the sensitivities' stage equations and
 /// the iteration matrices of a step keep their pattern and, mostly, their pivots from step to
-/// step. Where a pivot differs the elimination is made again, so that the factors are always
-/// those of partial pivoting ([`factor`]'s, whose other products are by zero).
+/// step. From a step whose pivot partial pivoting now picks otherwise the elimination is made
+/// anew, so that the factors are always partial pivoting's ([`factor`]'s, whose other products
+/// are by zero).
 #[derive(Clone, Debug, Default)]
 struct Elimination {
     /// The order of the matrix it was made for (0: none yet, or it ended singular) and that

@@ -55,9 +55,9 @@ pub struct Sensitivities {
     /// column, and which of the block's states they link.
     nz: [Vec<(usize, usize, f64)>; 3],
     linked: Vec<bool>,
-    /// The stage equations of each block, factored (each block's own: the next step's
-    /// repeat its elimination); the order of a block's states in them, and each state's place
-    /// in that order.
+    /// The stage equations of each block, factored (a factorization per block, so that the
+    /// next step's equations of the block repeat its elimination); the order of a block's
+    /// states in them, and each state's place in that order.
     lu: Vec<lu::SparseLu>,
     order: Vec<usize>,
     pos: Vec<usize>,
