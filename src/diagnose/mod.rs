@@ -193,7 +193,7 @@ pub struct Candidate {
     /// the model still misses the noise floor (book/src/diagnose.md, "Families of forms").
     pub far_forms: Vec<(&'static Form, StartValues, f64)>,
     /// Every form refitted, with its ΔBIC or why its refit failed.
-    pub forms_tried: Vec<(&'static str, Result<f64, String>)>,
+    pub forms_tried: Vec<FormTried>,
     pub refit: Option<Refit>,
     /// Why the refit could not run or failed, if it did.
     pub refit_error: Option<Error>,
@@ -202,8 +202,32 @@ pub struct Candidate {
 impl Candidate {
     /// Whether a refit of this round tried `form`, passing or failing.
     fn tried(&self, form: &Form) -> bool {
-        self.forms_tried.iter().any(|(name, _)| *name == form.name)
+        self.forms_tried.iter().any(|t| t.form.name == form.name)
     }
+
+    /// The other forms whose refit ended within [`BIC_MARGIN`] of the chosen one's, with the
+    /// values their parameters reached: the round's data did not choose between them.
+    fn tied_forms(&self) -> impl Iterator<Item = (&'static Form, &StartValues)> {
+        let fitted = self
+            .forms_tried
+            .iter()
+            .filter_map(|t| Some((t.form, t.outcome.as_ref().ok()?)));
+        let best = fitted
+            .clone()
+            .find(|(f, _)| f.name == self.form.name)
+            .map_or(f64::NEG_INFINITY, |(_, (d, _))| *d);
+        fitted
+            .filter(move |(f, (d, _))| f.name != self.form.name && *d < best + BIC_MARGIN)
+            .map(|(f, (_, values))| (f, values))
+    }
+}
+
+/// A form refitted in a round: its ΔBIC and the values its parameters reached, or why its refit
+/// failed.
+#[derive(Clone, Debug)]
+pub struct FormTried {
+    pub form: &'static Form,
+    pub outcome: Result<(f64, StartValues), String>,
 }
 
 /// A candidate added to the model and re-identified.
@@ -274,6 +298,9 @@ pub struct Revisit {
     pub replaced: Effect,
     /// The runner-up, in the form it was refitted in; `None`: the model without the effect.
     pub by: Option<&'static Form>,
+    /// `by` is a form of the effect's own family that its round could not tell from the one
+    /// chosen (within [`BIC_MARGIN`]), tried beside a tentative later effect.
+    pub tied: bool,
     /// BIC with the runner-up in its place (or without the effect) minus BIC of the model, on
     /// the estimation data; or why the refit failed.
     pub delta_bic: Result<f64, String>,
@@ -865,7 +892,7 @@ fn leader(candidates: &[Candidate]) -> Option<usize> {
         .flat_map(|(k, c)| {
             c.forms_tried
                 .iter()
-                .filter_map(move |(_, d)| Some((k, *d.as_ref().ok()?)))
+                .filter_map(move |t| Some((k, t.outcome.as_ref().ok()?.0)))
         })
         .min_by(|a, b| a.1.total_cmp(&b.1))
         .map(|(k, _)| k)
@@ -873,19 +900,26 @@ fn leader(candidates: &[Candidate]) -> Option<usize> {
 
 /// Each refitted candidate in the form of its family with the lowest BIC (src/diagnose/
 /// diagnose.md, "Families of forms"), judged against `before`; a failed refit fails only its
-/// form, and the candidate when all its forms failed.
+/// form, and the candidate when all its forms failed. Each form refitted is recorded with the
+/// values its parameters reached.
 fn settle_forms(
     candidates: &mut [Candidate],
     plan: &[PlannedRefit],
     refits: Vec<Result<Identification, Error>>,
     judge: impl Fn(&Form, Identification) -> Refit,
-) {
+) -> Result<(), Error> {
     for ((k, form, start), refit) in plan.iter().zip(refits) {
         let c = &mut candidates[*k];
         match refit {
             Ok(id) => {
                 let r = judge(form, id);
-                c.forms_tried.push((form.name, Ok(r.delta_bic)));
+                let values = form_parameters(form)
+                    .map(|name| Ok((name, r.id.params.get(name)?)))
+                    .collect::<Result<_, Error>>()?;
+                c.forms_tried.push(FormTried {
+                    form,
+                    outcome: Ok((r.delta_bic, values)),
+                });
                 if c.refit.as_ref().is_none_or(|b| r.delta_bic < b.delta_bic) {
                     c.form = form;
                     c.start = start.clone();
@@ -894,13 +928,17 @@ fn settle_forms(
                 }
             }
             Err(e) => {
-                c.forms_tried.push((form.name, Err(e.to_string())));
+                c.forms_tried.push(FormTried {
+                    form,
+                    outcome: Err(e.to_string()),
+                });
                 if c.refit.is_none() && c.refit_error.is_none() {
                     c.refit_error = Some(e);
                 }
             }
         }
     }
+    Ok(())
 }
 
 /// Diagnoses `experiments` (the first estimates, the others are held out) from `start`.
@@ -1197,7 +1235,7 @@ impl Search {
         let judged =
             |form: &Form, id| judge(form, id, &self.current, estimation, held, &self.forms);
         // a refit that cannot run (the model leaves its domain) fails its form
-        settle_forms(&mut candidates, &plan, refit_in(&plan)?, judged);
+        settle_forms(&mut candidates, &plan, refit_in(&plan)?, judged)?;
         // the leader's other forms, refitted once the refits have named the leader
         let mut second_pass = leader_close_forms(&candidates);
         if !second_pass.is_empty() {
@@ -1206,7 +1244,7 @@ impl Search {
                 &second_pass,
                 refit_in(&second_pass)?,
                 judged,
-            );
+            )?;
         }
         let none_passes = candidates
             .iter()
@@ -1215,7 +1253,7 @@ impl Search {
         if none_passes && !self.effects.is_empty() {
             let far = leader_far_forms(&candidates);
             if !far.is_empty() {
-                settle_forms(&mut candidates, &far, refit_in(&far)?, judged);
+                settle_forms(&mut candidates, &far, refit_in(&far)?, judged)?;
                 second_pass.extend(far);
             }
         }
@@ -1484,7 +1522,9 @@ fn converged(
 /// tried against nothing, the model without it, as the later effects may explain all it stood
 /// in for (a charge drift chosen for the first share of a slewing amplifier), and, where the
 /// model needs it, against the best other candidate that passed in its round, refitted with the
-/// later effects beside it. The replacement is taken when it lowers the BIC on the
+/// later effects beside it; beside a tentative later effect (`just_added` none), also in each
+/// form of its family its round could not tell from the one chosen ([`Candidate::tied_forms`]).
+/// The replacement is taken when it lowers the BIC on the
 /// estimation data by [`BIC_MARGIN`] and keeps every held-out fit within [`FIT_TOLERANCE`] of its
 /// noise floor; the model without the effect, when it lowers the BIC so and leaves no held-out
 /// fit farther from its floor than the model with it (book/src/diagnose.md, "Two mechanisms
@@ -1515,15 +1555,28 @@ fn revisit(
             continue;
         };
         let own = just_added == Some(effect);
-        let runner_up = rounds
+        let its_round = rounds
             .iter()
             .rev()
-            .find(|r| r.added == Some(effect) && !own)
+            .find(|r| r.added == Some(effect) && !own);
+        let runner_up = its_round
             .into_iter()
             .flat_map(|round| &round.candidates)
             .filter(|c| forms.iter().all(|f| f.effect != c.effect))
             .filter_map(|c| c.refit.as_ref().filter(|r| r.passes()).map(|r| (c.form, r)))
             .min_by(|a, b| a.1.delta_bic.total_cmp(&b.1.delta_bic));
+        // beside a tentative effect, the forms of the effect's family its round could not tell
+        // from the one chosen: which of two tied forms the round took decides how well a later
+        // effect fits beside it (`charge_drift_film+hysteresis` seed 1 of the suite: two
+        // hysteresis forms 0.7 apart in BIC, the film's drift beside one of them 2 points short
+        // of the floor)
+        let tied: Vec<_> = its_round
+            .filter(|_| just_added.is_none())
+            .into_iter()
+            .flat_map(|round| &round.candidates)
+            .filter(|c| c.effect == effect && c.form.name == forms[pos].name)
+            .flat_map(Candidate::tied_forms)
+            .collect();
         let replaced = forms[pos].effect;
         // first the model without the effect, its parameters neutral (off): when the later
         // effects explain all it stood in for, a runner-up swapped in would be a spurious second
@@ -1535,18 +1588,25 @@ fn revisit(
         for name in form_parameters(forms[pos]) {
             without.set(name, neutral.get(name)?)?;
         }
-        let mut tries = vec![(None, without.clone())];
+        let mut tries = vec![(None, false, without.clone())];
         if let Some((form, r)) = runner_up {
-            let mut start = without;
+            let mut start = without.clone();
             for name in form_parameters(form) {
                 start.set(name, r.id.params.get(name)?)?;
             }
-            tries.push((Some(form), start));
+            tries.push((Some(form), false, start));
+        }
+        for (form, values) in tied {
+            let mut start = without.clone();
+            for &(name, v) in values {
+                start.set(name, v)?;
+            }
+            tries.push((Some(form), true, start));
         }
         let bic_now = model_bic(&estimation[0], current, forms);
         let gap = |id: &Identification| worst_gap_to_floor(held, id);
         let gap_now = gap(current);
-        for (by, start) in tries {
+        for (by, tied, start) in tries {
             let mut with: Vec<&'static Form> = forms.to_vec();
             match by {
                 Some(form) => with[pos] = form,
@@ -1585,6 +1645,7 @@ fn revisit(
             out.push(Revisit {
                 replaced,
                 by,
+                tied,
                 delta_bic,
                 swapped,
             });
@@ -1695,6 +1756,7 @@ fn revisit_forms(
         out.push(Revisit {
             replaced: forms[*pos].effect,
             by: Some(*g),
+            tied: false,
             delta_bic: delta_bic.map_err(|e| e.to_string()),
             swapped: false,
         });
@@ -2232,7 +2294,10 @@ mod tests {
                 .collect(),
             far_forms: Vec::new(),
             forms_tried: delta_bic
-                .map(|d| (effect.forms()[0].name, Ok(d)))
+                .map(|d| FormTried {
+                    form: &effect.forms()[0],
+                    outcome: Ok((d, Vec::new())),
+                })
                 .into_iter()
                 .collect(),
             refit: None,
@@ -2266,7 +2331,10 @@ mod tests {
     fn the_leaders_untried_far_forms_are_planned() {
         let drift = Effect::ChargeDrift;
         let forms = drift.forms();
-        let tried = |f: &Form, d: f64| (f.name, Ok(d));
+        let tried = |form: &'static Form, d: f64| FormTried {
+            form,
+            outcome: Ok((d, Vec::new())),
+        };
         let candidate = |effect: Effect, forms_tried, far_forms| Candidate {
             effect,
             form: &effect.forms()[0],
@@ -2313,6 +2381,35 @@ mod tests {
         assert!(!untried.is_empty());
         assert_eq!(planned, untried);
         assert!(leader_far_forms(&candidates[..1]).is_empty());
+    }
+
+    /// A form whose refit ended within the margin of the chosen one's is tied with it, with
+    /// the values its refit reached; one beyond it, a failed one and the chosen one are not.
+    #[test]
+    fn the_forms_refitted_within_the_margin_of_the_chosen_are_tied() {
+        let forms = Effect::Hysteresis.forms();
+        let tried = |form: &'static Form, outcome| FormTried { form, outcome };
+        let values = vec![("k_h", 0.13)];
+        let candidate = Candidate {
+            effect: Effect::Hysteresis,
+            form: &forms[0],
+            score: 0.6,
+            start: Vec::new(),
+            alternatives: Vec::new(),
+            far_forms: Vec::new(),
+            forms_tried: vec![
+                tried(&forms[1], Ok((-29_252.8, values.clone()))),
+                tried(&forms[0], Ok((-29_253.5, Vec::new()))),
+                tried(&forms[2], Ok((-29_243.5, Vec::new()))),
+                tried(&forms[3], Err("diverged".into())),
+            ],
+            refit: None,
+            refit_error: None,
+        };
+        let tied: Vec<_> = candidate.tied_forms().collect();
+        assert_eq!(tied.len(), 1);
+        assert_eq!(tied[0].0.name, forms[1].name);
+        assert_eq!(tied[0].1, &values);
     }
 
     /// Near the noise floor a first effect is asked half the gap, a later one [`MIN_GAIN`] unless

@@ -24,9 +24,9 @@ fn candidate_json(c: &Candidate) -> Value {
         v["forms_tried"] = c
             .forms_tried
             .iter()
-            .map(|(name, r)| match r {
-                Ok(d) => json!({"form": name, "delta_bic": round(*d, 1)}),
-                Err(e) => json!({"form": name, "refit_error": e}),
+            .map(|t| match &t.outcome {
+                Ok((d, _)) => json!({"form": t.form.name, "delta_bic": round(*d, 1)}),
+                Err(e) => json!({"form": t.form.name, "refit_error": e}),
             })
             .collect();
     }
@@ -231,6 +231,7 @@ fn round_json(r: &Round) -> Value {
                 "replaced": v.replaced.name(),
                 "by": v.by.map(|f| f.effect.name()),
                 "by_form": v.by.map(|f| f.name),
+                "tied": v.tied,
                 "swapped": v.swapped,
             });
             match &v.delta_bic {
@@ -316,9 +317,9 @@ pub fn forms_cell(c: &Candidate) -> String {
     let tried: Vec<String> = c
         .forms_tried
         .iter()
-        .map(|(name, r)| match r {
-            Ok(d) => format!("{name} ΔBIC {d:.1}"),
-            Err(e) => format!("{name} failed: {e}"),
+        .map(|t| match &t.outcome {
+            Ok((d, _)) => format!("{} ΔBIC {d:.1}", t.form.name),
+            Err(e) => format!("{} failed: {e}", t.form.name),
         })
         .collect();
     format!("`{}` (of {})", c.form.name, tried.join(", "))
@@ -636,7 +637,7 @@ fn round_section(md: &mut String, k: usize, r: &Round) {
                 f.free.join(", ")
             ),
             (Some(e), _) => format!("Added: `{}`, {}.", e.name(), e.form()),
-            (None, _) if r.revisits.iter().any(|v| v.by.is_some_and(|f| f.effect == v.replaced)) => "Nothing added in this round, and the model still beyond its noise floor (the round ran for that): each earlier effect was tried in the forms of its family its round had not refitted (below).".into(),
+            (None, _) if r.revisits.iter().any(|v| !v.tied && v.by.is_some_and(|f| f.effect == v.replaced)) => "Nothing added in this round, and the model still beyond its noise floor (the round ran for that): each earlier effect was tried in the forms of its family its round had not refitted (below).".into(),
             (None, _) if !r.revisits.is_empty() => "Nothing added in this round: its best candidate, failing only by leaving a held-out fit beyond the tolerance of its noise floor, was tried tentatively with the earlier effects revisited beside it (below), and none of them was replaced.".into(),
             (None, _) => "Nothing added in this round.".into(),
         }
@@ -659,6 +660,11 @@ fn round_section(md: &mut String, k: usize, r: &Round) {
     }
     for v in &r.revisits {
         let against = match v.by {
+            Some(f) if v.tied => format!(
+                "its own family's form `{}`, which its round could not tell from the one chosen (within {} of BIC),",
+                f.name,
+                super::BIC_MARGIN
+            ),
             Some(f) if f.effect == v.replaced => {
                 format!(
                     "its own family's form `{}`, which its round had not refitted,",
