@@ -153,7 +153,8 @@ fn jacobian_at(
     own: bool,
     opts: &Options,
 ) -> Result<(DMatrix<f64>, usize, bool), Error> {
-    match p.jacobian(x).filter(|_| own) {
+    // asked only when it is wanted: the problem's own is a simulation with sensitivities
+    match own.then(|| p.jacobian(x)).flatten() {
         Some(Ok(j)) if j.iter().all(|v| v.is_finite()) => Ok((j, 1, true)),
         _ => Ok((jacobian(p, x, r, lo, hi, opts)?, x.len(), false)),
     }
